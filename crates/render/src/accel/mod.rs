@@ -1,0 +1,1 @@
+//! Ray–primitive intersection and the BVH. TO BE WRITTEN (helper: accel).

@@ -1,0 +1,1 @@
+//! BSDF models in the local shading frame. TO BE WRITTEN (helper: bsdf).

@@ -1,0 +1,1 @@
+//! Film: per-pixel weighted sums and reconstruction filters. TO BE WRITTEN (helper: sampling/film).

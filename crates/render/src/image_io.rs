@@ -1,0 +1,1 @@
+//! Reading and writing images (EXR, PNG, PFM, HDR), atomically. TO BE WRITTEN (helper: sampling/film).

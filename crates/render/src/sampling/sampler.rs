@@ -1,0 +1,1 @@
+//! Per-pixel sample generators. TO BE WRITTEN (helper: sampling/film).

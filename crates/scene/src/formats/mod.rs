@@ -1,0 +1,25 @@
+//! One module per input format, and the registry that picks one for a file.
+
+pub mod mitsuba;
+pub mod obj;
+pub mod ply;
+
+use std::path::Path;
+
+use crate::{Document, LoadError, LoadOptions, Loc, Result};
+
+/// Pick the loader by extension, sniffing the content where the extension is ambiguous.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "xml" => mitsuba::load(path, opts),
+        _ => Err(LoadError::new(
+            Loc::file(path),
+            format!("unsupported scene file extension '.{ext}' (supported: .xml)"),
+        )),
+    }
+}

@@ -1,0 +1,595 @@
+//! The format-independent scene description (`SceneDesc`).
+//!
+//! Every loader translates its format into these types; the renderer's `build` step is the only
+//! consumer. Plain data: no rendering logic lives here. Conventions:
+//! - right-handed world, linear Rec.709 RGB radiance, angles in **degrees** (as the formats
+//!   write them; the renderer converts to radians);
+//! - shapes keep their object-space geometry plus a `to_world` matrix;
+//! - every element keeps the source location it came from (`Loc`) for warnings and errors.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+pub use glam::{Mat3, Mat4, Vec2, Vec3};
+
+use crate::error::{Loc, Warning};
+
+/// Linear RGB triple (Rec.709 primaries).
+pub type Rgb = Vec3;
+
+/// Index into `SceneDesc::materials`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MaterialId(pub u32);
+
+/// Index into `SceneDesc::textures`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct TextureId(pub u32);
+
+/// A colour-valued parameter: a constant or a texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColorParam {
+    Const(Rgb),
+    Texture(TextureId),
+}
+
+impl ColorParam {
+    pub fn constant(v: f32) -> Self {
+        ColorParam::Const(Rgb::splat(v))
+    }
+}
+
+/// A scalar parameter: a constant or a texture (whose first channel / luminance is used).
+#[derive(Clone, Debug, PartialEq)]
+pub enum FloatParam {
+    Const(f32),
+    Texture(TextureId),
+}
+
+/// What a loader produces: either a scene to render or a Nori-style statistical test file.
+#[derive(Clone, Debug)]
+pub enum Document {
+    Scene(Box<SceneDesc>),
+    Test(TestDesc),
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct SceneDesc {
+    /// The file the scene was loaded from (the main file, not includes).
+    pub source: PathBuf,
+    pub shapes: Vec<ShapeDesc>,
+    pub materials: Vec<MaterialDesc>,
+    pub textures: Vec<TextureDesc>,
+    /// Emitters that are not attached to a shape (area emitters live on `ShapeDesc`).
+    pub emitters: Vec<EmitterDesc>,
+    /// At least one sensor after loading (loaders add the format's default camera).
+    pub sensors: Vec<Sensor>,
+    pub integrator: IntegratorDesc,
+    /// Background radiance seen by rays that escape (formats with a "background colour").
+    pub background: Option<Rgb>,
+    /// Non-fatal findings of the loader (unknown parameters, ignored features...).
+    pub warnings: Vec<Warning>,
+}
+
+impl SceneDesc {
+    pub fn add_material(&mut self, m: MaterialDesc) -> MaterialId {
+        self.materials.push(m);
+        MaterialId(self.materials.len() as u32 - 1)
+    }
+    pub fn add_texture(&mut self, t: TextureDesc) -> TextureId {
+        self.textures.push(t);
+        TextureId(self.textures.len() as u32 - 1)
+    }
+    pub fn material(&self, id: MaterialId) -> &MaterialDesc {
+        &self.materials[id.0 as usize]
+    }
+    pub fn texture(&self, id: TextureId) -> &TextureDesc {
+        &self.textures[id.0 as usize]
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shapes
+
+#[derive(Clone, Debug)]
+pub struct ShapeDesc {
+    pub shape: Shape,
+    /// Object-to-world transform (identity when the format gives world-space data).
+    pub to_world: Mat4,
+    /// `None`: the format's default material (diffuse 0.5 grey).
+    pub material: Option<MaterialId>,
+    /// Set when the shape is an area light.
+    pub emission: Option<AreaEmission>,
+    /// Flip the shading and geometric normals (Mitsuba `flip_normals`).
+    pub flip_normals: bool,
+    pub name: Option<String>,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// A triangle mesh in object space.
+    Mesh(Arc<TriMesh>),
+    /// Sphere in object space.
+    Sphere { center: Vec3, radius: f32 },
+    /// Mitsuba's rectangle: the square [-1,1]² in the z = 0 plane, normal +z,
+    /// uv = ((x+1)/2, (y+1)/2).
+    Rectangle,
+    /// Mitsuba's disk: the unit disk in the z = 0 plane, normal +z.
+    Disk,
+    /// Mitsuba's cube: [-1,1]³ with outward normals.
+    Cube,
+    /// An infinite plane through `point` with normal `normal` (object space).
+    InfinitePlane { point: Vec3, normal: Vec3 },
+}
+
+impl Shape {
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Shape::Mesh(_) => "mesh",
+            Shape::Sphere { .. } => "sphere",
+            Shape::Rectangle => "rectangle",
+            Shape::Disk => "disk",
+            Shape::Cube => "cube",
+            Shape::InfinitePlane { .. } => "infinite plane",
+        }
+    }
+}
+
+/// An indexed triangle mesh. `normals` and `uvs` are either empty or one per position.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub indices: Vec<[u32; 3]>,
+}
+
+impl TriMesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct AreaEmission {
+    /// Emitted radiance on the front side (the side the normal points to).
+    pub radiance: ColorParam,
+    /// Emit on both sides (CS184 area lights are one-sided; some formats are two-sided).
+    pub two_sided: bool,
+    pub loc: Loc,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Materials
+
+#[derive(Clone, Debug)]
+pub struct MaterialDesc {
+    pub material: Material,
+    pub name: Option<String>,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MicrofacetDistribution {
+    Ggx,
+    Beckmann,
+}
+
+/// Every material model any supported format can name. Not all are rendered yet; `build`
+/// reports the ones it does not support.
+#[derive(Clone, Debug)]
+pub enum Material {
+    /// Lambertian.
+    Diffuse { reflectance: ColorParam },
+    /// Smooth conductor with complex index of refraction `eta + i k` (relative to the outside).
+    Conductor {
+        eta: Rgb,
+        k: Rgb,
+        specular_reflectance: ColorParam,
+    },
+    /// Microfacet conductor (anisotropic when `alpha_u != alpha_v`).
+    RoughConductor {
+        distribution: MicrofacetDistribution,
+        alpha_u: FloatParam,
+        alpha_v: FloatParam,
+        eta: Rgb,
+        k: Rgb,
+        specular_reflectance: ColorParam,
+    },
+    /// Smooth dielectric interface; `absorption` is a Beer–Lambert coefficient per unit length
+    /// inside the medium (COMP30019, CENG795).
+    Dielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        specular_reflectance: ColorParam,
+        specular_transmittance: ColorParam,
+        absorption: Option<Rgb>,
+    },
+    /// Thin dielectric sheet (no refraction offset).
+    ThinDielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        specular_reflectance: ColorParam,
+        specular_transmittance: ColorParam,
+    },
+    RoughDielectric {
+        distribution: MicrofacetDistribution,
+        alpha_u: FloatParam,
+        alpha_v: FloatParam,
+        int_ior: f32,
+        ext_ior: f32,
+        specular_reflectance: ColorParam,
+        specular_transmittance: ColorParam,
+    },
+    /// Mitsuba's smooth plastic: dielectric coating over a diffuse base.
+    Plastic {
+        diffuse_reflectance: ColorParam,
+        specular_reflectance: ColorParam,
+        int_ior: f32,
+        ext_ior: f32,
+        nonlinear: bool,
+    },
+    RoughPlastic {
+        distribution: MicrofacetDistribution,
+        alpha: f32,
+        diffuse_reflectance: ColorParam,
+        specular_reflectance: ColorParam,
+        int_ior: f32,
+        ext_ior: f32,
+        nonlinear: bool,
+    },
+    /// Mitsuba `twosided`: `front` on both sides, or `back` on the back side when given.
+    TwoSided {
+        front: MaterialId,
+        back: Option<MaterialId>,
+    },
+    /// Perfect mirror (Nori `mirror`, Mitsuba `conductor` with material `none`).
+    Mirror { reflectance: ColorParam },
+    /// Nori's `microfacet`: a Beckmann dielectric-Fresnel specular lobe plus a diffuse term.
+    NoriMicrofacet {
+        alpha: f32,
+        int_ior: f32,
+        ext_ior: f32,
+        kd: Rgb,
+    },
+    /// The CENG795 Phong family (and Torrance–Sparrow).
+    PhongFamily {
+        model: PhongModel,
+        /// `_normalized`: energy-normalised lobes.
+        normalized: bool,
+        /// `_kdfresnel` (Torrance–Sparrow): scale the diffuse term by 1 − F.
+        kd_fresnel: bool,
+        exponent: f32,
+        diffuse: ColorParam,
+        specular: Rgb,
+        /// Refraction index used by the Torrance–Sparrow Fresnel term.
+        ior: f32,
+    },
+    /// Invisible interface (Mitsuba `null`).
+    Null,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhongModel {
+    OriginalPhong,
+    ModifiedPhong,
+    OriginalBlinnPhong,
+    ModifiedBlinnPhong,
+    TorranceSparrow,
+}
+
+impl Material {
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Material::Diffuse { .. } => "diffuse",
+            Material::Conductor { .. } => "conductor",
+            Material::RoughConductor { .. } => "roughconductor",
+            Material::Dielectric { .. } => "dielectric",
+            Material::ThinDielectric { .. } => "thindielectric",
+            Material::RoughDielectric { .. } => "roughdielectric",
+            Material::Plastic { .. } => "plastic",
+            Material::RoughPlastic { .. } => "roughplastic",
+            Material::TwoSided { .. } => "twosided",
+            Material::Mirror { .. } => "mirror",
+            Material::NoriMicrofacet { .. } => "microfacet",
+            Material::PhongFamily { .. } => "phong-family",
+            Material::Null => "null",
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Textures
+
+#[derive(Clone, Debug)]
+pub struct TextureDesc {
+    pub texture: Texture,
+    pub name: Option<String>,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureFilter {
+    Nearest,
+    Bilinear,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WrapMode {
+    Repeat,
+    Mirror,
+    Clamp,
+}
+
+#[derive(Clone, Debug)]
+pub enum Texture {
+    Constant(Rgb),
+    /// An image file. 8-bit images are sRGB-decoded unless `raw`; float images are linear.
+    Bitmap {
+        path: PathBuf,
+        filter: TextureFilter,
+        wrap: WrapMode,
+        raw: bool,
+        /// Gamma used to linearise 8-bit data when not sRGB (CENG795 `_degamma`, CS-E5520 2.2).
+        gamma: Option<f32>,
+        to_uv: Mat3,
+    },
+    Checkerboard {
+        color0: Rgb,
+        color1: Rgb,
+        to_uv: Mat3,
+    },
+}
+
+// ---------------------------------------------------------------------------------------------
+// Emitters
+
+#[derive(Clone, Debug)]
+pub struct EmitterDesc {
+    pub emitter: Emitter,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvMapping {
+    /// Equirectangular (Mitsuba `envmap`).
+    LatLong,
+    /// Light probe (angular map, CENG795 `probe`).
+    Probe,
+}
+
+#[derive(Clone, Debug)]
+pub enum Emitter {
+    /// Isotropic point light with radiant `intensity` (W/sr).
+    Point { position: Vec3, intensity: Rgb },
+    /// Mitsuba spot light at the origin of `to_world`, shining along its +z.
+    Spot {
+        to_world: Mat4,
+        intensity: Rgb,
+        /// Degrees.
+        cutoff_angle: f32,
+        /// Degrees.
+        beam_width: f32,
+    },
+    /// Light arriving from `-direction`... i.e. travelling along `direction` (world).
+    Directional { direction: Vec3, irradiance: Rgb },
+    /// Uniform environment radiance.
+    Constant { radiance: Rgb },
+    /// Image-based environment light.
+    EnvMap {
+        path: PathBuf,
+        scale: f32,
+        to_world: Mat4,
+        mapping: EnvMapping,
+    },
+}
+
+impl Emitter {
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Emitter::Point { .. } => "point",
+            Emitter::Spot { .. } => "spot",
+            Emitter::Directional { .. } => "directional",
+            Emitter::Constant { .. } => "constant",
+            Emitter::EnvMap { .. } => "envmap",
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sensors: camera + film + sampler
+
+#[derive(Clone, Debug)]
+pub struct Sensor {
+    pub camera: Camera,
+    pub film: Film,
+    pub sampler: SamplerDesc,
+    pub name: Option<String>,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    X,
+    Y,
+    Diagonal,
+    Smaller,
+    Larger,
+}
+
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub projection: Projection,
+    /// Camera-to-world. The camera looks along its local +z, with +y up and +x to the
+    /// *left* of the image (Mitsuba's convention, as produced by `lookat`).
+    pub to_world: Mat4,
+    pub near_clip: f32,
+    pub far_clip: f32,
+}
+
+#[derive(Clone, Debug)]
+pub enum Projection {
+    Perspective {
+        /// Degrees, measured along `fov_axis`.
+        fov: f32,
+        fov_axis: FovAxis,
+    },
+    ThinLens {
+        fov: f32,
+        fov_axis: FovAxis,
+        aperture_radius: f32,
+        focus_distance: f32,
+    },
+    /// Mitsuba's orthographic camera: the image covers [-1,1]² of the camera plane (scaled
+    /// by `to_world`).
+    Orthographic,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CropWindow {
+    pub offset_x: u32,
+    pub offset_y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    /// Box of the given radius (pixels); Mitsuba default 0.5.
+    Box { radius: f32 },
+    /// Tent (triangle) of the given radius; default 1.
+    Tent { radius: f32 },
+    /// Gaussian with standard deviation `stddev`, truncated at `radius` (Mitsuba: 0.5, 4σ = 2).
+    Gaussian { stddev: f32, radius: f32 },
+    /// Mitchell–Netravali with parameters B and C (radius 2).
+    Mitchell { b: f32, c: f32, radius: f32 },
+}
+
+#[derive(Clone, Debug)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub crop: Option<CropWindow>,
+    pub filter: FilterDesc,
+    /// Output file requested by the scene itself (CENG795 `ImageName`), if any.
+    pub output: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerKind {
+    Independent,
+    Stratified,
+    Halton,
+    /// Owen-scrambled Sobol.
+    Sobol,
+}
+
+#[derive(Clone, Debug)]
+pub struct SamplerDesc {
+    pub kind: SamplerKind,
+    pub spp: u32,
+    pub seed: u64,
+}
+
+impl Default for SamplerDesc {
+    fn default() -> Self {
+        SamplerDesc {
+            kind: SamplerKind::Independent,
+            spp: 16,
+            seed: 0,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Integrators
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MisHeuristic {
+    Balance,
+    Power,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum IntegratorDesc {
+    /// Shading normal as colour (n * 0.5 + 0.5 is *not* applied: raw normal, like Mitsuba's AOV).
+    Normals,
+    /// Surface albedo (reflectance at the first hit).
+    Albedo,
+    /// Distance along the camera ray to the first hit (0 when nothing is hit).
+    Depth,
+    /// Ambient occlusion with cosine-weighted rays of length `length` (infinite when `None`).
+    AmbientOcclusion { samples: u32, length: Option<f32> },
+    /// Direct illumination (Mitsuba `direct`).
+    Direct {
+        emitter_samples: u32,
+        bsdf_samples: u32,
+    },
+    /// Unidirectional path tracer (Mitsuba `path`); `max_depth` −1 means unbounded.
+    Path {
+        max_depth: i32,
+        rr_depth: u32,
+        hide_emitters: bool,
+        mis: MisHeuristic,
+    },
+    /// Whitted-style recursive ray tracer.
+    Whitted { max_depth: u32 },
+    /// Nori's `simple` (one point light, no shadows from area lights).
+    NoriSimple,
+    /// Nori's PA-5 integrators and direct variants, with Nori's semantics.
+    Nori(NoriIntegrator),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoriIntegrator {
+    DirectEms,
+    DirectMats,
+    DirectMis,
+    PathMats,
+    PathEms,
+    PathMis,
+}
+
+impl Default for IntegratorDesc {
+    fn default() -> Self {
+        IntegratorDesc::Path {
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+            mis: MisHeuristic::Power,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Statistical test files (Nori `ttest` / `chi2test`)
+
+#[derive(Clone, Debug)]
+pub struct TestDesc {
+    pub kind: TestKind,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Debug)]
+pub enum TestKind {
+    /// Student's t-test of rendered means (or BSDF albedos at `angles`) against `references`.
+    TTest {
+        significance: f32,
+        references: Vec<f32>,
+        /// Incident angles in degrees, for BSDF cases.
+        angles: Vec<f32>,
+        /// Each case: a whole scene.
+        scenes: Vec<SceneDesc>,
+        /// Each case: a BSDF (with its own scene holding its materials).
+        bsdfs: Vec<(SceneDesc, MaterialId)>,
+    },
+    /// χ² goodness-of-fit of a BSDF's sampling routine against its pdf.
+    Chi2Test {
+        significance: f32,
+        resolution: u32,
+        min_exp_frequency: f32,
+        sample_count: u32,
+        test_count: u32,
+        bsdfs: Vec<(SceneDesc, MaterialId)>,
+    },
+}
