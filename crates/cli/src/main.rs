@@ -1,1 +1,272 @@
-fn main() {}
+//! The `penumbra` command. Thin: parses arguments, reports progress and errors, writes files;
+//! all rendering logic lives in `penumbra-render`.
+
+mod info;
+mod progress;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use clap::{Parser, Subcommand};
+use render::build::{BuildOptions, build};
+use render::image_io::write_image;
+use render::integrators::Integrator;
+use render::render::{RenderOptions, render};
+use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
+
+#[derive(Parser)]
+#[command(name = "penumbra", version, about = "A physically based offline renderer")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to EXR and/or PNG.
+    Render(RenderArgs),
+    /// Print what was loaded from a scene file: counts, bounds, camera, warnings.
+    Info {
+        scene: PathBuf,
+        /// Override a scene parameter (Mitsuba `<default>`), e.g. `-D spp=64`.
+        #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+        define: Vec<(String, String)>,
+    },
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    scene: PathBuf,
+    /// Output image(s): .exr (linear float), .png (sRGB 8-bit), .pfm. May be repeated.
+    /// Default: SCENE.exr and SCENE.png next to the scene file.
+    #[arg(short, long = "output", value_name = "FILE")]
+    output: Vec<PathBuf>,
+    /// Samples per pixel (default: the scene's).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Resolution WxH (default: the scene's film; drops its crop window).
+    #[arg(long, value_name = "WxH", value_parser = parse_res)]
+    res: Option<(u32, u32)>,
+    /// Override a scene parameter (Mitsuba `<default>`), e.g. `-D spp=64`.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+    define: Vec<(String, String)>,
+    /// Seed of the sample streams (default: the scene's, else 0).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Time budget in seconds: stop after the last whole pass that fits.
+    #[arg(long, value_name = "SECONDS")]
+    time: Option<f64>,
+    /// Replace the scene's integrator: normals, albedo, depth, ao[:samples].
+    #[arg(long, value_parser = parse_integrator)]
+    integrator: Option<IntegratorDesc>,
+    /// Which sensor of the scene to render (0-based).
+    #[arg(long, default_value_t = 0)]
+    sensor: usize,
+    /// No progress output.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn parse_define(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, found '{s}'"))?;
+    if k.is_empty() {
+        return Err(format!("expected NAME=VALUE, found '{s}'"));
+    }
+    Ok((k.to_string(), v.to_string()))
+}
+
+fn parse_res(s: &str) -> Result<(u32, u32), String> {
+    let err = || format!("expected WIDTHxHEIGHT such as 640x480, found '{s}'");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
+    let w: u32 = w.trim().parse().map_err(|_| err())?;
+    let h: u32 = h.trim().parse().map_err(|_| err())?;
+    if w == 0 || h == 0 || w > 1 << 16 || h > 1 << 16 {
+        return Err(format!("resolution must be between 1 and 65536 per axis, found '{s}'"));
+    }
+    Ok((w, h))
+}
+
+fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
+    let (name, arg) = s.split_once(':').unwrap_or((s, ""));
+    Ok(match name {
+        "normals" => IntegratorDesc::Normals,
+        "albedo" => IntegratorDesc::Albedo,
+        "depth" => IntegratorDesc::Depth,
+        "ao" => IntegratorDesc::AmbientOcclusion {
+            samples: if arg.is_empty() {
+                1
+            } else {
+                arg.parse().map_err(|_| format!("ao:N expects a sample count, found '{arg}'"))?
+            },
+            length: None,
+        },
+        _ => return Err(format!("unknown integrator '{name}' (expected normals, albedo, depth, ao[:N])")),
+    })
+}
+
+/// An error for the user, with its exit code (2: bad input, 1: anything else).
+struct Failure {
+    message: String,
+    code: u8,
+}
+
+impl Failure {
+    fn input(message: impl ToString) -> Self {
+        Failure {
+            message: message.to_string(),
+            code: 2,
+        }
+    }
+    fn other(message: impl ToString) -> Self {
+        Failure {
+            message: message.to_string(),
+            code: 1,
+        }
+    }
+}
+
+fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<Document, Failure> {
+    let opts = LoadOptions {
+        defines: defines.to_vec(),
+    };
+    let doc = scene::load(path, &opts).map_err(Failure::input)?;
+    Ok(doc)
+}
+
+fn print_warnings(desc: &SceneDesc) {
+    for w in &desc.warnings {
+        eprintln!("{w}");
+    }
+}
+
+fn default_outputs(scene: &Path) -> Vec<PathBuf> {
+    vec![scene.with_extension("exr"), scene.with_extension("png")]
+}
+
+/// Fail before rendering when an output cannot be written (unknown format, missing folder).
+fn check_outputs(outputs: &[PathBuf]) -> Result<(), Failure> {
+    for o in outputs {
+        let ext = o
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        if !matches!(ext.as_str(), "exr" | "png" | "pfm" | "hdr") {
+            return Err(Failure::input(format!(
+                "{}: unsupported output format '.{ext}' (expected .exr, .png, .pfm or .hdr)",
+                o.display()
+            )));
+        }
+        let dir = match o.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        if !dir.is_dir() {
+            return Err(Failure::input(format!(
+                "{}: the output folder {} does not exist",
+                o.display(),
+                dir.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
+    let doc = load_scene(&args.scene, &args.define)?;
+    let Document::Scene(desc) = doc else {
+        return Err(Failure::input(format!(
+            "{}: this is a test file; run it with `penumbra test`",
+            args.scene.display()
+        )));
+    };
+    print_warnings(&desc);
+    let outputs = if args.output.is_empty() {
+        default_outputs(&args.scene)
+    } else {
+        args.output.clone()
+    };
+    check_outputs(&outputs)?;
+    if let Some(t) = args.time
+        && !(t > 0.0 && t.is_finite())
+    {
+        return Err(Failure::input(format!("--time expects a positive number of seconds, found {t}")));
+    }
+
+    let opts = BuildOptions {
+        sensor: args.sensor,
+        spp: args.spp,
+        resolution: args.res,
+        seed: args.seed,
+        integrator: args.integrator.clone(),
+    };
+    let scene = build(&desc, &opts).map_err(Failure::input)?;
+    let integrator = Integrator::from_desc(&scene.integrator).map_err(Failure::input)?;
+
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // A second Ctrl-C while the pass finishes kills the process as usual.
+        let _ = ctrlc::set_handler(move || {
+            if cancel.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+            eprintln!("\ninterrupted: finishing the current pass, then writing the image");
+        });
+    }
+    let ropts = RenderOptions {
+        spp: if args.time.is_some() && args.spp.is_none() {
+            u32::MAX / 2
+        } else {
+            scene.sampler.spp
+        },
+        time_budget: args.time.map(Duration::from_secs_f64),
+        cancel,
+        ..RenderOptions::default()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .map_err(Failure::other)?;
+    let reporter = progress::Reporter::new(args.quiet);
+    let outcome = pool.install(|| render(&scene, &integrator, &ropts, &reporter));
+    reporter.finish(&outcome);
+
+    let image = outcome.film.develop();
+    for o in &outputs {
+        write_image(o, &image).map_err(Failure::other)?;
+        if !args.quiet {
+            eprintln!("wrote {}", o.display());
+        }
+    }
+    let bad = outcome.film.nonfinite_count();
+    if bad > 0 {
+        eprintln!("warning: {bad} sample(s) were NaN or infinite and were discarded");
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => cmd_render(args),
+        Command::Info { scene, define } => {
+            load_scene(&scene, &define).and_then(|doc| info::print(&scene, &doc))
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            eprintln!("error: {}", f.message);
+            ExitCode::from(f.code)
+        }
+    }
+}

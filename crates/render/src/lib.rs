@@ -1,14 +1,21 @@
 //! Penumbra's renderer: everything that runs per ray.
 //!
-//! Data flow: `build` turns a `scene::SceneDesc` into a [`build::Scene`] (BVH, lights, textures,
-//! camera, film), `render` runs the integrator over tiles and passes, the film accumulates.
+//! Data flow: `build` turns a `scene::SceneDesc` into a [`build::Scene`] (BVH, textures,
+//! camera, film settings), `render` runs an integrator over tiles and passes into a film.
 
 pub mod accel;
 pub mod bsdf;
+pub mod build;
+pub mod camera;
 pub mod compare;
 pub mod film;
 pub mod geometry;
 pub mod image_io;
+pub mod integrators;
+pub mod lights;
 pub mod math;
+pub mod render;
 pub mod sampling;
+pub mod shapes;
 pub mod stats;
+pub mod textures;

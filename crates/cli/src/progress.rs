@@ -1,0 +1,97 @@
+//! Progress reporting: an indicatif bar with ETA and samples/s on a terminal, plain periodic
+//! lines otherwise (logs, CI).
+
+use std::io::IsTerminal;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use render::render::{Progress, RenderObserver, RenderOutcome};
+
+pub struct Reporter {
+    bar: Option<ProgressBar>,
+    plain: bool,
+    last_line: Mutex<Option<Instant>>,
+}
+
+const PLAIN_INTERVAL: Duration = Duration::from_secs(5);
+
+fn rate(samples: u64, elapsed: Duration) -> String {
+    let s = samples as f64 / elapsed.as_secs_f64().max(1e-9);
+    if s >= 1e6 {
+        format!("{:.2} M samples/s", s / 1e6)
+    } else {
+        format!("{:.1} k samples/s", s / 1e3)
+    }
+}
+
+impl Reporter {
+    pub fn new(quiet: bool) -> Reporter {
+        let terminal = std::io::stderr().is_terminal();
+        let bar = (!quiet && terminal).then(|| {
+            let bar = ProgressBar::new(1);
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta} {msg}",
+                )
+                .expect("static template"),
+            );
+            bar
+        });
+        Reporter {
+            bar,
+            plain: !quiet && !terminal,
+            last_line: Mutex::new(None),
+        }
+    }
+
+    pub fn finish(&self, o: &RenderOutcome) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+        if self.bar.is_some() || self.plain {
+            let (min, max) = o.film.pixel_bounds();
+            let px = (max - min).as_u64vec2();
+            let samples = px.x * px.y * o.spp as u64;
+            eprintln!(
+                "rendered {} spp in {:.2} s ({} passes, {}){}",
+                o.spp,
+                o.elapsed.as_secs_f64(),
+                o.passes,
+                rate(samples, o.elapsed),
+                if o.cancelled { ", interrupted" } else { "" }
+            );
+        }
+    }
+}
+
+impl RenderObserver for Reporter {
+    fn progress(&self, p: &Progress) {
+        if let Some(bar) = &self.bar {
+            bar.set_length(p.samples_total);
+            bar.set_position(p.samples_done);
+            bar.set_message(rate(p.samples_done, p.elapsed));
+        } else if self.plain {
+            let Ok(mut last) = self.last_line.lock() else {
+                return;
+            };
+            let now = Instant::now();
+            if last.is_none_or(|t| now - t >= PLAIN_INTERVAL) {
+                *last = Some(now);
+                let frac = p.samples_done as f64 / p.samples_total.max(1) as f64;
+                let eta = if frac > 0.0 {
+                    p.elapsed.as_secs_f64() * (1.0 - frac) / frac
+                } else {
+                    f64::NAN
+                };
+                eprintln!(
+                    "progress {:5.1}%  elapsed {:.1} s  ETA {:.1} s  {}",
+                    100.0 * frac,
+                    p.elapsed.as_secs_f64(),
+                    eta,
+                    rate(p.samples_done, p.elapsed)
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,127 @@
+//! Command-line tests: exit codes, diagnostics, output files.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn penumbra() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_penumbra"))
+}
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("penumbra-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Every malformed input gives exit code 2, a `file:line[:col]: message` diagnostic naming
+/// the file, and no panic.
+#[test]
+fn malformed_inputs_fail_cleanly() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed");
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("tests/malformed exists")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+        .collect();
+    cases.sort();
+    assert!(cases.len() >= 10, "only {} malformed cases", cases.len());
+    for case in &cases {
+        let out = penumbra().arg("info").arg(case).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{}: exit {:?}\n{stderr}", case.display(), out.status);
+        assert!(!stderr.contains("panicked"), "{}: panic\n{stderr}", case.display());
+        let line = stderr.lines().find(|l| l.starts_with("error: ")).unwrap_or_default();
+        let msg = line.trim_start_matches("error: ");
+        // The diagnostic names a file of the case (the scene or the mesh it points to) and,
+        // for text formats, a line and column.
+        let (file, rest) = msg.split_once(": ").unwrap_or(("", ""));
+        let file_part = file.split(':').next().unwrap_or_default();
+        assert!(
+            Path::new(file_part).starts_with(&dir) || file_part.contains("malformed"),
+            "{}: diagnostic does not name the file: {line}",
+            case.display()
+        );
+        assert!(!rest.is_empty(), "{}: empty message: {line}", case.display());
+        let is_text = !file_part.ends_with(".ply");
+        if is_text && file_part.ends_with(".xml") {
+            let pos: Vec<&str> = file.split(':').skip(1).collect();
+            assert!(
+                pos.len() == 2 && pos.iter().all(|p| p.parse::<u32>().is_ok_and(|n| n > 0)),
+                "{}: no line:col in {line}",
+                case.display()
+            );
+        }
+    }
+}
+
+#[test]
+fn unknown_file_type_and_missing_file_exit_2() {
+    let out = penumbra().args(["info", "no-such-scene.xml"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let out = penumbra().args(["info", "scene.unknown"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn renders_the_example_scene_to_png_and_exr() {
+    let dir = temp_dir("example");
+    let png = dir.join("cbox.png");
+    let exr = dir.join("cbox.exr");
+    let out = penumbra()
+        .arg("render")
+        .arg(repo_root().join("scenes/cornell-box.xml"))
+        .args(["--integrator", "ao:2", "--spp", "2", "--res", "32x32", "-q", "-o"])
+        .arg(&png)
+        .arg("-o")
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(png.is_file() && exr.is_file());
+    // No temporary files left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn unwritable_output_fails_before_rendering() {
+    let out = penumbra()
+        .arg("render")
+        .arg(repo_root().join("scenes/cornell-box.xml"))
+        .args(["-o", "/no/such/folder/out.png"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("does not exist"), "{stderr}");
+}
+
+#[test]
+fn same_seed_same_image_for_any_thread_count() {
+    let dir = temp_dir("determinism");
+    let mut images = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out_path = dir.join(format!("t{threads}.pfm"));
+        let out = penumbra()
+            .arg("render")
+            .arg(repo_root().join("scenes/cornell-box.xml"))
+            .args(["--integrator", "ao:4", "--spp", "3", "--res", "24x20", "-q", "--threads", threads])
+            .arg("-o")
+            .arg(&out_path)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        images.push(std::fs::read(&out_path).unwrap());
+    }
+    assert!(images.windows(2).all(|w| w[0] == w[1]));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,521 @@
+//! The one place where scene-description types meet render types: `SceneDesc` → [`Scene`]
+//! (world-space geometry and its BVH, decoded textures, the chosen sensor's camera, film and
+//! sampler, the integrator).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use scene::{
+    ColorParam, FloatParam, IntegratorDesc, Loc, Material, MaterialId, SamplerDesc, SceneDesc,
+    Shape, TriMesh,
+};
+
+use crate::accel::Accel;
+use crate::camera::Camera;
+use crate::film::Image;
+use crate::geometry::Ray;
+use crate::lights::{EnvMap, Light};
+use crate::sampling::distrib::Distribution1D;
+use crate::image_io::{self, Decode};
+use crate::math::{Mat3, Mat4, Vec2, Vec3};
+use crate::shapes::{ShapeGeom, SurfaceInteraction, interaction};
+use crate::textures::Texture;
+
+/// A problem found while building (unreadable texture, unsupported feature).
+#[derive(Clone, Debug, thiserror::Error)]
+#[error("{loc}: {message}")]
+pub struct BuildError {
+    pub loc: Loc,
+    pub message: String,
+}
+
+/// Command-line overrides applied on top of the scene's own settings.
+#[derive(Clone, Debug, Default)]
+pub struct BuildOptions {
+    /// Which sensor to render (index into `SceneDesc::sensors`).
+    pub sensor: usize,
+    pub spp: Option<u32>,
+    pub resolution: Option<(u32, u32)>,
+    pub seed: Option<u64>,
+    pub integrator: Option<IntegratorDesc>,
+}
+
+#[derive(Clone, Debug)]
+pub struct ShapeInfo {
+    pub geom: ShapeGeom,
+    pub material: Option<MaterialId>,
+    pub emission: Option<ColorParam>,
+    pub flip_normals: bool,
+}
+
+pub struct Scene {
+    pub accel: Accel,
+    pub shapes: Vec<ShapeInfo>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub camera: Camera,
+    pub film: scene::Film,
+    pub sampler: SamplerDesc,
+    pub integrator: IntegratorDesc,
+    pub background: Option<Vec3>,
+    pub lights: Vec<Light>,
+    /// The light of each shape that emits.
+    pub shape_light: Vec<Option<u32>>,
+    /// Lights seen by escaping rays (environment).
+    pub infinite_lights: Vec<u32>,
+    /// Bounds of the bounded geometry.
+    pub bounds: (Vec3, Vec3),
+    pub triangle_count: usize,
+}
+
+impl Scene {
+    /// Closest surface hit along `ray` with 0 < t < `t_max`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceInteraction> {
+        let hit = self.accel.intersect(ray, t_max)?;
+        let shape = &self.shapes[hit.shape as usize];
+        Some(interaction(&shape.geom, &hit, ray, shape.flip_normals))
+    }
+
+    /// Pick a light uniformly (as Mitsuba does): the light and its selection probability.
+    #[inline]
+    pub fn sample_light(&self, u: f32) -> (&Light, f32) {
+        let n = self.lights.len();
+        let i = ((u * n as f32) as usize).min(n - 1);
+        (&self.lights[i], 1.0 / n as f32)
+    }
+
+    /// Probability that `sample_light` picks any given light.
+    #[inline]
+    pub fn light_pmf(&self) -> f32 {
+        1.0 / self.lights.len().max(1) as f32
+    }
+
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.accel.occluded(ray, t_max)
+    }
+
+    #[inline]
+    pub fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3 {
+        match p {
+            ColorParam::Const(c) => *c,
+            ColorParam::Texture(t) => self.textures[t.0 as usize].eval(uv),
+        }
+    }
+
+    #[inline]
+    pub fn float(&self, p: &FloatParam, uv: Vec2) -> f32 {
+        match p {
+            FloatParam::Const(c) => *c,
+            FloatParam::Texture(t) => self.textures[t.0 as usize].eval(uv).x,
+        }
+    }
+
+    /// The material seen at `si` (following `twosided` to the side that was hit).
+    pub fn material_at(&self, si: &SurfaceInteraction) -> Option<&Material> {
+        let mut id = self.shapes[si.shape as usize].material?;
+        // Bounded: a twosided chain longer than the material count is a cycle.
+        for _ in 0..=self.materials.len() {
+            match &self.materials[id.0 as usize] {
+                Material::TwoSided { front, back } => {
+                    id = match back {
+                        Some(b) if si.wo.dot(si.shading.n) < 0.0 => *b,
+                        _ => *front,
+                    };
+                }
+                m => return Some(m),
+            }
+        }
+        None
+    }
+
+    /// A representative reflectance colour at `si` (the `albedo` AOV).
+    pub fn albedo(&self, si: &SurfaceInteraction) -> Vec3 {
+        let default = Vec3::splat(0.5);
+        let Some(m) = self.material_at(si) else {
+            return default;
+        };
+        match m {
+            Material::Diffuse { reflectance } => self.color(reflectance, si.uv),
+            Material::Conductor {
+                specular_reflectance,
+                ..
+            }
+            | Material::RoughConductor {
+                specular_reflectance,
+                ..
+            }
+            | Material::Dielectric {
+                specular_transmittance: specular_reflectance,
+                ..
+            }
+            | Material::ThinDielectric {
+                specular_transmittance: specular_reflectance,
+                ..
+            }
+            | Material::RoughDielectric {
+                specular_transmittance: specular_reflectance,
+                ..
+            } => self.color(specular_reflectance, si.uv),
+            Material::Plastic {
+                diffuse_reflectance,
+                ..
+            }
+            | Material::RoughPlastic {
+                diffuse_reflectance,
+                ..
+            } => self.color(diffuse_reflectance, si.uv),
+            Material::Mirror { reflectance } => self.color(reflectance, si.uv),
+            Material::NoriMicrofacet { kd, .. } => *kd,
+            Material::PhongFamily { diffuse, .. } => self.color(diffuse, si.uv),
+            Material::TwoSided { .. } | Material::Null => default,
+        }
+    }
+}
+
+fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {
+    let positions: Arc<[Vec3]> = mesh
+        .positions
+        .iter()
+        .map(|p| to_world.transform_point3(*p))
+        .collect();
+    let normal_matrix = Mat3::from_mat4(*to_world).inverse().transpose();
+    let normals = (!mesh.normals.is_empty() && mesh.normals.len() == mesh.positions.len()).then(
+        || {
+            mesh.normals
+                .iter()
+                .map(|n| (normal_matrix * *n).normalize_or_zero())
+                .collect::<Arc<[Vec3]>>()
+        },
+    );
+    let uvs = (!mesh.uvs.is_empty() && mesh.uvs.len() == mesh.positions.len())
+        .then(|| Arc::<[Vec2]>::from(mesh.uvs.as_slice()));
+    // A reflection in to_world flips the winding, hence the geometric normal: keep triangles
+    // facing the way their (transformed) normals say by swapping two indices.
+    let flip = Mat3::from_mat4(*to_world).determinant() < 0.0;
+    let indices: Arc<[[u32; 3]]> = if flip {
+        mesh.indices.iter().map(|&[a, b, c]| [a, c, b]).collect()
+    } else {
+        Arc::from(mesh.indices.as_slice())
+    };
+    ShapeGeom::Mesh {
+        positions,
+        normals,
+        uvs,
+        indices,
+    }
+}
+
+/// Mitsuba's rectangle: [-1,1]² at z = 0, normal +z, uv ((x+1)/2, (y+1)/2).
+pub fn rectangle_mesh() -> TriMesh {
+    TriMesh {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ],
+        indices: vec![[0, 1, 2], [2, 3, 0]],
+    }
+}
+
+/// Mitsuba's cube: [-1,1]³, 24 vertices with per-face normals and uvs, outward winding.
+pub fn cube_mesh() -> TriMesh {
+    let mut m = TriMesh::default();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            // Two tangent axes forming a right-handed frame with n.
+            let mut s = Vec3::ZERO;
+            s[(axis + 1) % 3] = 1.0;
+            let t = n.cross(s);
+            let base = m.positions.len() as u32;
+            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                m.positions.push(n + s * a + t * b);
+                m.normals.push(n);
+                m.uvs.push(Vec2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5));
+            }
+            m.indices.push([base, base + 1, base + 2]);
+            m.indices.push([base + 2, base + 3, base]);
+        }
+    }
+    m
+}
+
+fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, BuildError> {
+    Ok(match &desc.texture {
+        scene::Texture::Constant(c) => Texture::Constant(*c),
+        scene::Texture::Checkerboard {
+            color0,
+            color1,
+            to_uv,
+        } => Texture::Checkerboard {
+            color0: *color0,
+            color1: *color1,
+            to_uv: *to_uv,
+        },
+        scene::Texture::Bitmap {
+            path,
+            filter,
+            wrap,
+            raw,
+            gamma,
+            to_uv,
+        } => {
+            let full: PathBuf = if path.is_absolute() {
+                path.clone()
+            } else {
+                base.join(path)
+            };
+            let decode = match (raw, gamma) {
+                (true, _) => Decode::Raw,
+                (false, Some(g)) => Decode::Gamma(*g),
+                (false, None) => Decode::Srgb,
+            };
+            let image = image_io::read_image_with(&full, decode).map_err(|e| BuildError {
+                loc: desc.loc.clone(),
+                message: format!("cannot read texture: {e}"),
+            })?;
+            Texture::Bitmap {
+                image: Arc::new(image),
+                filter: *filter,
+                wrap: *wrap,
+                to_uv: *to_uv,
+            }
+        }
+    })
+}
+
+/// Every emitter of the scene: area lights (one per emitting shape) first, then the others.
+fn build_lights(
+    desc: &SceneDesc,
+    shapes: &[ShapeInfo],
+    base: &Path,
+) -> Result<(Vec<Light>, Vec<Option<u32>>), BuildError> {
+    let mut lights = Vec::new();
+    let mut shape_light = vec![None; shapes.len()];
+    for (i, (s, d)) in shapes.iter().zip(&desc.shapes).enumerate() {
+        let Some(radiance) = &s.emission else { continue };
+        let triangles = match &s.geom {
+            ShapeGeom::Mesh {
+                positions, indices, ..
+            } => {
+                let areas: Vec<f32> = indices
+                    .iter()
+                    .map(|t| {
+                        let [a, b, c] = t.map(|i| positions[i as usize]);
+                        0.5 * (b - a).cross(c - a).length()
+                    })
+                    .collect();
+                Some(Arc::new(Distribution1D::new(&areas)))
+            }
+            ShapeGeom::Plane { .. } => {
+                return Err(BuildError {
+                    loc: d.loc.clone(),
+                    message: "an infinite plane cannot be an area light".into(),
+                });
+            }
+            _ => None,
+        };
+        let area = s.geom.area();
+        if !(area > 0.0 && area.is_finite()) {
+            continue;
+        }
+        shape_light[i] = Some(lights.len() as u32);
+        lights.push(Light::Area {
+            shape: i as u32,
+            radiance: radiance.clone(),
+            two_sided: d.emission.as_ref().is_some_and(|e| e.two_sided),
+            triangles,
+            area,
+        });
+    }
+    for e in &desc.emitters {
+        lights.push(match &e.emitter {
+            scene::Emitter::Point {
+                position,
+                intensity,
+            } => Light::Point {
+                position: *position,
+                intensity: *intensity,
+            },
+            scene::Emitter::Spot {
+                to_world,
+                intensity,
+                cutoff_angle,
+                beam_width,
+            } => Light::spot(to_world, *intensity, *cutoff_angle, *beam_width),
+            scene::Emitter::Directional {
+                direction,
+                irradiance,
+            } => Light::Directional {
+                direction: direction.normalize_or_zero(),
+                irradiance: *irradiance,
+            },
+            scene::Emitter::Constant { radiance } => Light::Constant {
+                radiance: *radiance,
+            },
+            scene::Emitter::EnvMap {
+                path,
+                scale,
+                to_world,
+                mapping,
+            } => {
+                let full = if path.is_absolute() {
+                    path.clone()
+                } else {
+                    base.join(path)
+                };
+                let image = image_io::read_image_with(&full, Decode::Srgb).map_err(|err| {
+                    BuildError {
+                        loc: e.loc.clone(),
+                        message: format!("cannot read environment map: {err}"),
+                    }
+                })?;
+                Light::EnvMap(Arc::new(EnvMap::new(image, *scale, to_world, *mapping)))
+            }
+        });
+    }
+    Ok((lights, shape_light))
+}
+
+/// Turn a loaded scene into a renderable one.
+pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError> {
+    let base = desc
+        .source
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let sensor = desc.sensors.get(opts.sensor).ok_or_else(|| BuildError {
+        loc: Loc::file(&desc.source),
+        message: format!(
+            "the scene has {} sensor(s); sensor {} does not exist",
+            desc.sensors.len(),
+            opts.sensor
+        ),
+    })?;
+
+    let mut shapes = Vec::with_capacity(desc.shapes.len());
+    for s in &desc.shapes {
+        let geom = match &s.shape {
+            Shape::Mesh(m) => mesh_geom(m, &s.to_world),
+            Shape::Rectangle => mesh_geom(&rectangle_mesh(), &s.to_world),
+            Shape::Cube => mesh_geom(&cube_mesh(), &s.to_world),
+            Shape::Sphere { center, radius } => {
+                // Mitsuba: the sphere's to_world may hold a uniform scale and translation.
+                let c = s.to_world.transform_point3(*center);
+                let r = s.to_world.transform_vector3(Vec3::new(*radius, 0.0, 0.0)).length();
+                ShapeGeom::Sphere {
+                    center: c,
+                    radius: r,
+                }
+            }
+            Shape::Disk => {
+                let n = (Mat3::from_mat4(s.to_world).inverse().transpose() * Vec3::Z)
+                    .normalize_or_zero();
+                ShapeGeom::Disk {
+                    to_world: s.to_world,
+                    normal: n,
+                }
+            }
+            Shape::InfinitePlane { point, normal } => {
+                let nm = Mat3::from_mat4(s.to_world).inverse().transpose();
+                ShapeGeom::Plane {
+                    point: s.to_world.transform_point3(*point),
+                    normal: (nm * *normal).normalize_or_zero(),
+                }
+            }
+        };
+        shapes.push(ShapeInfo {
+            geom,
+            material: s.material,
+            emission: s.emission.as_ref().map(|e| e.radiance.clone()),
+            flip_normals: s.flip_normals,
+        });
+    }
+    let triangle_count = shapes.iter().map(|s| s.geom.triangle_count()).sum();
+    let accel = Accel::build(shapes.iter().map(|s| s.geom.accel_shape()).collect());
+    let bounds = accel.bounds();
+
+    let textures = desc
+        .textures
+        .iter()
+        .map(|t| load_texture(t, &base))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    let (lights, shape_light) = build_lights(desc, &shapes, &base)?;
+    let infinite_lights = (0..lights.len() as u32)
+        .filter(|&i| lights[i as usize].is_infinite())
+        .collect();
+
+    let mut film = sensor.film.clone();
+    if let Some((w, h)) = opts.resolution {
+        film.width = w;
+        film.height = h;
+        film.crop = None;
+    }
+    let mut sampler = sensor.sampler.clone();
+    if let Some(spp) = opts.spp {
+        sampler.spp = spp;
+    }
+    if let Some(seed) = opts.seed {
+        sampler.seed = seed;
+    }
+    let camera = Camera::new(&sensor.camera, film.width, film.height);
+
+    Ok(Scene {
+        accel,
+        shapes,
+        materials: desc.materials.iter().map(|m| m.material.clone()).collect(),
+        textures,
+        camera,
+        film,
+        sampler,
+        integrator: opts
+            .integrator
+            .clone()
+            .unwrap_or_else(|| desc.integrator.clone()),
+        background: desc.background,
+        lights,
+        shape_light,
+        infinite_lights,
+        bounds,
+        triangle_count,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_faces_point_outwards() {
+        let m = cube_mesh();
+        assert_eq!(m.indices.len(), 12);
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a).normalize();
+            let centre = (a + b + c) / 3.0;
+            assert!(n.dot(centre) > 0.0, "face normal {n} at {centre}");
+            assert!((n - m.normals[t[0] as usize]).length() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn rectangle_faces_plus_z() {
+        let m = rectangle_mesh();
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            assert!((b - a).cross(c - a).z > 0.0);
+        }
+    }
+}

@@ -1,0 +1,131 @@
+//! Integrators: estimate the radiance (or an AOV) arriving along a camera ray.
+//!
+//! Closed-set dispatch: [`Integrator`] is an enum and `li` matches on it. Each integrator draws
+//! its random numbers from the sampler it is handed, so the estimate is a pure function of the
+//! sampler's stream.
+
+mod aov;
+mod direct;
+pub mod path;
+
+use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator};
+
+use self::path::{Combine, PathConfig};
+
+use crate::build::Scene;
+use crate::camera::CameraRay;
+use crate::math::Vec3;
+use crate::sampling::Sampler;
+
+/// The integrators this build can run.
+#[derive(Clone, Debug)]
+pub enum Integrator {
+    /// Shading normal at the first hit (world space, components in [-1,1]); 0 on a miss.
+    Normals,
+    /// Reflectance colour at the first hit; 0 on a miss.
+    Albedo,
+    /// Distance along the camera ray to the first hit; 0 on a miss.
+    Depth,
+    /// Fraction of the cosine-weighted hemisphere that is unoccluded within `length`.
+    AmbientOcclusion { samples: u32, length: f32 },
+    /// Path tracing and its restrictions (Whitted, Nori's variants).
+    Path(PathConfig),
+    /// Mitsuba's `direct`: `emitter_samples` + `bsdf_samples` combined with MIS.
+    Direct { emitter_samples: u32, bsdf_samples: u32 },
+}
+
+/// An integrator the scene asks for that this build does not have.
+#[derive(Clone, Debug, thiserror::Error)]
+#[error("integrator '{0}' is not implemented yet")]
+pub struct UnsupportedIntegrator(pub String);
+
+impl Integrator {
+    pub fn from_desc(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegrator> {
+        Ok(match desc {
+            IntegratorDesc::Normals => Integrator::Normals,
+            IntegratorDesc::Albedo => Integrator::Albedo,
+            IntegratorDesc::Depth => Integrator::Depth,
+            IntegratorDesc::AmbientOcclusion { samples, length } => Integrator::AmbientOcclusion {
+                samples: (*samples).max(1),
+                length: length.unwrap_or(f32::INFINITY),
+            },
+            IntegratorDesc::Path {
+                max_depth,
+                rr_depth,
+                hide_emitters,
+                mis,
+            } => Integrator::Path(PathConfig::mitsuba(
+                *max_depth,
+                *rr_depth,
+                *hide_emitters,
+                match mis {
+                    MisHeuristic::Power => Combine::Power,
+                    MisHeuristic::Balance => Combine::Balance,
+                },
+            )),
+            IntegratorDesc::Direct {
+                emitter_samples,
+                bsdf_samples,
+            } => Integrator::Direct {
+                emitter_samples: *emitter_samples,
+                bsdf_samples: *bsdf_samples,
+            },
+            IntegratorDesc::Whitted { max_depth } => Integrator::Path(PathConfig {
+                max_depth: *max_depth,
+                rr_depth: u32::MAX,
+                hide_emitters: false,
+                combine: Combine::EmitterOnly,
+                continue_diffuse: false,
+            }),
+            IntegratorDesc::NoriSimple => Integrator::Path(nori(2, Combine::EmitterOnly)),
+            IntegratorDesc::Nori(n) => Integrator::Path(match n {
+                NoriIntegrator::DirectEms => nori(2, Combine::EmitterOnly),
+                NoriIntegrator::DirectMats => nori(2, Combine::BsdfOnly),
+                NoriIntegrator::DirectMis => nori(2, Combine::Balance),
+                NoriIntegrator::PathEms => nori(u32::MAX, Combine::EmitterOnly),
+                NoriIntegrator::PathMats => nori(u32::MAX, Combine::BsdfOnly),
+                NoriIntegrator::PathMis => nori(u32::MAX, Combine::Balance),
+            }),
+        })
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Integrator::Normals => "normals",
+            Integrator::Albedo => "albedo",
+            Integrator::Depth => "depth",
+            Integrator::AmbientOcclusion { .. } => "ao",
+            Integrator::Path(_) => "path",
+            Integrator::Direct { .. } => "direct",
+        }
+    }
+
+    /// The estimate along one camera ray.
+    pub fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        match self {
+            Integrator::Normals => aov::normals(scene, cray),
+            Integrator::Albedo => aov::albedo(scene, cray),
+            Integrator::Depth => aov::depth(scene, cray),
+            Integrator::AmbientOcclusion { samples, length } => {
+                aov::ambient_occlusion(scene, cray, sampler, *samples, *length)
+            }
+            Integrator::Path(cfg) => path::li(scene, cray, sampler, cfg),
+            Integrator::Direct {
+                emitter_samples,
+                bsdf_samples,
+            } => direct::li(scene, cray, sampler, *emitter_samples, *bsdf_samples),
+        }
+    }
+}
+
+/// Nori's unbiased estimators: Russian roulette from the third bounce, no depth limit unless
+/// `max_depth` (direct lighting: 2 segments).
+fn nori(max_depth: u32, combine: Combine) -> PathConfig {
+    PathConfig {
+        max_depth,
+        rr_depth: 3,
+        hide_emitters: false,
+        combine,
+        continue_diffuse: true,
+    }
+}

@@ -1,0 +1,534 @@
+//! Emitters and their sampling, following Mitsuba 3's definitions.
+//!
+//! - `Area`: an emitting shape; radiance leaves the front side (the side the shading normal
+//!   points to) unless two-sided. Spheres seen from outside are sampled uniformly in the cone
+//!   they subtend (solid angle); meshes by area (triangle chosen in proportion to its area,
+//!   then a uniform point), disks by area; area densities are converted to solid angle.
+//! - `Point` (intensity / d²), `Spot` (Mitsuba's linear falloff between `beam_width` and
+//!   `cutoff_angle`), `Directional` (irradiance along `direction`): delta lights.
+//! - `Constant` environment (sampled uniformly over the sphere) and `EnvMap`: an
+//!   equirectangular image, bilinearly interpolated, importance-sampled with a piecewise-
+//!   constant 2D distribution of its pixel luminance weighted by sin θ. Local directions map to
+//!   uv = (atan2(x, −z) / 2π, acos(y) / π), y up, as in Mitsuba.
+
+use std::sync::Arc;
+
+use scene::{ColorParam, EnvMapping};
+
+use crate::build::Scene;
+use crate::film::Image;
+use crate::math::{Frame, INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
+use crate::sampling::distrib::{Distribution1D, Distribution2D};
+use crate::sampling::warp;
+use crate::shapes::{ShapeGeom, SurfaceInteraction, gamma};
+
+/// A point on an emitter with what it sends towards the receiver.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Unit direction from the receiver towards the light.
+    pub wi: Vec3,
+    /// Emitted radiance arriving along `-wi` (for delta lights: intensity / d² or irradiance).
+    pub li: Vec3,
+    /// Solid-angle density of choosing `wi` (1 for delta lights), not including light selection.
+    pub pdf: f32,
+    pub delta: bool,
+    /// Where the shadow ray must stop.
+    pub target: ShadowTarget,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum ShadowTarget {
+    /// A point on a surface (offset by its error bound along `n`).
+    Surface { p: Vec3, p_error: Vec3, n: Vec3 },
+    /// A point in space (point and spot lights).
+    Point(Vec3),
+    /// Infinitely far along `wi`.
+    Infinite,
+}
+
+/// The receiving point of a light query.
+#[derive(Clone, Copy, Debug)]
+pub struct Receiver {
+    pub p: Vec3,
+}
+
+impl From<&SurfaceInteraction> for Receiver {
+    fn from(si: &SurfaceInteraction) -> Self {
+        Receiver { p: si.p }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub enum Light {
+    Area {
+        shape: u32,
+        radiance: ColorParam,
+        two_sided: bool,
+        /// Triangle selection by area (meshes only).
+        triangles: Option<Arc<Distribution1D>>,
+        area: f32,
+    },
+    Point {
+        position: Vec3,
+        intensity: Vec3,
+    },
+    Spot {
+        position: Vec3,
+        to_local: Mat3,
+        intensity: Vec3,
+        cos_cutoff: f32,
+        cos_beam: f32,
+        cutoff: f32,
+        inv_transition: f32,
+    },
+    Directional {
+        /// Direction the light travels in (unit).
+        direction: Vec3,
+        irradiance: Vec3,
+    },
+    Constant {
+        radiance: Vec3,
+    },
+    EnvMap(Arc<EnvMap>),
+}
+
+#[derive(Debug)]
+pub struct EnvMap {
+    pub image: Image,
+    pub scale: f32,
+    pub to_world: Mat3,
+    pub to_local: Mat3,
+    pub mapping: EnvMapping,
+    pub distribution: Distribution2D,
+}
+
+impl EnvMap {
+    pub fn new(image: Image, scale: f32, to_world: &Mat4, mapping: EnvMapping) -> EnvMap {
+        let (w, h) = (image.width as usize, image.height as usize);
+        let mut weights = vec![0f32; w * h];
+        for y in 0..h {
+            let sin_theta = ((y as f32 + 0.5) / h as f32 * PI).sin();
+            for x in 0..w {
+                let v = luminance(image.get(x as u32, y as u32)).max(0.0);
+                weights[y * w + x] = if v.is_finite() { v * sin_theta } else { 0.0 };
+            }
+        }
+        let rot = Mat3::from_mat4(*to_world);
+        EnvMap {
+            distribution: Distribution2D::new(&weights, w, h),
+            image,
+            scale,
+            to_world: rot,
+            to_local: rot.inverse(),
+            mapping,
+        }
+    }
+
+    fn dir_to_uv(&self, d_world: Vec3) -> Vec2 {
+        let d = (self.to_local * d_world).normalize_or_zero();
+        match self.mapping {
+            EnvMapping::LatLong => {
+                let mut u = d.x.atan2(-d.z) * (0.5 * INV_PI);
+                if u < 0.0 {
+                    u += 1.0;
+                }
+                Vec2::new(u, d.y.clamp(-1.0, 1.0).acos() * INV_PI)
+            }
+            EnvMapping::Probe => {
+                // Debevec's angular map: r = acos(-z) / (π √(x² + y²)).
+                let xy = (d.x * d.x + d.y * d.y).sqrt();
+                let r = if xy > 0.0 {
+                    (-d.z).clamp(-1.0, 1.0).acos() * INV_PI / xy
+                } else {
+                    0.0
+                };
+                Vec2::new(0.5 + 0.5 * d.x * r, 0.5 - 0.5 * d.y * r)
+            }
+        }
+    }
+
+    fn uv_to_dir(&self, uv: Vec2) -> (Vec3, f32) {
+        let phi = uv.x * 2.0 * PI;
+        let theta = uv.y * PI;
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        let local = Vec3::new(st * sp, ct, -st * cp);
+        ((self.to_world * local).normalize(), st)
+    }
+
+    /// Bilinear lookup, uv (0,0) at the top-left of the image, wrapping in u.
+    fn lookup(&self, uv: Vec2) -> Vec3 {
+        let (w, h) = (self.image.width as i64, self.image.height as i64);
+        let x = uv.x * w as f32 - 0.5;
+        let y = uv.y * h as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let px = |dx: i64, dy: i64| {
+            let xi = (x0 + dx).rem_euclid(w) as u32;
+            let yi = (y0 + dy).clamp(0, h - 1) as u32;
+            self.image.get(xi, yi)
+        };
+        ((px(0, 0) * (1.0 - fx) + px(1, 0) * fx) * (1.0 - fy)
+            + (px(0, 1) * (1.0 - fx) + px(1, 1) * fx) * fy)
+            * self.scale
+    }
+
+    pub fn eval(&self, d_world: Vec3) -> Vec3 {
+        self.lookup(self.dir_to_uv(d_world))
+    }
+
+    fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        if self.mapping == EnvMapping::Probe {
+            // Probe maps are sampled uniformly over the sphere.
+            let d = warp::square_to_uniform_sphere(u);
+            return Some((d, self.eval(d), warp::uniform_sphere_pdf()));
+        }
+        let (uv, pdf_uv) = self.distribution.sample(u);
+        let (d, sin_theta) = self.uv_to_dir(uv);
+        if pdf_uv <= 0.0 || sin_theta <= 0.0 {
+            return None;
+        }
+        Some((d, self.lookup(uv), pdf_uv / (2.0 * PI * PI * sin_theta)))
+    }
+
+    fn pdf(&self, d_world: Vec3) -> f32 {
+        if self.mapping == EnvMapping::Probe {
+            return warp::uniform_sphere_pdf();
+        }
+        let uv = self.dir_to_uv(d_world);
+        let sin_theta = (uv.y * PI).sin();
+        if sin_theta <= 0.0 {
+            return 0.0;
+        }
+        self.distribution.pdf(uv) / (2.0 * PI * PI * sin_theta)
+    }
+}
+
+/// Spot falloff of Mitsuba 3 for a local direction (cos θ = z).
+fn spot_falloff(cos_t: f32, cos_cutoff: f32, cos_beam: f32, cutoff: f32, inv_trans: f32) -> f32 {
+    if cos_t <= cos_cutoff {
+        0.0
+    } else if cos_t >= cos_beam {
+        1.0
+    } else {
+        ((cutoff - cos_t.clamp(-1.0, 1.0).acos()) * inv_trans).clamp(0.0, 1.0)
+    }
+}
+
+impl Light {
+    pub fn spot(to_world: &Mat4, intensity: Vec3, cutoff_deg: f32, beam_deg: f32) -> Light {
+        let cutoff = cutoff_deg.to_radians();
+        let beam = beam_deg.to_radians().min(cutoff);
+        let rot = Mat3::from_mat4(*to_world);
+        Light::Spot {
+            position: to_world.w_axis.truncate(),
+            to_local: rot.inverse(),
+            intensity,
+            cos_cutoff: cutoff.cos(),
+            cos_beam: beam.cos(),
+            cutoff,
+            inv_transition: if cutoff > beam {
+                1.0 / (cutoff - beam)
+            } else {
+                0.0
+            },
+        }
+    }
+
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. }
+        )
+    }
+
+    pub fn is_infinite(&self) -> bool {
+        matches!(
+            self,
+            Light::Directional { .. } | Light::Constant { .. } | Light::EnvMap(_)
+        )
+    }
+
+    /// Radiance of an environment light seen along `d` (escaping ray direction).
+    pub fn environment(&self, d: Vec3) -> Vec3 {
+        match self {
+            Light::Constant { radiance } => *radiance,
+            Light::EnvMap(env) => env.eval(d),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Sample a direction from `r` towards this light.
+    pub fn sample_li(&self, scene: &Scene, r: &Receiver, u: Vec2) -> Option<LightSample> {
+        match self {
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                let d = *position - r.p;
+                let d2 = d.length_squared();
+                (d2 > 0.0).then(|| LightSample {
+                    wi: d / d2.sqrt(),
+                    li: *intensity / d2,
+                    pdf: 1.0,
+                    delta: true,
+                    target: ShadowTarget::Point(*position),
+                })
+            }
+            Light::Spot {
+                position,
+                to_local,
+                intensity,
+                cos_cutoff,
+                cos_beam,
+                cutoff,
+                inv_transition,
+            } => {
+                let d = *position - r.p;
+                let d2 = d.length_squared();
+                if d2 <= 0.0 {
+                    return None;
+                }
+                let wi = d / d2.sqrt();
+                let local = (*to_local * -wi).normalize_or_zero();
+                let f = spot_falloff(local.z, *cos_cutoff, *cos_beam, *cutoff, *inv_transition);
+                (f > 0.0).then(|| LightSample {
+                    wi,
+                    li: *intensity * f / d2,
+                    pdf: 1.0,
+                    delta: true,
+                    target: ShadowTarget::Point(*position),
+                })
+            }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => Some(LightSample {
+                wi: -*direction,
+                li: *irradiance,
+                pdf: 1.0,
+                delta: true,
+                target: ShadowTarget::Infinite,
+            }),
+            Light::Constant { radiance } => {
+                let wi = warp::square_to_uniform_sphere(u);
+                Some(LightSample {
+                    wi,
+                    li: *radiance,
+                    pdf: warp::uniform_sphere_pdf(),
+                    delta: false,
+                    target: ShadowTarget::Infinite,
+                })
+            }
+            Light::EnvMap(env) => {
+                let (wi, li, pdf) = env.sample(u)?;
+                Some(LightSample {
+                    wi,
+                    li,
+                    pdf,
+                    delta: false,
+                    target: ShadowTarget::Infinite,
+                })
+            }
+            Light::Area {
+                shape,
+                radiance,
+                two_sided,
+                triangles,
+                area,
+            } => {
+                let info = &scene.shapes[*shape as usize];
+                let flip = if info.flip_normals { -1.0 } else { 1.0 };
+                let (p, p_error, n, uv, pdf) = match &info.geom {
+                    ShapeGeom::Sphere { center, radius } => {
+                        return sample_sphere(scene, *center, *radius, flip, radiance, r, u);
+                    }
+                    ShapeGeom::Mesh {
+                        positions,
+                        normals,
+                        uvs,
+                        indices,
+                    } => {
+                        let dist = triangles.as_ref()?;
+                        let (tri, _, ux) = dist.sample_discrete(u.x);
+                        let [i0, i1, i2] = indices[tri].map(|i| i as usize);
+                        let b = warp::square_to_uniform_triangle(Vec2::new(ux, u.y));
+                        let b0 = 1.0 - b.x - b.y;
+                        let (p0, p1, p2) = (positions[i0], positions[i1], positions[i2]);
+                        let p = b0 * p0 + b.x * p1 + b.y * p2;
+                        let err = gamma(6) * ((b0 * p0).abs() + (b.x * p1).abs() + (b.y * p2).abs());
+                        let mut n = (p1 - p0).cross(p2 - p0).normalize_or_zero() * flip;
+                        if let Some(ns) = normals {
+                            let s = b0 * ns[i0] + b.x * ns[i1] + b.y * ns[i2];
+                            if s.dot(n) < 0.0 {
+                                n = -n;
+                            }
+                        }
+                        let uv = match uvs {
+                            Some(t) => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
+                            None => b,
+                        };
+                        (p, err, n, uv, 1.0 / *area)
+                    }
+                    ShapeGeom::Disk { to_world, normal } => {
+                        let d = warp::square_to_uniform_disk_concentric(u);
+                        let p = to_world.transform_point3(Vec3::new(d.x, d.y, 0.0));
+                        let err = gamma(6) * (p.abs() + to_world.w_axis.truncate().abs());
+                        let rr = d.length();
+                        let mut phi = d.y.atan2(d.x);
+                        if phi < 0.0 {
+                            phi += 2.0 * PI;
+                        }
+                        (p, err, *normal * flip, Vec2::new(rr, phi / (2.0 * PI)), 1.0 / *area)
+                    }
+                    ShapeGeom::Plane { .. } => return None,
+                };
+                let to = p - r.p;
+                let d2 = to.length_squared();
+                if d2 <= 0.0 {
+                    return None;
+                }
+                let wi = to / d2.sqrt();
+                let cos_l = n.dot(-wi);
+                if cos_l == 0.0 || (!*two_sided && cos_l < 0.0) {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    li: scene.color(radiance, uv),
+                    pdf: pdf * d2 / cos_l.abs(),
+                    delta: false,
+                    target: ShadowTarget::Surface { p, p_error, n },
+                })
+            }
+        }
+    }
+
+    /// Solid-angle density with which `sample_li` from `r` produces the direction towards
+    /// `si`, a point on this (area) light — or, for environment lights, the direction `wi`.
+    pub fn pdf_li(&self, scene: &Scene, r: &Receiver, wi: Vec3, si: Option<&SurfaceInteraction>) -> f32 {
+        match self {
+            Light::Constant { .. } => warp::uniform_sphere_pdf(),
+            Light::EnvMap(env) => env.pdf(wi),
+            Light::Area {
+                shape, area, two_sided, ..
+            } => {
+                let Some(si) = si else { return 0.0 };
+                let info = &scene.shapes[*shape as usize];
+                if let ShapeGeom::Sphere { center, radius } = &info.geom {
+                    return sphere_pdf(*center, *radius, r.p, si.p);
+                }
+                let d2 = (si.p - r.p).length_squared();
+                let cos_l = si.ng.dot(-wi);
+                if cos_l == 0.0 || (!*two_sided && si.shading.n.dot(-wi) < 0.0) {
+                    return 0.0;
+                }
+                d2 / (cos_l.abs() * *area)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Radiance leaving an area light at `si` towards `si.wo`.
+    pub fn le(&self, scene: &Scene, si: &SurfaceInteraction) -> Vec3 {
+        match self {
+            Light::Area {
+                radiance, two_sided, ..
+            } => {
+                if *two_sided || si.shading.n.dot(si.wo) > 0.0 {
+                    scene.color(radiance, si.uv)
+                } else {
+                    Vec3::ZERO
+                }
+            }
+            _ => Vec3::ZERO,
+        }
+    }
+}
+
+/// Mitsuba's sphere emitter sampling: uniform cone from outside, uniform area from inside.
+fn sample_sphere(
+    scene: &Scene,
+    center: Vec3,
+    radius: f32,
+    flip: f32,
+    radiance: &ColorParam,
+    r: &Receiver,
+    u: Vec2,
+) -> Option<LightSample> {
+    let to_c = center - r.p;
+    let dc2 = to_c.length_squared();
+    let r2 = radius * radius;
+    let (p, pdf_solid) = if dc2 > r2 * (1.0 + 1e-4) {
+        let dc = dc2.sqrt();
+        let sin_max2 = r2 / dc2;
+        let cos_max = (1.0 - sin_max2).max(0.0).sqrt();
+        let frame = Frame::from_normal(to_c / dc);
+        let local = warp::square_to_uniform_cone(u, cos_max);
+        let wi = frame.to_world(local);
+        // Nearest intersection of the ray r.p + t wi with the sphere (clamped for grazing).
+        let b = wi.dot(to_c);
+        let disc = (r2 - (to_c - b * wi).length_squared()).max(0.0);
+        let t = b - disc.sqrt();
+        (r.p + wi * t, warp::uniform_cone_pdf(cos_max))
+    } else {
+        let d = warp::square_to_uniform_sphere(u);
+        let p = center + d * radius;
+        let to = p - r.p;
+        let d2 = to.length_squared();
+        let cos_l = d.dot(-to.normalize_or_zero()).abs();
+        if d2 <= 0.0 || cos_l == 0.0 {
+            return None;
+        }
+        (p, d2 / (cos_l * 4.0 * PI * r2))
+    };
+    let n_out = (p - center).normalize_or_zero();
+    let p = center + n_out * radius;
+    let to = p - r.p;
+    let d2 = to.length_squared();
+    if d2 <= 0.0 || !pdf_solid.is_finite() {
+        return None;
+    }
+    let wi = to / d2.sqrt();
+    let n = n_out * flip;
+    if n.dot(-wi) <= 0.0 {
+        // Sampled the inside of the sphere from outside (or vice versa): no emission.
+        return None;
+    }
+    let mut phi = n_out.y.atan2(n_out.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let uv = Vec2::new(phi / (2.0 * PI), n_out.z.clamp(-1.0, 1.0).acos() * INV_PI);
+    Some(LightSample {
+        wi,
+        li: scene.color(radiance, uv),
+        pdf: pdf_solid,
+        delta: false,
+        target: ShadowTarget::Surface {
+            p,
+            p_error: gamma(5) * (p.abs() + center.abs()),
+            n,
+        },
+    })
+}
+
+fn sphere_pdf(center: Vec3, radius: f32, from: Vec3, on: Vec3) -> f32 {
+    let to_c = center - from;
+    let dc2 = to_c.length_squared();
+    let r2 = radius * radius;
+    if dc2 > r2 * (1.0 + 1e-4) {
+        let cos_max = (1.0 - r2 / dc2).max(0.0).sqrt();
+        warp::uniform_cone_pdf(cos_max)
+    } else {
+        let to = on - from;
+        let d2 = to.length_squared();
+        let n = (on - center).normalize_or_zero();
+        let cos_l = n.dot(to.normalize_or_zero()).abs();
+        if cos_l == 0.0 {
+            return 0.0;
+        }
+        d2 / (cos_l * 4.0 * PI * r2)
+    }
+}

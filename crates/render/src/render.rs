@@ -1,0 +1,202 @@
+//! The render driver: tiles × passes on the current rayon pool.
+//!
+//! A pass adds samples `[s0, s1)` to every pixel. Tiles of a pass run in parallel and are
+//! merged into the film after the pass; each pixel's samples are accumulated in index order,
+//! so the image is bit-identical for any thread count and any split into passes. Passes are
+//! sized from the measured speed (about a second each), so a time budget, Ctrl-C (the
+//! `cancel` flag) or a progressive writer stops at a pass boundary with a consistent image.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use crate::build::Scene;
+use crate::film::{Film, FilmTile, Filter};
+use crate::integrators::Integrator;
+use crate::math::{UVec2, Vec2};
+use crate::sampling::Sampler;
+
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// Samples per pixel to reach (upper bound when a time budget is set).
+    pub spp: u32,
+    /// Stop after the pass during which this much time has elapsed (passes are planned to fit).
+    pub time_budget: Option<Duration>,
+    pub tile_size: u32,
+    /// Set it (e.g. from a Ctrl-C handler) to stop after the current pass.
+    pub cancel: Arc<AtomicBool>,
+    /// Target duration of one pass.
+    pub pass_duration: Duration,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            spp: 16,
+            time_budget: None,
+            tile_size: 16,
+            cancel: Arc::new(AtomicBool::new(false)),
+            pass_duration: Duration::from_secs(1),
+        }
+    }
+}
+
+/// What the progress callback is told.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Pixel samples finished so far.
+    pub samples_done: u64,
+    /// Pixel samples planned in all (spp × pixels); with a time budget, an estimate.
+    pub samples_total: u64,
+    pub elapsed: Duration,
+    /// Samples per pixel completed in whole passes.
+    pub spp_done: u32,
+}
+
+pub struct RenderOutcome {
+    pub film: Film,
+    pub spp: u32,
+    pub passes: u32,
+    pub elapsed: Duration,
+    pub cancelled: bool,
+}
+
+/// Events reported while rendering.
+pub trait RenderObserver: Sync {
+    /// Called often (after every tile) from worker threads.
+    fn progress(&self, _p: &Progress) {}
+    /// Called after every pass with the film so far (e.g. progressive output).
+    fn pass_done(&self, _film: &Film, _spp: u32) {}
+}
+
+/// An observer that ignores everything.
+pub struct Silent;
+impl RenderObserver for Silent {}
+
+fn tiles(film: &Film, size: u32) -> Vec<(UVec2, UVec2)> {
+    let (min, max) = film.pixel_bounds();
+    let mut out = Vec::new();
+    let mut y = min.y;
+    while y < max.y {
+        let mut x = min.x;
+        while x < max.x {
+            let hi = UVec2::new((x + size).min(max.x), (y + size).min(max.y));
+            out.push((UVec2::new(x, y), hi));
+            x += size;
+        }
+        y += size;
+    }
+    out
+}
+
+/// Render sample indices `[s0, s1)` of every pixel of one tile.
+#[allow(clippy::too_many_arguments)]
+fn render_tile(
+    scene: &Scene,
+    integrator: &Integrator,
+    filter: &Filter,
+    template: &Sampler,
+    film: &Film,
+    (lo, hi): (UVec2, UVec2),
+    s0: u32,
+    s1: u32,
+) -> FilmTile {
+    let mut tile = film.tile(lo, hi);
+    let mut sampler = template.clone();
+    for y in lo.y..hi.y {
+        for x in lo.x..hi.x {
+            let pixel = UVec2::new(x, y);
+            for index in s0..s1 {
+                sampler.start_pixel_sample(pixel, index);
+                let fs = filter.sample(sampler.next_2d());
+                let u_lens = sampler.next_2d();
+                let p_film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + fs.offset;
+                let cray = scene.camera.generate_ray(p_film, u_lens);
+                let l = integrator.li(scene, &cray, &mut sampler);
+                tile.add_sample(pixel, l, fs.weight);
+            }
+        }
+    }
+    tile
+}
+
+/// Render `scene` with `integrator` on the current rayon pool.
+pub fn render(
+    scene: &Scene,
+    integrator: &Integrator,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
+    let start = Instant::now();
+    let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop);
+    let filter = Filter::new(&scene.film.filter);
+    let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
+    let tile_list = tiles(&film, opts.tile_size.max(1));
+    let (pmin, pmax) = film.pixel_bounds();
+    let pixels = (pmax - pmin).as_u64vec2();
+    let pixels = pixels.x * pixels.y;
+    let target = opts.spp.max(1);
+
+    let done = AtomicU64::new(0);
+    let mut spp_done = 0u32;
+    let mut passes = 0u32;
+    let mut pass_spp = 1u32;
+    let mut cancelled = false;
+    while spp_done < target {
+        if opts.cancel.load(Ordering::Relaxed) {
+            cancelled = true;
+            break;
+        }
+        let s0 = spp_done;
+        let s1 = (s0 + pass_spp).min(target);
+        let pass_start = Instant::now();
+        let samples_total = pixels * target as u64;
+        let finished: Vec<FilmTile> = tile_list
+            .par_iter()
+            .map(|&bounds| {
+                let tile = render_tile(scene, integrator, &filter, &template, &film, bounds, s0, s1);
+                let n = (bounds.1 - bounds.0).as_u64vec2();
+                let d = done.fetch_add(n.x * n.y * (s1 - s0) as u64, Ordering::Relaxed)
+                    + n.x * n.y * (s1 - s0) as u64;
+                observer.progress(&Progress {
+                    samples_done: d,
+                    samples_total,
+                    elapsed: start.elapsed(),
+                    spp_done: s0,
+                });
+                tile
+            })
+            .collect();
+        for t in finished {
+            film.merge(t);
+        }
+        spp_done = s1;
+        passes += 1;
+        observer.pass_done(&film, spp_done);
+
+        // Size the next pass from the measured speed.
+        let per_spp = pass_start.elapsed().as_secs_f64() / (s1 - s0) as f64;
+        let mut next = (opts.pass_duration.as_secs_f64() / per_spp.max(1e-9)).floor();
+        if let Some(budget) = opts.time_budget {
+            let left = budget.as_secs_f64() - start.elapsed().as_secs_f64();
+            if left <= 0.0 {
+                break;
+            }
+            next = next.min((left / per_spp.max(1e-9)).floor());
+            if next < 1.0 {
+                // Not even one more sample per pixel fits in the budget.
+                break;
+            }
+        }
+        pass_spp = next.clamp(1.0, 1 << 20) as u32;
+    }
+    RenderOutcome {
+        film,
+        spp: spp_done,
+        passes,
+        elapsed: start.elapsed(),
+        cancelled,
+    }
+}
