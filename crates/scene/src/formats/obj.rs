@@ -323,7 +323,7 @@ impl Parser {
                 line,
                 line_no,
                 at,
-                format!("{what} index {i} out of range ({count} {what}s defined so far)"),
+                format!("{what} index {i} out of range ({count} defined so far)"),
             ));
         }
         Ok(resolved as u32)

@@ -406,6 +406,18 @@ trait Source {
     fn min_record_size(&self, elem: &Element) -> usize;
     /// An error at the current position.
     fn error(&self, msg: String) -> LoadError;
+    /// The position of the next value (for errors about it once it has been read).
+    fn mark(&mut self) -> Mark;
+    /// An error at a marked position.
+    fn error_at(&self, mark: Mark, msg: String) -> LoadError;
+}
+
+/// A position in the data: byte offset, and line and column for ascii files.
+#[derive(Clone, Copy, Debug)]
+struct Mark {
+    pos: usize,
+    line: u32,
+    col: u32,
 }
 
 struct Binary<'a> {
@@ -475,9 +487,8 @@ impl Binary<'_> {
                 Ok(b)
             }
             None => Err(self.error(format!(
-                "file truncated ({n} bytes needed at byte offset {}, file has {} bytes)",
-                self.pos,
-                self.data.len()
+                "file truncated ({n} bytes needed, {} left)",
+                self.remaining()
             ))),
         }
     }
@@ -506,9 +517,24 @@ impl Source for Binary<'_> {
         elem.min_binary_size()
     }
     fn error(&self, msg: String) -> LoadError {
+        let mark = Mark {
+            pos: self.pos,
+            line: 0,
+            col: 0,
+        };
+        self.error_at(mark, msg)
+    }
+    fn mark(&mut self) -> Mark {
+        Mark {
+            pos: self.pos,
+            line: 0,
+            col: 0,
+        }
+    }
+    fn error_at(&self, mark: Mark, msg: String) -> LoadError {
         LoadError::new(
             Loc::new(self.file, 0, 0),
-            format!("{msg} (at byte offset {})", self.pos),
+            format!("{msg} (at byte offset {})", mark.pos),
         )
     }
 }
@@ -523,7 +549,7 @@ struct Ascii<'a> {
 
 impl<'a> Ascii<'a> {
     /// The next whitespace-separated token and its (line, column).
-    fn token(&mut self) -> Result<(&'a str, u32, u32)> {
+    fn skip_space(&mut self) {
         let d = self.data;
         while self.pos < d.len() && d[self.pos].is_ascii_whitespace() {
             if d[self.pos] == b'\n' {
@@ -532,6 +558,11 @@ impl<'a> Ascii<'a> {
             }
             self.pos += 1;
         }
+    }
+
+    fn token(&mut self) -> Result<(&'a str, u32, u32)> {
+        self.skip_space();
+        let d = self.data;
         if self.pos >= d.len() {
             return Err(self.error("unexpected end of file".into()));
         }
@@ -582,10 +613,59 @@ impl Source for Ascii<'_> {
         let col = u32::try_from(self.pos - self.line_start + 1).unwrap_or(u32::MAX);
         self.at(self.line, col, msg)
     }
+    fn mark(&mut self) -> Mark {
+        self.skip_space();
+        Mark {
+            pos: self.pos,
+            line: self.line,
+            col: u32::try_from(self.pos - self.line_start + 1).unwrap_or(u32::MAX),
+        }
+    }
+    fn error_at(&self, mark: Mark, msg: String) -> LoadError {
+        self.at(mark.line, mark.col, msg)
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
 // Element readers
+
+/// Read one `N`-component attribute from every `stride`-byte record of `block` (component `k`
+/// at byte offset `fields[k].0`, of type `fields[k].1`) and append it to `out`.
+#[inline(always)]
+fn gather<const BIG: bool, const N: usize, T, F: Fn([f32; N]) -> T>(
+    block: &[u8],
+    stride: usize,
+    fields: [(usize, Scalar); N],
+    out: &mut Vec<T>,
+    make: F,
+) {
+    let records = block.chunks_exact(stride);
+    out.reserve_exact(records.len());
+    if fields.iter().all(|&(_, s)| s == Scalar::F32) {
+        // The common case: single-precision components.
+        let offsets = fields.map(|(o, _)| o);
+        out.extend(records.map(|rec| {
+            let mut v = [0.0f32; N];
+            for (x, &o) in v.iter_mut().zip(&offsets) {
+                let b = [rec[o], rec[o + 1], rec[o + 2], rec[o + 3]];
+                *x = if BIG {
+                    f32::from_be_bytes(b)
+                } else {
+                    f32::from_le_bytes(b)
+                };
+            }
+            make(v)
+        }));
+    } else {
+        out.extend(records.map(|rec| {
+            let mut v = [0.0f32; N];
+            for (x, &(o, s)) in v.iter_mut().zip(&fields) {
+                *x = decode(s, &rec[o..], BIG) as f32;
+            }
+            make(v)
+        }));
+    }
+}
 
 /// `i` as a vertex index if it is in `0..vertex_count`.
 fn checked_index(i: i64, vertex_count: u64) -> Option<u32> {
@@ -743,12 +823,31 @@ impl<'a> Reader<'a> {
             "vertex" => {
                 self.reserve_vertices(cap);
                 let mut vals = vec![0.0f64; elem.props.len()];
+                let mut used = vec![false; elem.props.len()];
+                if let Some(l) = &self.vertex {
+                    let uv = l.uv.iter().flatten();
+                    for &k in l.pos.iter().chain(l.normal.iter().flatten()).chain(uv) {
+                        used[k] = true;
+                    }
+                }
                 for i in 0..elem.count {
                     let what = || format!("vertex {i}");
                     for (k, prop) in elem.props.iter().enumerate() {
                         match prop.kind {
                             Kind::Scalar(s) => {
-                                vals[k] = src.value(s).map_err(|e| src.context(e, &what))?;
+                                let mark = src.mark();
+                                let v = src.value(s).map_err(|e| src.context(e, &what))?;
+                                if used[k] && !(v as f32).is_finite() {
+                                    return Err(src.error_at(
+                                        mark,
+                                        format!(
+                                            "vertex {i}: property '{}' is not a finite \
+                                             single-precision number ({v:e})",
+                                            prop.name
+                                        ),
+                                    ));
+                                }
+                                vals[k] = v;
                             }
                             Kind::List { count, item } => {
                                 let n = self.list_len(src, count, &what)?;
@@ -762,14 +861,8 @@ impl<'a> Reader<'a> {
                     let p = l.pos.map(|k| vals[k]);
                     let n = l.normal.map(|ks| ks.map(|k| vals[k]));
                     let uv = l.uv.map(|ks| ks.map(|k| vals[k]));
-                    if !self.push_vertex(p, n, uv) {
-                        return Err(src.context(
-                            src.error(
-                                "non-finite (NaN, infinite or out of f32 range) value".into(),
-                            ),
-                            &what,
-                        ));
-                    }
+                    // Values were checked as they were read.
+                    self.push_vertex(p, n, uv);
                 }
             }
             "face" => {
@@ -838,12 +931,14 @@ impl<'a> Reader<'a> {
         }
         let vertex_count = self.vertex_count;
         let read = |src: &mut S| -> Result<u32> {
+            let mark = src.mark();
             let i = src.int(item).map_err(|e| src.context(e, what))?;
             checked_index(i, vertex_count).ok_or_else(|| {
                 src.context(
-                    src.error(format!(
-                        "vertex index {i} out of range ({vertex_count} vertices)"
-                    )),
+                    src.error_at(
+                        mark,
+                        format!("vertex index {i} out of range ({vertex_count} vertices)"),
+                    ),
                     what,
                 )
             })
@@ -891,7 +986,7 @@ impl<'a> Reader<'a> {
         };
         let count = usize::try_from(elem.count).unwrap_or(usize::MAX);
         let start = src.pos;
-        let bytes = count.checked_mul(stride).unwrap_or(usize::MAX);
+        let bytes = count.saturating_mul(stride);
         let Some(block) = src.data.get(start..).and_then(|r| r.get(..bytes)) else {
             return Err(src.error(format!(
                 "file truncated: {} vertices of {stride} bytes need {bytes} bytes, {} remain",
@@ -916,23 +1011,48 @@ impl<'a> Reader<'a> {
         let pos = layout.pos.map(field);
         let normal = layout.normal.map(|ks| ks.map(field));
         let uv = layout.uv.map(|ks| ks.map(field));
-        let big = src.big;
-        self.reserve_vertices(count);
-        let rd = |rec: &[u8], (o, s): (usize, Scalar)| decode(s, &rec[o..], big);
-        for (i, rec) in block.chunks_exact(stride).enumerate() {
-            let p = pos.map(|f| rd(rec, f));
-            let n = normal.map(|fs| fs.map(|f| rd(rec, f)));
-            let t = uv.map(|fs| fs.map(|f| rd(rec, f)));
-            if !self.push_vertex(p, n, t) {
-                return Err(LoadError::new(
-                    Loc::new(self.file, 0, 0),
-                    format!(
-                        "vertex {i}: non-finite (NaN, infinite or out of f32 range) value \
-                         (at byte offset {})",
-                        start + i * stride
-                    ),
-                ));
+        let m = &mut self.mesh;
+        // One tight pass per attribute over fixed-size records.
+        if src.big {
+            gather::<true, 3, _, _>(block, stride, pos, &mut m.positions, Vec3::from_array);
+            if let Some(f) = normal {
+                gather::<true, 3, _, _>(block, stride, f, &mut m.normals, Vec3::from_array);
             }
+            if let Some(f) = uv {
+                gather::<true, 2, _, _>(block, stride, f, &mut m.uvs, Vec2::from_array);
+            }
+        } else {
+            gather::<false, 3, _, _>(block, stride, pos, &mut m.positions, Vec3::from_array);
+            if let Some(f) = normal {
+                gather::<false, 3, _, _>(block, stride, f, &mut m.normals, Vec3::from_array);
+            }
+            if let Some(f) = uv {
+                gather::<false, 2, _, _>(block, stride, f, &mut m.uvs, Vec2::from_array);
+            }
+        }
+        let first_bad = [
+            m.positions
+                .iter()
+                .position(|v| !v.is_finite())
+                .map(|i| (i, "position")),
+            m.normals
+                .iter()
+                .position(|v| !v.is_finite())
+                .map(|i| (i, "normal")),
+            m.uvs.iter().position(|v| !v.is_finite()).map(|i| (i, "uv")),
+        ]
+        .into_iter()
+        .flatten()
+        .min();
+        if let Some((i, what)) = first_bad {
+            return Err(LoadError::new(
+                Loc::new(self.file, 0, 0),
+                format!(
+                    "vertex {i}: the {what} is not finite in single precision \
+                     (at byte offset {})",
+                    start + i * stride
+                ),
+            ));
         }
         src.pos = start + bytes;
         Ok(())
@@ -961,55 +1081,72 @@ impl<'a> Reader<'a> {
         };
         let cap = Self::capacity(elem.count, src.remaining(), 13);
         self.mesh.indices.reserve_exact(cap);
-        let data = src.data;
-        let big = src.big;
         // With at most i32::MAX vertices, a negative `int` read as u32 is out of range too.
         let nv = self.vertex_count as u32;
-        let rd = |o: usize| {
-            let mut a = [0u8; 4];
-            a.copy_from_slice(&data[o..o + 4]);
-            if big {
-                u32::from_be_bytes(a)
-            } else {
-                u32::from_le_bytes(a)
-            }
-        };
         let mut pos = src.pos;
-        for i in 0..elem.count {
-            if data.get(pos) == Some(&3) && pos + 13 <= data.len() {
-                let tri = [rd(pos + 1), rd(pos + 5), rd(pos + 9)];
-                if tri[0] >= nv || tri[1] >= nv || tri[2] >= nv {
-                    let (k, &bad) = tri
-                        .iter()
-                        .enumerate()
-                        .find(|(_, v)| **v >= nv)
-                        .unwrap_or((0, &0));
-                    let shown = decode_int(item, &data[pos + 1 + 4 * k..], big);
-                    debug_assert_eq!(shown as u32, bad);
-                    return Err(LoadError::new(
-                        Loc::new(self.file, 0, 0),
-                        format!(
-                            "face {i}: vertex index {shown} out of range ({} vertices) \
-                             (at byte offset {})",
-                            self.vertex_count,
-                            pos + 1 + 4 * k
-                        ),
-                    ));
-                }
-                self.mesh.indices.push(tri);
-                pos += 13;
+        let mut i = 0;
+        while i < elem.count {
+            let run = if src.big {
+                triangle_run::<true>(src.data, pos, elem.count - i, nv, &mut self.mesh.indices)
             } else {
-                // Polygons, and the error paths (truncation, short faces).
+                triangle_run::<false>(src.data, pos, elem.count - i, nv, &mut self.mesh.indices)
+            };
+            i += run;
+            pos += 13 * run as usize;
+            if i < elem.count {
+                // A polygon, or an error (truncation, short face, bad index) reported with
+                // the generic reader's messages.
                 src.pos = pos;
                 let what = || format!("face {i}");
                 let n = self.list_len(src, count_ty, &what)?;
                 self.polygon(src, item, n, &what)?;
                 pos = src.pos;
+                i += 1;
             }
         }
         src.pos = pos;
         Ok(())
     }
+}
+
+/// Append the consecutive triangle records (`3 a b c`, one count byte and three 32-bit
+/// indices, all indices below `nv`) starting at byte `pos`, at most `max` of them; returns how
+/// many were consumed.
+#[inline(always)]
+fn triangle_run<const BIG: bool>(
+    data: &[u8],
+    mut pos: usize,
+    max: u64,
+    nv: u32,
+    out: &mut Vec<[u32; 3]>,
+) -> u64 {
+    let mut n = 0;
+    while n < max {
+        let Some(rec) = data
+            .get(pos..)
+            .and_then(|r| r.get(..13))
+            .and_then(|r| <&[u8; 13]>::try_from(r).ok())
+        else {
+            break;
+        };
+        let rd = |o: usize| {
+            let b = [rec[o], rec[o + 1], rec[o + 2], rec[o + 3]];
+            if BIG {
+                u32::from_be_bytes(b)
+            } else {
+                u32::from_le_bytes(b)
+            }
+        };
+        let tri = [rd(1), rd(5), rd(9)];
+        // With at most i32::MAX vertices, a negative `int` read as u32 is out of range too.
+        if rec[0] != 3 || tri[0] >= nv || tri[1] >= nv || tri[2] >= nv {
+            break;
+        }
+        out.push(tri);
+        pos += 13;
+        n += 1;
+    }
+    n
 }
 
 #[cfg(test)]
