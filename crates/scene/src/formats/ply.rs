@@ -818,6 +818,10 @@ impl<'a> Reader<'a> {
 
     /// Read any element from any source, one value at a time.
     fn element_generic<S: Source>(&mut self, elem: &Element, src: &mut S) -> Result<()> {
+        if elem.props.is_empty() {
+            // Records without properties take no space, however many the header announces.
+            return Ok(());
+        }
         let cap = Self::capacity(elem.count, src.remaining(), src.min_record_size(elem));
         match elem.name.as_str() {
             "vertex" => {
