@@ -35,7 +35,7 @@ pub const CIE_MAX: f64 = 830.0;
 /// Number of samples of the CIE tables (5 nm spacing).
 pub const CIE_SAMPLES: usize = 95;
 /// Scale making a flat unit spectrum integrate to luminance 1 (Mitsuba `MI_CIE_Y_NORMALIZATION`).
-pub const CIE_Y_NORMALIZATION: f64 = 1.0 / 106.750_259_399_414_062_5;
+pub const CIE_Y_NORMALIZATION: f64 = 1.0 / 106.750_259_399_414_06;
 /// Scale making the tabulated D65 illuminant integrate to luminance 1 (Mitsuba
 /// `MI_CIE_D65_NORMALIZATION`).
 pub const D65_NORMALIZATION: f64 = 1.0 / 98.997_417_518_762_55;

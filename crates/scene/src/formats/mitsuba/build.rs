@@ -128,12 +128,11 @@ impl<'s> Ctx<'s> {
 
 fn collect_ids<'s>(e: &'s Elem, ids: &mut HashMap<String, &'s Elem>) -> Result<()> {
     for c in &e.children {
-        if c.tag != "ref" {
-            if let Some(a) = c.attr("id") {
-                if ids.insert(a.value.clone(), c).is_some() {
-                    return Err(err(&a.loc, format!("duplicate id '{}'", a.value)));
-                }
-            }
+        if c.tag != "ref"
+            && let Some(a) = c.attr("id")
+            && ids.insert(a.value.clone(), c).is_some()
+        {
+            return Err(err(&a.loc, format!("duplicate id '{}'", a.value)));
         }
         collect_ids(c, ids)?;
     }
@@ -278,10 +277,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     /// A scalar parameter: a float or a texture.
     fn float_param(&mut self, pl: &Plugin<'s>, name: &str, default: f32) -> Result<FloatParam> {
-        if let Some(c) = pl.named_child(name) {
-            if c.elem.tag == "texture" {
-                return Ok(FloatParam::Texture(self.texture(c)?));
-            }
+        if let Some(c) = pl.named_child(name)
+            && c.elem.tag == "texture"
+        {
+            return Ok(FloatParam::Texture(self.texture(c)?));
         }
         Ok(FloatParam::Const(pl.props.float(name, default)?))
     }
@@ -355,10 +354,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     // Textures
 
     fn texture(&mut self, c: &Child<'s>) -> Result<TextureId> {
-        if let Some(id) = c.id() {
-            if let Some(&t) = self.textures.get(id) {
-                return Ok(t);
-            }
+        if let Some(id) = c.id()
+            && let Some(&t) = self.textures.get(id)
+        {
+            return Ok(t);
         }
         let pl = self.ctx.plugin(c.elem)?;
         let to_uv = pl
@@ -433,10 +432,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     // Materials
 
     pub fn material(&mut self, c: &Child<'s>) -> Result<MaterialId> {
-        if let Some(id) = c.id() {
-            if let Some(&m) = self.materials.get(id) {
-                return Ok(m);
-            }
+        if let Some(id) = c.id()
+            && let Some(&m) = self.materials.get(id)
+        {
+            return Ok(m);
         }
         let pl = self.ctx.plugin(c.elem)?;
         let material = self.material_of(&pl)?;

@@ -98,6 +98,8 @@ struct Reader {
     params: HashMap<String, Param>,
     /// Canonical paths of the files being read (include cycle detection).
     stack: Vec<PathBuf>,
+    /// For each entry of `stack`, the `<include>` that opened it.
+    via: Vec<Loc>,
     search_dirs: Vec<PathBuf>,
     warnings: Vec<Warning>,
 }
@@ -107,6 +109,7 @@ pub fn read(path: &Path, opts: &LoadOptions) -> Result<Source> {
     let mut reader = Reader {
         params: HashMap::new(),
         stack: Vec::new(),
+        via: Vec::new(),
         search_dirs: vec![main_dir],
         warnings: Vec::new(),
     };
@@ -157,7 +160,12 @@ impl Reader {
                 .chain(std::iter::once(&canonical))
                 .map(|p| p.display().to_string())
                 .collect();
-            return Err(err(at, format!("include cycle: {}", chain.join(" -> "))));
+            // Point at the <include> inside the first file of the cycle.
+            let culprit = self.via.get(i + 1).unwrap_or(at);
+            return Err(err(
+                culprit,
+                format!("include cycle: {}", chain.join(" -> ")),
+            ));
         }
         let text = read_text(path, at)?;
         let file = Arc::new(path.to_path_buf());
@@ -167,18 +175,33 @@ impl Reader {
             ..Default::default()
         };
         let doc = roxmltree::Document::parse_with_options(&text, opt).map_err(|e| {
-            let p = e.pos();
-            LoadError::new(Loc::new(&file, p.row, p.col), format!("malformed XML: {e}"))
+            use roxmltree::Error as E;
+            match e {
+                // roxmltree reports these at 1:1; the problem is at the end of the text.
+                E::UnclosedRootNode | E::UnexpectedEndOfStream | E::NoRootNode => {
+                    let (line, col) = line_col(&text, text.len());
+                    LoadError::new(
+                        Loc::new(&file, line, col),
+                        format!("malformed XML: unexpected end of file ({e})"),
+                    )
+                }
+                _ => {
+                    let p = e.pos();
+                    LoadError::new(Loc::new(&file, p.row, p.col), format!("malformed XML: {e}"))
+                }
+            }
         })?;
         let dir = Arc::new(path.parent().map(Path::to_path_buf).unwrap_or_default());
         self.stack.push(canonical);
+        self.via.push(at.clone());
         let ctx = FileCtx {
             doc: &doc,
             file: &file,
             dir: &dir,
         };
-        let result = self.convert(&ctx, doc.root_element(), 0);
+        let result = self.convert(&ctx, doc.root_element());
         self.stack.pop();
+        self.via.pop();
         match result? {
             Converted::One(e) => Ok(e),
             Converted::Many(_) | Converted::None => Err(err(
@@ -234,7 +257,6 @@ impl Reader {
         &mut self,
         ctx: &FileCtx<'_, '_>,
         node: roxmltree::Node<'_, '_>,
-        depth: usize,
     ) -> Result<Converted> {
         let tag = node.tag_name().name().to_string();
         let loc = ctx.loc(node.range().start);
@@ -316,7 +338,7 @@ impl Reader {
         let mut elem = elem;
         for child in node.children() {
             if child.is_element() {
-                match self.convert(ctx, child, depth + 1)? {
+                match self.convert(ctx, child)? {
                     Converted::One(e) => elem.children.push(e),
                     Converted::Many(v) => elem.children.extend(v),
                     Converted::None => {}
