@@ -96,17 +96,20 @@ impl<'s> Ctx<'s> {
             )
         })?;
         self.resolve(name, pl.elem).ok_or_else(|| {
+            let mut dirs: Vec<String> = Vec::new();
+            for d in std::iter::once(pl.elem.dir.as_path())
+                .chain(self.src.search_dirs.iter().map(PathBuf::as_path))
+            {
+                let d = d.display().to_string();
+                if !dirs.contains(&d) {
+                    dirs.push(d);
+                }
+            }
             err(
                 loc,
                 format!(
-                    "{what} file '{name}' not found (looked next to {} and in {})",
-                    pl.elem.dir.display(),
-                    self.src
-                        .search_dirs
-                        .iter()
-                        .map(|d| d.display().to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    "{what} file '{name}' not found (looked in {})",
+                    dirs.join(", ")
                 ),
             )
         })
@@ -676,7 +679,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                          referenced from one)",
                     ));
                 }
-                // A template referenced by shapes: instantiated there.
+                // A template referenced by shapes: instantiated (and checked) there.
+                for p in &pl.props.props {
+                    p.used.set(true);
+                }
                 return Ok(None);
             }
             "point" => {
