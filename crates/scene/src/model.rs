@@ -578,6 +578,8 @@ pub enum TestKind {
         references: Vec<f32>,
         /// Incident angles in degrees, for BSDF cases.
         angles: Vec<f32>,
+        /// Samples per BSDF case (Nori `sampleCount`, default 100 000).
+        sample_count: u32,
         /// Each case: a whole scene.
         scenes: Vec<SceneDesc>,
         /// Each case: a BSDF (with its own scene holding its materials).

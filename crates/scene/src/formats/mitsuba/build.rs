@@ -1,0 +1,1486 @@
+//! Stage 3: plugins → the scene model. Defaults are Mitsuba 3's for Mitsuba tags (`sensor`,
+//! `shape`...) and Nori's for Nori tags (`camera`, `mesh`) and Nori-only plugins.
+
+use std::collections::{HashMap, HashSet};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{Mat3, Mat4, Vec3};
+
+use super::ior;
+use super::plugin::{Child, Plugin};
+use super::props::{ColorSpec, Value, parse_floats};
+use super::tree::{Elem, Source, err, resolve_file};
+use crate::model::*;
+use crate::spectra::{self, SpectrumUse};
+use crate::{LoadError, Loc, Result, Warning};
+
+/// Largest accepted film side and pixel count (a bigger film would not fit in memory).
+const MAX_FILM_SIDE: i64 = 1 << 16;
+const MAX_FILM_PIXELS: i64 = 1 << 28;
+
+/// Which renderer's conventions a file follows (decides defaults that differ).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dialect {
+    /// Mitsuba 2/3 (`<scene version="2.x/3.x">`).
+    Mitsuba3,
+    /// Mitsuba 0.x or Nori (no version, or version 0.x).
+    Legacy,
+}
+
+/// State shared by every scene of one document.
+pub struct Ctx<'s> {
+    pub src: &'s Source,
+    pub ids: HashMap<String, &'s Elem>,
+    pub main_file: PathBuf,
+    pub dialect: Dialect,
+    meshes: HashMap<PathBuf, Arc<TriMesh>>,
+    warned: HashSet<(String, String, String)>,
+    pub warnings: Vec<Warning>,
+}
+
+impl<'s> Ctx<'s> {
+    pub fn new(src: &'s Source, main_file: PathBuf, dialect: Dialect) -> Result<Self> {
+        let mut ids = HashMap::new();
+        collect_ids(&src.root, &mut ids)?;
+        Ok(Ctx {
+            src,
+            ids,
+            main_file,
+            dialect,
+            meshes: HashMap::new(),
+            warned: HashSet::new(),
+            warnings: src.warnings.clone(),
+        })
+    }
+
+    pub fn plugin(&mut self, elem: &'s Elem) -> Result<Plugin<'s>> {
+        Plugin::new(elem, &self.ids, &mut self.warnings)
+    }
+
+    pub fn warn(&mut self, loc: &Loc, message: impl Into<String>) {
+        self.warnings.push(Warning {
+            loc: loc.clone(),
+            message: message.into(),
+        });
+    }
+
+    /// Warn (once per tag, type and name) about parameters the plugin did not use.
+    pub fn finish(&mut self, pl: &Plugin<'_>) {
+        for p in pl.props.unused() {
+            let key = (pl.elem.tag.clone(), pl.ty.clone(), p.name.clone());
+            if self.warned.insert(key) {
+                let what = if pl.ty.is_empty() {
+                    format!("<{}>", pl.elem.tag)
+                } else {
+                    format!("{} '{}'", pl.elem.tag, pl.ty)
+                };
+                self.warnings.push(Warning {
+                    loc: p.loc.clone(),
+                    message: format!("unknown parameter '{}' of {what} ignored", p.name),
+                });
+            }
+        }
+    }
+
+    fn resolve(&self, name: &str, elem: &Elem) -> Option<PathBuf> {
+        resolve_file(name, &elem.dir, &self.src.search_dirs)
+    }
+
+    /// A file parameter (`filename`), resolved and checked to exist.
+    fn file_param(&self, pl: &Plugin<'_>, what: &str) -> Result<PathBuf> {
+        let (name, loc) = pl.props.string_opt("filename")?.ok_or_else(|| {
+            err(
+                pl.loc(),
+                format!("{what} needs a 'filename' string parameter"),
+            )
+        })?;
+        self.resolve(name, pl.elem).ok_or_else(|| {
+            let mut dirs: Vec<String> = Vec::new();
+            for d in std::iter::once(pl.elem.dir.as_path())
+                .chain(self.src.search_dirs.iter().map(PathBuf::as_path))
+            {
+                let d = d.display().to_string();
+                if !dirs.contains(&d) {
+                    dirs.push(d);
+                }
+            }
+            err(
+                loc,
+                format!(
+                    "{what} file '{name}' not found (looked in {})",
+                    dirs.join(", ")
+                ),
+            )
+        })
+    }
+
+    fn mesh(&mut self, path: PathBuf, ty: &str) -> Result<Arc<TriMesh>> {
+        if let Some(m) = self.meshes.get(&path) {
+            return Ok(m.clone());
+        }
+        let mesh = match ty {
+            "ply" => crate::formats::ply::read_ply(&path)?,
+            _ => crate::formats::obj::read_obj(&path)?,
+        };
+        let mesh = Arc::new(mesh);
+        self.meshes.insert(path, mesh.clone());
+        Ok(mesh)
+    }
+}
+
+fn collect_ids<'s>(e: &'s Elem, ids: &mut HashMap<String, &'s Elem>) -> Result<()> {
+    for c in &e.children {
+        if c.tag != "ref"
+            && let Some(a) = c.attr("id")
+            && ids.insert(a.value.clone(), c).is_some()
+        {
+            return Err(err(&a.loc, format!("duplicate id '{}'", a.value)));
+        }
+        collect_ids(c, ids)?;
+    }
+    Ok(())
+}
+
+fn unknown_type(pl: &Plugin<'_>, expected: &str) -> LoadError {
+    err(
+        pl.loc(),
+        format!(
+            "unknown {} type '{}' (supported: {expected})",
+            pl.elem.tag, pl.ty
+        ),
+    )
+}
+
+/// Turn a 4×4 `to_uv` transform into the 2D homogeneous matrix Mitsuba uses (rows and
+/// columns 0, 1, 3).
+fn extract_uv(m: Mat4) -> Mat3 {
+    let pick = |c: usize| Vec3::new(m.col(c)[0], m.col(c)[1], m.col(c)[3]);
+    Mat3::from_cols(pick(0), pick(1), pick(3))
+}
+
+fn spec_to_rgb(spec: &ColorSpec, usage: SpectrumUse, loc: &Loc) -> Result<Rgb> {
+    match spec {
+        ColorSpec::Rgb(v) => Ok(*v),
+        ColorSpec::Uniform(v) => Ok(spectra::uniform_to_rgb(*v, usage)),
+        ColorSpec::Sampled(w, v) => {
+            spectra::sampled_to_rgb(w, v, usage).map_err(|e| err(loc, e.to_string()))
+        }
+    }
+}
+
+fn usage_for(name: &str, emitter: bool) -> SpectrumUse {
+    if emitter {
+        SpectrumUse::Emission
+    } else if matches!(name, "eta" | "k" | "int_ior" | "ext_ior") {
+        SpectrumUse::Unbounded
+    } else {
+        SpectrumUse::Reflectance
+    }
+}
+
+/// Builds one `SceneDesc` (a document holds one, or several for Nori t-tests).
+pub struct SceneBuilder<'c, 's> {
+    pub ctx: &'c mut Ctx<'s>,
+    pub scene: SceneDesc,
+    materials: HashMap<String, MaterialId>,
+    textures: HashMap<String, TextureId>,
+    /// A sampler given at scene level (Nori), applied to every sensor without its own.
+    top_sampler: Option<SamplerDesc>,
+    sensor_has_sampler: Vec<bool>,
+    has_integrator: bool,
+}
+
+impl<'c, 's> SceneBuilder<'c, 's> {
+    pub fn new(ctx: &'c mut Ctx<'s>) -> Self {
+        let source = ctx.main_file.clone();
+        SceneBuilder {
+            ctx,
+            scene: SceneDesc {
+                source,
+                ..Default::default()
+            },
+            materials: HashMap::new(),
+            textures: HashMap::new(),
+            top_sampler: None,
+            sensor_has_sampler: Vec::new(),
+            has_integrator: false,
+        }
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Parameters
+
+    /// A colour parameter: a texture child, an `<rgb>`/`<spectrum>`/`<float>`, or `default`.
+    fn color(
+        &mut self,
+        pl: &Plugin<'s>,
+        name: &str,
+        default: f32,
+        emitter: bool,
+    ) -> Result<ColorParam> {
+        Ok(self
+            .color_opt(pl, name, emitter)?
+            .unwrap_or(ColorParam::constant(default)))
+    }
+
+    fn color_opt(
+        &mut self,
+        pl: &Plugin<'s>,
+        name: &str,
+        emitter: bool,
+    ) -> Result<Option<ColorParam>> {
+        if let Some(c) = pl.named_child(name) {
+            if c.elem.tag != "texture" {
+                return Err(err(
+                    &c.loc,
+                    format!(
+                        "parameter '{name}' expects a texture, found <{}>",
+                        c.elem.tag
+                    ),
+                ));
+            }
+            return Ok(Some(ColorParam::Texture(self.texture(c)?)));
+        }
+        let Some(p) = pl.props.get(name) else {
+            return Ok(None);
+        };
+        let usage = usage_for(name, emitter);
+        let rgb = match &p.value {
+            Value::Color(spec) => spec_to_rgb(spec, usage, &p.loc)?,
+            Value::Float(v) => Vec3::splat(*v as f32),
+            Value::Int(v) => Vec3::splat(*v as f32),
+            other => {
+                return Err(err(
+                    &p.loc,
+                    format!(
+                        "parameter '{name}' should be a colour (rgb, spectrum, float or \
+                         texture), found {other:?}"
+                    ),
+                ));
+            }
+        };
+        Ok(Some(ColorParam::Const(rgb)))
+    }
+
+    /// A constant colour (no textures allowed).
+    fn rgb(&mut self, pl: &Plugin<'s>, name: &str, default: Rgb, emitter: bool) -> Result<Rgb> {
+        match self.color_opt(pl, name, emitter)? {
+            None => Ok(default),
+            Some(ColorParam::Const(v)) => Ok(v),
+            Some(ColorParam::Texture(_)) => Err(err(
+                pl.named_child(name).map_or(pl.loc(), |c| &c.loc),
+                format!(
+                    "parameter '{name}' of {} '{}' cannot be a texture",
+                    pl.elem.tag, pl.ty
+                ),
+            )),
+        }
+    }
+
+    /// A scalar parameter: a float or a texture.
+    fn float_param(&mut self, pl: &Plugin<'s>, name: &str, default: f32) -> Result<FloatParam> {
+        if let Some(c) = pl.named_child(name)
+            && c.elem.tag == "texture"
+        {
+            return Ok(FloatParam::Texture(self.texture(c)?));
+        }
+        Ok(FloatParam::Const(pl.props.float(name, default)?))
+    }
+
+    /// An index of refraction: a number or one of Mitsuba's names (`bk7`, `water`...).
+    fn ior(&self, pl: &Plugin<'s>, name: &str, default: f32) -> Result<f32> {
+        let Some(p) = pl.props.get(name) else {
+            return Ok(default);
+        };
+        let v = match &p.value {
+            Value::Float(v) => *v as f32,
+            Value::Int(v) => *v as f32,
+            Value::Str(s) => ior::dielectric(s).ok_or_else(|| {
+                err(
+                    &p.loc,
+                    format!(
+                        "unknown IOR name '{s}' (known: {})",
+                        ior::dielectric_names()
+                    ),
+                )
+            })?,
+            Value::Color(spec) => spec_to_rgb(spec, SpectrumUse::Unbounded, &p.loc)?.x,
+            _ => {
+                return Err(err(
+                    &p.loc,
+                    format!("'{name}' should be a number or a name"),
+                ));
+            }
+        };
+        if v <= 0.0 {
+            return Err(err(&p.loc, format!("'{name}' must be positive, found {v}")));
+        }
+        Ok(v)
+    }
+
+    fn distribution(&self, pl: &Plugin<'s>) -> Result<MicrofacetDistribution> {
+        match pl.props.string_opt("distribution")? {
+            None => Ok(MicrofacetDistribution::Beckmann),
+            Some((s, loc)) => match s.to_ascii_lowercase().as_str() {
+                "beckmann" => Ok(MicrofacetDistribution::Beckmann),
+                "ggx" => Ok(MicrofacetDistribution::Ggx),
+                "phong" | "as" => Err(err(
+                    loc,
+                    format!("microfacet distribution '{s}' is not supported (beckmann, ggx)"),
+                )),
+                _ => Err(err(
+                    loc,
+                    format!("unknown microfacet distribution '{s}' (beckmann, ggx)"),
+                )),
+            },
+        }
+    }
+
+    fn alphas(&mut self, pl: &Plugin<'s>) -> Result<(FloatParam, FloatParam)> {
+        if pl.props.has("alpha_u") || pl.props.has("alpha_v") {
+            if pl.props.has("alpha") {
+                return Err(err(
+                    pl.loc(),
+                    "give either 'alpha' or 'alpha_u'/'alpha_v', not both",
+                ));
+            }
+            let u = self.float_param(pl, "alpha_u", 0.1)?;
+            let v = self.float_param(pl, "alpha_v", 0.1)?;
+            return Ok((u, v));
+        }
+        let a = self.float_param(pl, "alpha", 0.1)?;
+        Ok((a.clone(), a))
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Textures
+
+    fn texture(&mut self, c: &Child<'s>) -> Result<TextureId> {
+        if let Some(id) = c.id()
+            && let Some(&t) = self.textures.get(id)
+        {
+            return Ok(t);
+        }
+        let pl = self.ctx.plugin(c.elem)?;
+        let to_uv = pl
+            .props
+            .transform("to_uv")?
+            .map_or(Mat3::IDENTITY, extract_uv);
+        let texture = match pl.ty.as_str() {
+            "bitmap" => {
+                let path = self.ctx.file_param(&pl, "bitmap texture")?;
+                let filter = match pl.props.string_opt("filter_type")? {
+                    None => TextureFilter::Bilinear,
+                    Some((s, loc)) => match s {
+                        "bilinear" => TextureFilter::Bilinear,
+                        "nearest" => TextureFilter::Nearest,
+                        "ewa" | "trilinear" => {
+                            self.ctx
+                                .warn(loc, format!("filter_type '{s}' approximated by bilinear"));
+                            TextureFilter::Bilinear
+                        }
+                        _ => {
+                            return Err(err(
+                                loc,
+                                format!("unknown filter_type '{s}' (bilinear, nearest)"),
+                            ));
+                        }
+                    },
+                };
+                let wrap = match pl.props.string_opt("wrap_mode")? {
+                    None => WrapMode::Repeat,
+                    Some((s, loc)) => match s {
+                        "repeat" => WrapMode::Repeat,
+                        "mirror" => WrapMode::Mirror,
+                        "clamp" => WrapMode::Clamp,
+                        _ => {
+                            return Err(err(
+                                loc,
+                                format!("unknown wrap_mode '{s}' (repeat, mirror, clamp)"),
+                            ));
+                        }
+                    },
+                };
+                let raw = pl.props.bool("raw", false)?;
+                Texture::Bitmap {
+                    path,
+                    filter,
+                    wrap,
+                    raw,
+                    gamma: None,
+                    to_uv,
+                }
+            }
+            "checkerboard" => Texture::Checkerboard {
+                color0: self.rgb(&pl, "color0", Vec3::splat(0.4), false)?,
+                color1: self.rgb(&pl, "color1", Vec3::splat(0.2), false)?,
+                to_uv,
+            },
+            _ => return Err(unknown_type(&pl, "bitmap, checkerboard")),
+        };
+        self.ctx.finish(&pl);
+        let id = self.scene.add_texture(TextureDesc {
+            texture,
+            name: c.id().map(str::to_string),
+            loc: pl.loc().clone(),
+        });
+        if let Some(key) = c.id() {
+            self.textures.insert(key.to_string(), id);
+        }
+        Ok(id)
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Materials
+
+    pub fn material(&mut self, c: &Child<'s>) -> Result<MaterialId> {
+        if let Some(id) = c.id()
+            && let Some(&m) = self.materials.get(id)
+        {
+            return Ok(m);
+        }
+        let pl = self.ctx.plugin(c.elem)?;
+        let material = self.material_of(&pl)?;
+        self.ctx.finish(&pl);
+        let id = match material {
+            // Wrappers we do not model resolve to their nested material.
+            Err(nested) => nested,
+            Ok(material) => self.scene.add_material(MaterialDesc {
+                material,
+                name: c.id().map(str::to_string),
+                loc: pl.loc().clone(),
+            }),
+        };
+        if let Some(key) = c.id() {
+            self.materials.insert(key.to_string(), id);
+        }
+        Ok(id)
+    }
+
+    fn nested_bsdfs(&mut self, pl: &Plugin<'s>) -> Result<Vec<MaterialId>> {
+        let children: Vec<&Child<'s>> = pl.children_with(&["bsdf"]).collect();
+        let mut out = Vec::with_capacity(children.len());
+        for c in children {
+            out.push(self.material(c)?);
+        }
+        Ok(out)
+    }
+
+    /// `Ok(Err(id))`: the plugin is a wrapper resolved to the nested material `id`.
+    fn material_of(
+        &mut self,
+        pl: &Plugin<'s>,
+    ) -> Result<std::result::Result<Material, MaterialId>> {
+        let m = match pl.ty.as_str() {
+            "diffuse" => {
+                let name = if pl.props.has("albedo") || pl.named_child("albedo").is_some() {
+                    "albedo"
+                } else {
+                    "reflectance"
+                };
+                Material::Diffuse {
+                    reflectance: self.color(pl, name, 0.5, false)?,
+                }
+            }
+            "conductor" | "roughconductor" => {
+                let (eta, k) = self.conductor_ior(pl)?;
+                let specular_reflectance = self.color(pl, "specular_reflectance", 1.0, false)?;
+                if pl.ty == "conductor" {
+                    match (eta, k) {
+                        (None, _) => Material::Mirror {
+                            reflectance: specular_reflectance,
+                        },
+                        (Some(eta), k) => Material::Conductor {
+                            eta,
+                            k,
+                            specular_reflectance,
+                        },
+                    }
+                } else {
+                    let (alpha_u, alpha_v) = self.alphas(pl)?;
+                    let (eta, k) = eta.map_or((Vec3::ZERO, Vec3::ONE), |e| (e, k));
+                    Material::RoughConductor {
+                        distribution: self.distribution(pl)?,
+                        alpha_u,
+                        alpha_v,
+                        eta,
+                        k,
+                        specular_reflectance,
+                    }
+                }
+            }
+            "dielectric" => Material::Dielectric {
+                int_ior: self.ior(pl, "int_ior", ior::BK7)?,
+                ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+                specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
+                absorption: None,
+            },
+            "thindielectric" => Material::ThinDielectric {
+                int_ior: self.ior(pl, "int_ior", ior::BK7)?,
+                ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+                specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
+            },
+            "roughdielectric" => {
+                let (alpha_u, alpha_v) = self.alphas(pl)?;
+                Material::RoughDielectric {
+                    distribution: self.distribution(pl)?,
+                    alpha_u,
+                    alpha_v,
+                    int_ior: self.ior(pl, "int_ior", ior::BK7)?,
+                    ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                    specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+                    specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
+                }
+            }
+            "plastic" => Material::Plastic {
+                diffuse_reflectance: self.color(pl, "diffuse_reflectance", 0.5, false)?,
+                specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+                int_ior: self.ior(pl, "int_ior", ior::POLYPROPYLENE)?,
+                ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                nonlinear: pl.props.bool("nonlinear", false)?,
+            },
+            "roughplastic" => Material::RoughPlastic {
+                distribution: self.distribution(pl)?,
+                alpha: pl.props.float("alpha", 0.1)?,
+                diffuse_reflectance: self.color(pl, "diffuse_reflectance", 0.5, false)?,
+                specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+                int_ior: self.ior(pl, "int_ior", ior::POLYPROPYLENE)?,
+                ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                nonlinear: pl.props.bool("nonlinear", false)?,
+            },
+            "twosided" => {
+                let nested = self.nested_bsdfs(pl)?;
+                match nested[..] {
+                    [front] => Material::TwoSided { front, back: None },
+                    [front, back] => Material::TwoSided {
+                        front,
+                        back: Some(back),
+                    },
+                    _ => {
+                        return Err(err(
+                            pl.loc(),
+                            format!(
+                                "twosided needs one or two nested bsdfs, found {}",
+                                nested.len()
+                            ),
+                        ));
+                    }
+                }
+            }
+            "null" => Material::Null,
+            // Nori
+            "mirror" => Material::Mirror {
+                reflectance: ColorParam::constant(1.0),
+            },
+            "microfacet" => Material::NoriMicrofacet {
+                alpha: pl.props.float("alpha", 0.1)?,
+                int_ior: self.ior(pl, "int_ior", ior::BK7)?,
+                ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                kd: self.rgb(pl, "kd", Vec3::splat(0.5), false)?,
+            },
+            // Wrappers whose effect we do not model: keep the nested material.
+            "mask" | "bumpmap" | "normalmap" => {
+                let nested = self.nested_bsdfs(pl)?;
+                let Some(&inner) = nested.first() else {
+                    return Err(err(pl.loc(), format!("{} needs a nested bsdf", pl.ty)));
+                };
+                self.ctx.warn(
+                    pl.loc(),
+                    format!("bsdf '{}' is not supported: using its nested bsdf", pl.ty),
+                );
+                for p in &pl.props.props {
+                    p.used.set(true);
+                }
+                for c in &pl.children {
+                    if c.elem.tag == "texture" {
+                        // consumed by the wrapper
+                    }
+                }
+                return Ok(Err(inner));
+            }
+            _ => {
+                return Err(unknown_type(
+                    pl,
+                    "diffuse, conductor, roughconductor, dielectric, thindielectric, \
+                     roughdielectric, plastic, roughplastic, twosided, null, mirror, microfacet",
+                ));
+            }
+        };
+        Ok(Ok(m))
+    }
+
+    /// (η, k) of a conductor; `None` η means Mitsuba's default "none" (a perfect mirror).
+    fn conductor_ior(&mut self, pl: &Plugin<'s>) -> Result<(Option<Rgb>, Rgb)> {
+        let material = pl
+            .props
+            .string_opt("material")?
+            .map(|(s, l)| (s.to_string(), l.clone()));
+        let has_eta = pl.props.has("eta") || pl.props.has("k");
+        match material {
+            Some((m, loc)) if m != "none" => {
+                if has_eta {
+                    return Err(err(&loc, "give either 'material' or 'eta'/'k', not both"));
+                }
+                let (eta, k) = ior::conductor(&m).ok_or_else(|| {
+                    err(
+                        &loc,
+                        format!(
+                            "unknown conductor material '{m}' (known: {})",
+                            ior::conductor_names()
+                        ),
+                    )
+                })?;
+                let ext = self.ior(pl, "ext_eta", 1.0)?;
+                Ok((Some(eta / ext), k / ext))
+            }
+            _ if has_eta => {
+                let eta = self.rgb(pl, "eta", Vec3::ZERO, false)?;
+                let k = self.rgb(pl, "k", Vec3::ONE, false)?;
+                Ok((Some(eta), k))
+            }
+            _ => Ok((None, Vec3::ONE)),
+        }
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Emitters
+
+    fn area_emission(&mut self, c: &Child<'s>) -> Result<AreaEmission> {
+        let pl = self.ctx.plugin(c.elem)?;
+        if pl.ty != "area" {
+            return Err(err(
+                &c.loc,
+                format!(
+                    "a shape can only carry an 'area' emitter, found '{}'",
+                    pl.ty
+                ),
+            ));
+        }
+        let radiance = self.color(&pl, "radiance", 1.0, true)?;
+        self.ctx.finish(&pl);
+        Ok(AreaEmission {
+            radiance,
+            two_sided: false,
+            loc: pl.loc().clone(),
+        })
+    }
+
+    fn emitter(&mut self, pl: &Plugin<'s>) -> Result<Option<Emitter>> {
+        let to_world = pl.props.transform("to_world")?;
+        let e = match pl.ty.as_str() {
+            "area" => {
+                if pl.elem.attr("id").is_none() {
+                    return Err(err(
+                        pl.loc(),
+                        "an area emitter must be nested in a shape (or given an id and \
+                         referenced from one)",
+                    ));
+                }
+                // A template referenced by shapes: instantiated (and checked) there.
+                for p in &pl.props.props {
+                    p.used.set(true);
+                }
+                return Ok(None);
+            }
+            "point" => {
+                let position = match pl.props.vector_opt("position")? {
+                    Some(p) => p,
+                    None => to_world.map_or(Vec3::ZERO, |m| m.w_axis.truncate()),
+                };
+                let intensity = if pl.props.has("power") {
+                    // Nori: isotropic point light of total power Φ → I = Φ / 4π.
+                    self.rgb(pl, "power", Vec3::ONE, true)? / (4.0 * std::f32::consts::PI)
+                } else {
+                    self.rgb(pl, "intensity", Vec3::ONE, true)?
+                };
+                Emitter::Point {
+                    position,
+                    intensity,
+                }
+            }
+            "spot" => {
+                let cutoff_angle = pl.props.float("cutoff_angle", 20.0)?;
+                let beam_width = pl.props.float("beam_width", cutoff_angle * 0.75)?;
+                if !(cutoff_angle > 0.0 && cutoff_angle <= 180.0) {
+                    return Err(err(pl.loc(), "spot: cutoff_angle must be in (0, 180]"));
+                }
+                Emitter::Spot {
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    intensity: self.rgb(pl, "intensity", Vec3::ONE, true)?,
+                    cutoff_angle,
+                    beam_width: beam_width.min(cutoff_angle),
+                }
+            }
+            "directional" => {
+                let direction = match pl.props.vector_opt("direction")? {
+                    Some(d) => d,
+                    None => to_world.map_or(Vec3::Z, |m| m.transform_vector3(Vec3::Z)),
+                };
+                let direction = direction.normalize_or_zero();
+                if direction == Vec3::ZERO {
+                    return Err(err(pl.loc(), "directional: direction must be non-zero"));
+                }
+                Emitter::Directional {
+                    direction,
+                    irradiance: self.rgb(pl, "irradiance", Vec3::ONE, true)?,
+                }
+            }
+            "constant" => Emitter::Constant {
+                radiance: self.rgb(pl, "radiance", Vec3::ONE, true)?,
+            },
+            "envmap" => {
+                let path = self.ctx.file_param(pl, "envmap")?;
+                Emitter::EnvMap {
+                    path,
+                    scale: pl.props.float("scale", 1.0)?,
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    mapping: EnvMapping::LatLong,
+                }
+            }
+            _ => {
+                return Err(unknown_type(
+                    pl,
+                    "area, point, spot, directional, constant, envmap",
+                ));
+            }
+        };
+        Ok(Some(e))
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Shapes
+
+    fn shape(&mut self, pl: &Plugin<'s>) -> Result<()> {
+        let mut to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let shape = match pl.ty.as_str() {
+            "obj" | "ply" => {
+                let path = self.ctx.file_param(pl, "mesh")?;
+                let mut mesh = self.ctx.mesh(path, &pl.ty)?;
+                if pl.props.bool("face_normals", false)? && !mesh.normals.is_empty() {
+                    let mut m = (*mesh).clone();
+                    m.normals.clear();
+                    mesh = Arc::new(m);
+                }
+                // Known Mitsuba options without an effect on our model.
+                let _ = pl.props.bool("flip_tex_coords", true)?;
+                Shape::Mesh(mesh)
+            }
+            "sphere" => {
+                let center = pl.props.vector_opt("center")?.unwrap_or(Vec3::ZERO);
+                let radius = pl.props.float("radius", 1.0)?;
+                Shape::Sphere { center, radius }
+            }
+            "rectangle" => Shape::Rectangle,
+            "disk" => Shape::Disk,
+            "cube" => Shape::Cube,
+            "serialized" | "shapegroup" | "instance" => {
+                return Err(err(
+                    pl.loc(),
+                    format!("{} '{}' is not supported", pl.elem.tag, pl.ty),
+                ));
+            }
+            _ => {
+                return Err(unknown_type(pl, "obj, ply, sphere, rectangle, disk, cube"));
+            }
+        };
+        if !to_world.is_finite() {
+            to_world = Mat4::IDENTITY;
+        }
+        let flip_normals = pl.props.bool("flip_normals", false)?;
+        let mut material = None;
+        let mut emission = None;
+        for c in &pl.children {
+            match c.elem.tag.as_str() {
+                "bsdf" => {
+                    if material.is_some() {
+                        return Err(err(&c.loc, "a shape can have only one bsdf"));
+                    }
+                    material = Some(self.material(c)?);
+                }
+                "emitter" => {
+                    if emission.is_some() {
+                        return Err(err(&c.loc, "a shape can have only one emitter"));
+                    }
+                    emission = Some(self.area_emission(c)?);
+                }
+                "medium" => self
+                    .ctx
+                    .warn(&c.loc, "participating media are not supported; ignored"),
+                other => {
+                    return Err(err(
+                        &c.loc,
+                        format!("<{other}> cannot be nested in a shape"),
+                    ));
+                }
+            }
+        }
+        self.ctx.finish(pl);
+        let name = pl
+            .elem
+            .value("id")
+            .or_else(|| pl.elem.value("name"))
+            .map(str::to_string);
+        self.scene.shapes.push(ShapeDesc {
+            shape,
+            to_world,
+            material,
+            emission,
+            flip_normals,
+            name,
+            loc: pl.loc().clone(),
+        });
+        Ok(())
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Sensors, films, filters, samplers
+
+    fn sampler(&mut self, pl: &Plugin<'s>) -> Result<SamplerDesc> {
+        let kind = match pl.ty.as_str() {
+            "independent" => SamplerKind::Independent,
+            "stratified" => SamplerKind::Stratified,
+            "halton" => SamplerKind::Halton,
+            "sobol" => SamplerKind::Sobol,
+            "multijitter" | "orthogonal" => {
+                self.ctx.warn(
+                    pl.loc(),
+                    format!("sampler '{}' approximated by stratified", pl.ty),
+                );
+                SamplerKind::Stratified
+            }
+            "ldsampler" => {
+                self.ctx
+                    .warn(pl.loc(), "sampler 'ldsampler' approximated by sobol");
+                SamplerKind::Sobol
+            }
+            "hammersley" => {
+                self.ctx
+                    .warn(pl.loc(), "sampler 'hammersley' approximated by halton");
+                SamplerKind::Halton
+            }
+            _ => {
+                return Err(unknown_type(
+                    pl,
+                    "independent, stratified, multijitter, orthogonal, ldsampler, halton, \
+                     hammersley, sobol",
+                ));
+            }
+        };
+        let default_spp = match self.ctx.dialect {
+            Dialect::Mitsuba3 => 4,
+            Dialect::Legacy => 1,
+        };
+        let spp = pl
+            .props
+            .int_in("sample_count", default_spp, 1, u32::MAX as i64)? as u32;
+        let seed = pl.props.int_in("seed", 0, 0, i64::MAX)? as u64;
+        // Options of Mitsuba's samplers that do not change what is estimated.
+        let _ = pl.props.bool("jitter", true)?;
+        let _ = pl.props.int_opt("dimension")?;
+        let _ = pl.props.bool("scramble", true);
+        Ok(SamplerDesc { kind, spp, seed })
+    }
+
+    fn default_sampler(&self) -> SamplerDesc {
+        SamplerDesc {
+            kind: SamplerKind::Independent,
+            spp: match self.ctx.dialect {
+                Dialect::Mitsuba3 => 4,
+                Dialect::Legacy => 1,
+            },
+            seed: 0,
+        }
+    }
+
+    fn rfilter(&mut self, pl: &Plugin<'s>) -> Result<FilterDesc> {
+        let positive = |v: f32, what: &str| -> Result<f32> {
+            if v > 0.0 {
+                Ok(v)
+            } else {
+                Err(err(
+                    pl.loc(),
+                    format!("rfilter '{}': {what} must be positive", pl.ty),
+                ))
+            }
+        };
+        let f = match pl.ty.as_str() {
+            "box" => FilterDesc::Box {
+                radius: positive(pl.props.float("radius", 0.5)?, "radius")?,
+            },
+            "tent" => FilterDesc::Tent {
+                radius: positive(pl.props.float("radius", 1.0)?, "radius")?,
+            },
+            "gaussian" => {
+                let stddev = positive(pl.props.float("stddev", 0.5)?, "stddev")?;
+                // Mitsuba 3 truncates at 4σ; Nori has an explicit radius (default 2).
+                let radius = positive(pl.props.float("radius", 4.0 * stddev)?, "radius")?;
+                FilterDesc::Gaussian { stddev, radius }
+            }
+            "mitchell" => FilterDesc::Mitchell {
+                b: pl.props.float("b", 1.0 / 3.0)?,
+                c: pl.props.float("c", 1.0 / 3.0)?,
+                radius: positive(pl.props.float("radius", 2.0)?, "radius")?,
+            },
+            "catmullrom" => FilterDesc::Mitchell {
+                b: 0.0,
+                c: 0.5,
+                radius: 2.0,
+            },
+            "lanczos" => {
+                self.ctx.warn(
+                    pl.loc(),
+                    "rfilter 'lanczos' is not supported: using mitchell",
+                );
+                let _ = pl.props.int_opt("lobes")?;
+                FilterDesc::Mitchell {
+                    b: 1.0 / 3.0,
+                    c: 1.0 / 3.0,
+                    radius: 2.0,
+                }
+            }
+            _ => {
+                return Err(unknown_type(
+                    pl,
+                    "box, tent, gaussian, mitchell, catmullrom, lanczos",
+                ));
+            }
+        };
+        Ok(f)
+    }
+
+    fn resolution(&self, pl: &Plugin<'s>, dw: i64, dh: i64) -> Result<(u32, u32)> {
+        let w = pl.props.int_in("width", dw, 1, MAX_FILM_SIDE)?;
+        let h = pl.props.int_in("height", dh, 1, MAX_FILM_SIDE)?;
+        if w * h > MAX_FILM_PIXELS {
+            return Err(err(
+                pl.loc(),
+                format!("film of {w}×{h} pixels is too large (at most {MAX_FILM_PIXELS} pixels)"),
+            ));
+        }
+        Ok((w as u32, h as u32))
+    }
+
+    fn film(&mut self, pl: &Plugin<'s>) -> Result<Film> {
+        if !matches!(pl.ty.as_str(), "hdrfilm" | "ldrfilm" | "specfilm" | "mfilm") {
+            return Err(unknown_type(pl, "hdrfilm (ldrfilm, specfilm accepted)"));
+        }
+        let (width, height) = self.resolution(pl, 768, 576)?;
+        let crop = if [
+            "crop_offset_x",
+            "crop_offset_y",
+            "crop_width",
+            "crop_height",
+        ]
+        .iter()
+        .any(|n| pl.props.has(n))
+        {
+            let ox = pl.props.int_in("crop_offset_x", 0, 0, width as i64 - 1)?;
+            let oy = pl.props.int_in("crop_offset_y", 0, 0, height as i64 - 1)?;
+            let cw = pl
+                .props
+                .int_in("crop_width", width as i64 - ox, 1, width as i64 - ox)?;
+            let ch = pl
+                .props
+                .int_in("crop_height", height as i64 - oy, 1, height as i64 - oy)?;
+            Some(CropWindow {
+                offset_x: ox as u32,
+                offset_y: oy as u32,
+                width: cw as u32,
+                height: ch as u32,
+            })
+        } else {
+            None
+        };
+        // Output-format options: they do not change the image we compute.
+        for n in [
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "banner",
+            "high_quality_edges",
+            "sample_border",
+            "compensate",
+            "tonemap_method",
+            "gamma",
+            "exposure",
+        ] {
+            let _ = pl.props.get(n);
+        }
+        let mut filter = FilterDesc::Gaussian {
+            stddev: 0.5,
+            radius: 2.0,
+        };
+        for c in &pl.children {
+            if c.elem.tag != "rfilter" {
+                return Err(err(
+                    &c.loc,
+                    format!("<{}> cannot be nested in a film", c.elem.tag),
+                ));
+            }
+            let fp = self.ctx.plugin(c.elem)?;
+            filter = self.rfilter(&fp)?;
+            self.ctx.finish(&fp);
+        }
+        Ok(Film {
+            width,
+            height,
+            crop,
+            filter,
+            output: None,
+        })
+    }
+
+    fn fov(&mut self, pl: &Plugin<'s>, nori: bool) -> Result<(f32, FovAxis)> {
+        let axis = match pl.props.string_opt("fov_axis")? {
+            None => FovAxis::X,
+            Some((s, loc)) => match s.to_ascii_lowercase().as_str() {
+                "x" => FovAxis::X,
+                "y" => FovAxis::Y,
+                "diagonal" => FovAxis::Diagonal,
+                "smaller" => FovAxis::Smaller,
+                "larger" => FovAxis::Larger,
+                _ => {
+                    return Err(err(
+                        loc,
+                        format!("unknown fov_axis '{s}' (x, y, diagonal, smaller, larger)"),
+                    ));
+                }
+            },
+        };
+        if let Some(fov) = pl.props.float_opt("fov")? {
+            if pl.props.has("focal_length") {
+                return Err(err(
+                    pl.loc(),
+                    "give either 'fov' or 'focal_length', not both",
+                ));
+            }
+            if !(fov > 0.0 && fov < 180.0) {
+                return Err(err(
+                    &pl.props
+                        .get("fov")
+                        .map_or(pl.loc().clone(), |p| p.loc.clone()),
+                    format!("fov must be in (0, 180) degrees, found {fov}"),
+                ));
+            }
+            return Ok((fov, axis));
+        }
+        if nori {
+            return Ok((30.0, FovAxis::X));
+        }
+        // Mitsuba: 35 mm-equivalent focal length (default 50mm) → diagonal field of view.
+        let f = match pl.props.get("focal_length") {
+            None => 50.0,
+            Some(p) => {
+                let v = match &p.value {
+                    Value::Str(s) => {
+                        let t = s.trim().trim_end_matches("mm");
+                        super::props::parse_float(t, &p.loc)?
+                    }
+                    Value::Float(v) => *v,
+                    Value::Int(v) => *v as f64,
+                    _ => return Err(err(&p.loc, "focal_length should be like \"50mm\"")),
+                };
+                if v <= 0.0 {
+                    return Err(err(&p.loc, "focal_length must be positive"));
+                }
+                v as f32
+            }
+        };
+        let diag = (36.0f32 * 36.0 + 24.0 * 24.0).sqrt();
+        Ok((
+            2.0 * (diag / (2.0 * f)).atan().to_degrees(),
+            FovAxis::Diagonal,
+        ))
+    }
+
+    fn sensor(&mut self, pl: &Plugin<'s>) -> Result<()> {
+        let nori = pl.elem.tag == "camera";
+        let to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let (near_default, far_default) = if nori { (1e-4, 1e4) } else { (1e-2, 1e4) };
+        let near_clip = pl.props.float("near_clip", near_default)?;
+        let far_clip = pl.props.float("far_clip", far_default)?;
+        if !(near_clip > 0.0 && far_clip > near_clip) {
+            return Err(err(
+                pl.loc(),
+                format!("need 0 < near_clip < far_clip, found {near_clip} and {far_clip}"),
+            ));
+        }
+        let projection = match pl.ty.as_str() {
+            "perspective" => {
+                let (fov, fov_axis) = self.fov(pl, nori)?;
+                if !nori {
+                    // Used only by thinlens; Mitsuba's perspective accepts and ignores it.
+                    let _ = pl.props.float_opt("focus_distance")?;
+                }
+                Projection::Perspective { fov, fov_axis }
+            }
+            "thinlens" => {
+                let (fov, fov_axis) = self.fov(pl, nori)?;
+                Projection::ThinLens {
+                    fov,
+                    fov_axis,
+                    aperture_radius: pl.props.float("aperture_radius", 1.0)?,
+                    focus_distance: pl.props.float("focus_distance", 0.0)?,
+                }
+            }
+            "orthographic" => Projection::Orthographic,
+            _ => return Err(unknown_type(pl, "perspective, thinlens, orthographic")),
+        };
+        let mut film = None;
+        let mut sampler = None;
+        let mut filter = None;
+        for c in &pl.children {
+            let cp = self.ctx.plugin(c.elem)?;
+            match c.elem.tag.as_str() {
+                "film" => film = Some(self.film(&cp)?),
+                "sampler" => sampler = Some(self.sampler(&cp)?),
+                "rfilter" => filter = Some(self.rfilter(&cp)?),
+                "medium" => self
+                    .ctx
+                    .warn(&c.loc, "participating media are not supported; ignored"),
+                other => {
+                    return Err(err(
+                        &c.loc,
+                        format!("<{other}> cannot be nested in a sensor"),
+                    ));
+                }
+            }
+            self.ctx.finish(&cp);
+        }
+        let film = match film {
+            Some(f) => f,
+            None if nori => {
+                let (width, height) = self.resolution(pl, 1280, 720)?;
+                Film {
+                    width,
+                    height,
+                    crop: None,
+                    filter: filter.unwrap_or(FilterDesc::Gaussian {
+                        stddev: 0.5,
+                        radius: 2.0,
+                    }),
+                    output: None,
+                }
+            }
+            None => Film {
+                width: 768,
+                height: 576,
+                crop: None,
+                filter: filter.unwrap_or(FilterDesc::Gaussian {
+                    stddev: 0.5,
+                    radius: 2.0,
+                }),
+                output: None,
+            },
+        };
+        self.ctx.finish(pl);
+        self.sensor_has_sampler.push(sampler.is_some());
+        self.scene.sensors.push(Sensor {
+            camera: Camera {
+                projection,
+                to_world,
+                near_clip,
+                far_clip,
+            },
+            film,
+            sampler: sampler.unwrap_or_else(|| self.default_sampler()),
+            name: pl
+                .elem
+                .value("id")
+                .or_else(|| pl.elem.value("name"))
+                .map(str::to_string),
+            loc: pl.loc().clone(),
+        });
+        Ok(())
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Integrators
+
+    fn integrator(&mut self, pl: &Plugin<'s>) -> Result<IntegratorDesc> {
+        let i = match pl.ty.as_str() {
+            "path" | "volpath" | "volpathmis" => {
+                if pl.ty != "path" {
+                    self.ctx.warn(
+                        pl.loc(),
+                        format!("integrator '{}' approximated by 'path' (no media)", pl.ty),
+                    );
+                }
+                IntegratorDesc::Path {
+                    max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                    rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
+                    hide_emitters: pl.props.bool("hide_emitters", false)?,
+                    mis: MisHeuristic::Power,
+                }
+            }
+            "direct" => {
+                let shading = pl.props.int_in("shading_samples", 1, 0, 1 << 20)?;
+                IntegratorDesc::Direct {
+                    emitter_samples: pl.props.int_in("emitter_samples", shading, 0, 1 << 20)?
+                        as u32,
+                    bsdf_samples: pl.props.int_in("bsdf_samples", shading, 0, 1 << 20)? as u32,
+                }
+            }
+            "whitted" => IntegratorDesc::Whitted {
+                // Nori's whitted has no depth limit (specular chains end by Russian roulette).
+                max_depth: pl
+                    .props
+                    .int_in("max_depth", u32::MAX as i64, 0, u32::MAX as i64)?
+                    as u32,
+            },
+            "normals" => IntegratorDesc::Normals,
+            "albedo" => IntegratorDesc::Albedo,
+            "depth" => IntegratorDesc::Depth,
+            "ao" => IntegratorDesc::AmbientOcclusion {
+                samples: pl.props.int_in("shading_samples", 1, 1, 1 << 20)? as u32,
+                length: pl.props.float_opt("length")?,
+            },
+            "aov" => {
+                let (aovs, loc) = pl
+                    .props
+                    .string_opt("aovs")?
+                    .map(|(s, l)| (s.to_string(), l.clone()))
+                    .unwrap_or_default();
+                let kinds: Vec<&str> = aovs
+                    .split(',')
+                    .filter_map(|t| t.split(':').nth(1))
+                    .map(str::trim)
+                    .collect();
+                match kinds[..] {
+                    ["sh_normal"] | ["geo_normal"] => IntegratorDesc::Normals,
+                    ["albedo"] => IntegratorDesc::Albedo,
+                    ["depth"] => IntegratorDesc::Depth,
+                    _ => {
+                        return Err(err(
+                            &loc,
+                            format!(
+                                "aov integrator: only one of sh_normal, geo_normal, albedo, \
+                                 depth is supported, found '{aovs}'"
+                            ),
+                        ));
+                    }
+                }
+            }
+            "simple" => IntegratorDesc::NoriSimple,
+            "direct_ems" => IntegratorDesc::Nori(NoriIntegrator::DirectEms),
+            "direct_mats" => IntegratorDesc::Nori(NoriIntegrator::DirectMats),
+            "direct_mis" => IntegratorDesc::Nori(NoriIntegrator::DirectMis),
+            "path_mats" => IntegratorDesc::Nori(NoriIntegrator::PathMats),
+            "path_ems" => IntegratorDesc::Nori(NoriIntegrator::PathEms),
+            "path_mis" => IntegratorDesc::Nori(NoriIntegrator::PathMis),
+            _ => {
+                return Err(unknown_type(
+                    pl,
+                    "path, direct, normals, albedo, depth, aov, ao, whitted, simple, \
+                     direct_ems, direct_mats, direct_mis, path_mats, path_ems, path_mis",
+                ));
+            }
+        };
+        Ok(i)
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Scene
+
+    /// Add every object of a `<scene>` element.
+    pub fn scene_children(&mut self, scene: &'s Elem) -> Result<()> {
+        let pl = self.ctx.plugin(scene)?;
+        for c in &pl.children {
+            match c.elem.tag.as_str() {
+                "shape" | "mesh" => {
+                    let cp = self.ctx.plugin(c.elem)?;
+                    self.shape(&cp)?;
+                }
+                // Declarations (usually with an id): instantiated once, used through <ref>.
+                "bsdf" => {
+                    self.material(c)?;
+                }
+                "texture" => {
+                    self.texture(c)?;
+                }
+                "emitter" => {
+                    let cp = self.ctx.plugin(c.elem)?;
+                    if let Some(e) = self.emitter(&cp)? {
+                        self.scene.emitters.push(EmitterDesc {
+                            emitter: e,
+                            loc: cp.loc().clone(),
+                        });
+                    }
+                    self.ctx.finish(&cp);
+                }
+                "sensor" | "camera" => {
+                    let cp = self.ctx.plugin(c.elem)?;
+                    self.sensor(&cp)?;
+                }
+                "integrator" => {
+                    if self.has_integrator {
+                        return Err(err(&c.loc, "more than one <integrator>"));
+                    }
+                    let cp = self.ctx.plugin(c.elem)?;
+                    self.scene.integrator = self.integrator(&cp)?;
+                    self.has_integrator = true;
+                    self.ctx.finish(&cp);
+                }
+                "sampler" => {
+                    let cp = self.ctx.plugin(c.elem)?;
+                    self.top_sampler = Some(self.sampler(&cp)?);
+                    self.ctx.finish(&cp);
+                }
+                "medium" | "phase" | "volume" => {
+                    self.ctx.warn(
+                        &c.loc,
+                        format!(
+                            "<{}> (participating media) is not supported; ignored",
+                            c.elem.tag
+                        ),
+                    );
+                }
+                other => {
+                    return Err(err(&c.loc, format!("<{other}> cannot appear in a <scene>")));
+                }
+            }
+        }
+        self.ctx.finish(&pl);
+        Ok(())
+    }
+
+    /// Apply scene-level defaults and return the scene.
+    pub fn finish(mut self, loc: &Loc) -> SceneDesc {
+        if let Some(s) = &self.top_sampler {
+            for (sensor, own) in self.scene.sensors.iter_mut().zip(&self.sensor_has_sampler) {
+                if !own {
+                    sensor.sampler = s.clone();
+                }
+            }
+        }
+        if !self.has_integrator && self.ctx.dialect == Dialect::Legacy {
+            self.ctx.warn(
+                loc,
+                "no <integrator> given: using 'path' (Mitsuba's default)",
+            );
+        }
+        if self.scene.sensors.is_empty() {
+            let sensor = default_sensor(&self.scene, loc);
+            let mut sensor = sensor;
+            if let Some(s) = &self.top_sampler {
+                sensor.sampler = s.clone();
+            } else {
+                sensor.sampler = self.default_sampler();
+            }
+            self.ctx.warn(
+                loc,
+                "no sensor given: using a 45° perspective camera framing the scene from −z \
+                 (Mitsuba's default)",
+            );
+            self.scene.sensors.push(sensor);
+        }
+        self.scene
+    }
+}
+
+/// World-space bounds of the scene's shapes (None when empty or unbounded).
+fn scene_bounds(scene: &SceneDesc) -> Option<(Vec3, Vec3)> {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    let mut add = |m: &Mat4, p: Vec3| {
+        let q = m.transform_point3(p);
+        lo = lo.min(q);
+        hi = hi.max(q);
+    };
+    for s in &scene.shapes {
+        let m = &s.to_world;
+        match &s.shape {
+            Shape::Mesh(mesh) => mesh.positions.iter().for_each(|&p| add(m, p)),
+            Shape::Sphere { center, radius } => {
+                for i in 0..8 {
+                    let sign = Vec3::new(
+                        if i & 1 == 0 { -1.0 } else { 1.0 },
+                        if i & 2 == 0 { -1.0 } else { 1.0 },
+                        if i & 4 == 0 { -1.0 } else { 1.0 },
+                    );
+                    add(m, *center + sign * radius.abs());
+                }
+            }
+            Shape::Rectangle | Shape::Disk | Shape::Cube => {
+                let z = if matches!(s.shape, Shape::Cube) {
+                    1.0
+                } else {
+                    0.0
+                };
+                for i in 0..8 {
+                    let p = Vec3::new(
+                        if i & 1 == 0 { -1.0 } else { 1.0 },
+                        if i & 2 == 0 { -1.0 } else { 1.0 },
+                        if i & 4 == 0 { -z } else { z },
+                    );
+                    add(m, p);
+                }
+            }
+            Shape::InfinitePlane { .. } => {}
+        }
+    }
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
+/// Mitsuba's fallback camera: 45° field of view, looking along +z at the scene's bounding box
+/// from `distance` in front of its near face.
+fn default_sensor(scene: &SceneDesc, loc: &Loc) -> Sensor {
+    let fov = 45.0f32;
+    let (to_world, near_clip, far_clip) = match scene_bounds(scene) {
+        Some((lo, hi)) => {
+            let center = (lo + hi) * 0.5;
+            let extents = hi - lo;
+            let max_ext = extents.max_element().max(1e-6);
+            let distance = max_ext / (2.0 * (0.5 * fov).to_radians().tan());
+            (
+                Mat4::from_translation(Vec3::new(center.x, center.y, lo.z - distance)),
+                distance / 100.0,
+                max_ext * 5.0 + distance,
+            )
+        }
+        None => (Mat4::IDENTITY, 1e-2, 1e4),
+    };
+    Sensor {
+        camera: Camera {
+            projection: Projection::Perspective {
+                fov,
+                fov_axis: FovAxis::X,
+            },
+            to_world,
+            near_clip,
+            far_clip,
+        },
+        film: Film {
+            width: 768,
+            height: 576,
+            crop: None,
+            filter: FilterDesc::Gaussian {
+                stddev: 0.5,
+                radius: 2.0,
+            },
+            output: None,
+        },
+        sampler: SamplerDesc::default(),
+        name: None,
+        loc: loc.clone(),
+    }
+}
+
+/// Parse a Nori list parameter (`references`, `angles`): numbers separated by commas/spaces.
+pub fn float_list(pl: &Plugin<'_>, name: &str) -> Result<Vec<f32>> {
+    match pl.props.get(name) {
+        None => Ok(Vec::new()),
+        Some(p) => match &p.value {
+            Value::Str(s) => Ok(parse_floats(s, &p.loc)?
+                .into_iter()
+                .map(|v| v as f32)
+                .collect()),
+            Value::Float(v) => Ok(vec![*v as f32]),
+            Value::Int(v) => Ok(vec![*v as f32]),
+            _ => Err(err(&p.loc, format!("'{name}' should be a list of numbers"))),
+        },
+    }
+}
