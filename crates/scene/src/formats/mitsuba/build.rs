@@ -764,8 +764,13 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     m.normals.clear();
                     mesh = Arc::new(m);
                 }
-                // Known Mitsuba options without an effect on our model.
-                let _ = pl.props.bool("flip_tex_coords", true)?;
+                // Mitsuba flips v of OBJ texture coordinates by default, so that v = 0 is
+                // the top row of a bitmap (textures are indexed top-down).
+                if pl.ty == "obj" && pl.props.bool("flip_tex_coords", true)? && !mesh.uvs.is_empty() {
+                    let mut m = (*mesh).clone();
+                    m.uvs.iter_mut().for_each(|uv| uv.y = 1.0 - uv.y);
+                    mesh = Arc::new(m);
+                }
                 Shape::Mesh(mesh)
             }
             "sphere" => {
