@@ -1,1 +1,5 @@
-//! Film: per-pixel weighted sums and reconstruction filters. TO BE WRITTEN (helper: sampling/film).
+//! Film: per-pixel weighted sums and reconstruction filters.
+
+pub mod image;
+
+pub use image::Image;
