@@ -445,8 +445,8 @@ mod tests {
             counts[i] += 1;
         }
         assert_eq!(counts[1] + counts[4], 0);
-        for i in 0..5 {
-            assert!((counts[i] as f32 / n as f32 - a.pmf(i)).abs() < 1e-3);
+        for (i, &c) in counts.iter().enumerate() {
+            assert!((c as f32 / n as f32 - a.pmf(i)).abs() < 1e-3);
         }
     }
 }

@@ -176,7 +176,7 @@ const PRIMES: [u32; N_PRIMES] = {
         let mut is_prime = true;
         let mut d = 2u32;
         while d * d <= c {
-            if c % d == 0 {
+            if c.is_multiple_of(d) {
                 is_prime = false;
                 break;
             }
@@ -253,7 +253,7 @@ pub struct Sampler {
 /// The divisor pair `m × n = spp` with `m ≤ n` closest to square.
 fn stratified_grid(spp: u32) -> (u32, u32) {
     let mut m = (spp as f64).sqrt() as u32;
-    while m > 1 && spp % m != 0 {
+    while m > 1 && !spp.is_multiple_of(m) {
         m -= 1;
     }
     let m = m.max(1);
