@@ -18,8 +18,9 @@
 //!   on the grid), again with a per-(pixel, dimension) permutation of the sample index so the
 //!   dimensions are decorrelated. Sample indices `≥ spp` continue with independent samples.
 //! - **Halton**: the per-pixel Halton sequence (dimension `d` uses the `d`-th prime as base)
-//!   randomised by nested (Owen-style) scrambling: every digit is shifted by a hash of the
-//!   seed, the dimension, the digit position and the digits already produced, and the seed is
+//!   randomised by nested (Owen) scrambling: every digit goes through a hashed permutation
+//!   chosen by the seed, the dimension, the digit position and the digits already produced
+//!   (one permutation per node of the base-b digit tree), and the seed is
 //!   hashed with the pixel so every pixel gets an independent scramble. Base 2 uses an exact
 //!   Owen scramble via bit operations. Beyond the first 256 dimensions (base 1619) samples are
 //!   independent.
@@ -209,9 +210,13 @@ const HALTON_DIGITS: [u8; N_PRIMES] = {
     out
 };
 
-/// Owen-style scrambled radical inverse of `a` in base `PRIMES[dim]`: digit j (most significant
-/// first) is shifted by a hash of (seed, j, the scrambled digits before it). Also scrambles the
-/// (zero) digits beyond the last digit of `a`, so points fill the cells uniformly.
+/// Owen-scrambled radical inverse of `a` in base `PRIMES[dim]`: digit j (most significant first)
+/// goes through a hashed permutation of `[0, base)` (Kensler's [`permute`]) chosen by
+/// (seed, j, the scrambled digits before it), i.e. one random permutation per node of the
+/// base-b tree. Full permutations rather than pbrt-v4's random cyclic shifts: a cyclic shift
+/// of the leading digit keeps the diagonal structure of high-base Halton pairs at low sample
+/// counts (χ²-detected in `tests/sampling_stats.rs`). The (zero) digits beyond the last digit
+/// of `a` are scrambled too, so points fill their cells uniformly.
 fn scrambled_radical_inverse(dim: usize, mut a: u32, seed: u64) -> f32 {
     let base = PRIMES[dim];
     if base == 2 {
@@ -224,8 +229,8 @@ fn scrambled_radical_inverse(dim: usize, mut a: u32, seed: u64) -> f32 {
     for j in 0..HALTON_DIGITS[dim] as u64 {
         let digit = (a % base) as u64;
         a /= base;
-        let shift = hash2(seed ^ (j << 56), reversed) % b;
-        reversed = reversed * b + (digit + shift) % b;
+        let node = hash2(seed ^ (j << 56), reversed) as u32;
+        reversed = reversed * b + permute(digit as u32, base, node) as u64;
         scale *= inv_base;
     }
     ((reversed as f64 * scale) as f32).min(ONE_MINUS_EPSILON)
