@@ -150,21 +150,39 @@ const SOBOL_DIM1: [u32; 32] = {
     v
 };
 
+/// Sobol dimension 1 by bytes: `SOBOL_DIM1_BYTES[b][v]` is the XOR of the direction numbers
+/// selected by the bits of byte value `v` at byte position `b` of the index (4 KiB).
+const SOBOL_DIM1_BYTES: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut v = 0;
+        while v < 256 {
+            let mut x = 0u32;
+            let mut k = 0;
+            while k < 8 {
+                if v & (1 << k) != 0 {
+                    x ^= SOBOL_DIM1[8 * b + k];
+                }
+                k += 1;
+            }
+            t[b][v] = x;
+            v += 1;
+        }
+        b += 1;
+    }
+    t
+};
+
 /// The first two Sobol dimensions of index `i` as 32-bit fractions.
 #[inline]
 fn sobol_2d(i: u32) -> (u32, u32) {
-    let x = i.reverse_bits();
-    let mut y = 0u32;
-    let mut bits = i;
-    let mut k = 0;
-    while bits != 0 {
-        if bits & 1 != 0 {
-            y ^= SOBOL_DIM1[k];
-        }
-        bits >>= 1;
-        k += 1;
-    }
-    (x, y)
+    let [b0, b1, b2, b3] = i.to_le_bytes();
+    let y = SOBOL_DIM1_BYTES[0][b0 as usize]
+        ^ SOBOL_DIM1_BYTES[1][b1 as usize]
+        ^ SOBOL_DIM1_BYTES[2][b2 as usize]
+        ^ SOBOL_DIM1_BYTES[3][b3 as usize];
+    (i.reverse_bits(), y)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -195,7 +213,8 @@ const PRIMES: [u32; N_PRIMES] = {
     out
 };
 
-/// Number of base-`b` digits needed to resolve 2⁻³²: the smallest `k` with `bᵏ ≥ 2³²`.
+/// Number of base-`b` digits scrambled: the smallest `k` with `bᵏ ≥ 2²⁶`, two bits beyond the
+/// resolution of an `f32` in [0.5, 1).
 const HALTON_DIGITS: [u8; N_PRIMES] = {
     let mut out = [0u8; N_PRIMES];
     let mut i = 0;
@@ -203,7 +222,7 @@ const HALTON_DIGITS: [u8; N_PRIMES] = {
         let b = PRIMES[i] as u64;
         let mut k = 0u8;
         let mut p = 1u64;
-        while p < (1u64 << 32) {
+        while p < (1u64 << 26) {
             p *= b;
             k += 1;
         }
@@ -219,7 +238,8 @@ const HALTON_DIGITS: [u8; N_PRIMES] = {
 /// base-b tree. Full permutations rather than pbrt-v4's random cyclic shifts: a cyclic shift
 /// of the leading digit keeps the diagonal structure of high-base Halton pairs at low sample
 /// counts (χ²-detected in `tests/sampling_stats.rs`). The (zero) digits beyond the last digit
-/// of `a` are scrambled too, so points fill their cells uniformly.
+/// of `a` are scrambled too, so points fill their cells uniformly; since each of those nodes is
+/// visited by this point alone, that tail is one uniform draw.
 fn scrambled_radical_inverse(dim: usize, mut a: u32, seed: u64) -> f32 {
     let base = PRIMES[dim];
     if base == 2 {
@@ -229,12 +249,21 @@ fn scrambled_radical_inverse(dim: usize, mut a: u32, seed: u64) -> f32 {
     let mut reversed = 0u64;
     let mut scale = 1.0f64;
     let inv_base = 1.0 / base as f64;
-    for j in 0..HALTON_DIGITS[dim] as u64 {
-        let digit = (a % base) as u64;
+    let mut j = 0u64;
+    while j < HALTON_DIGITS[dim] as u64 {
+        // One hash per node of the digit tree: (level j, prefix `reversed`).
+        let node = mix64(seed ^ reversed.wrapping_mul(GOLDEN) ^ (j << 58));
+        if a == 0 {
+            // Every remaining digit is 0 and each node below this one is visited by this point
+            // only, so the scrambled tail is an independent uniform number: draw it at once.
+            let tail = (node >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+            return (((reversed as f64 + tail) * scale) as f32).min(ONE_MINUS_EPSILON);
+        }
+        let digit = a % base;
         a /= base;
-        let node = hash2(seed ^ (j << 56), reversed) as u32;
-        reversed = reversed * b + permute(digit as u32, base, node) as u64;
+        reversed = reversed * b + permute(digit, base, node as u32) as u64;
         scale *= inv_base;
+        j += 1;
     }
     ((reversed as f64 * scale) as f32).min(ONE_MINUS_EPSILON)
 }
@@ -483,11 +512,28 @@ mod tests {
     }
 
     #[test]
+    fn sobol_byte_tables_match_direction_numbers() {
+        for i in [0u32, 1, 2, 3, 255, 256, 0x1234_5678, u32::MAX] {
+            let mut y = 0;
+            for (k, v) in SOBOL_DIM1.iter().enumerate() {
+                if i >> k & 1 != 0 {
+                    y ^= v;
+                }
+            }
+            assert_eq!(sobol_2d(i), (i.reverse_bits(), y));
+        }
+        // Dimension 1 starts 1/2, 1/4, 3/4, ... for indices 1, 2, 3 (bit-reversed Pascal).
+        assert_eq!(sobol_2d(1).1, 1 << 31);
+        assert_eq!(sobol_2d(2).1, 3 << 30);
+        assert_eq!(sobol_2d(3).1, 1 << 30);
+    }
+
+    #[test]
     fn primes_and_digits() {
         assert_eq!(&PRIMES[..6], &[2, 3, 5, 7, 11, 13]);
         assert_eq!(PRIMES[255], 1619);
-        assert_eq!(HALTON_DIGITS[0], 32);
-        assert_eq!(HALTON_DIGITS[1], 21); // 3^21 > 2^32 > 3^20
+        assert_eq!(HALTON_DIGITS[0], 26);
+        assert_eq!(HALTON_DIGITS[1], 17); // 3^17 ≥ 2^26 > 3^16
     }
 
     #[test]
