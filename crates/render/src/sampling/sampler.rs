@@ -2,7 +2,8 @@
 //!
 //! A [`Sampler`] produces, for sample `index` of pixel `pixel`, a stream of uniform numbers in
 //! `[0, 1)` indexed by a *dimension* counter that [`Sampler::next_1d`] advances by 1 and
-//! [`Sampler::next_2d`] by 2. Every value is a pure function of
+//! [`Sampler::next_2d`] by 2 (a 2D draw at dimension d is not the same as two 1D draws: use the
+//! same call pattern for the same purpose). Every value is a pure function of
 //! `(seed, pixel, index, dimension)` (and, for the stratified sampler, `spp`): there is no
 //! hidden state carried from one pixel sample to the next, so the image does not depend on the
 //! thread count or the tile order, progressive passes can resume, and a render split across
@@ -30,9 +31,9 @@
 //! - **Sobol** (Burley 2020, "Practical Hash-based Owen Scrambling", JCGT 9(4)): padded
 //!   Sobol: each 1D / 2D draw takes the first one / two Sobol dimensions, whose sample index is
 //!   shuffled by a nested uniform scramble seeded by (seed, pixel, dimension), and whose
-//!   coordinates are then Owen-scrambled with their own seeds. The first two Sobol
-//!   dimensions have generator matrices small enough to compute on the fly, so no direction
-//!   number tables are needed. The per-bit scramble is a Laine–Karras-style hash (constants
+//!   coordinates are then Owen-scrambled with their own seeds. Only the first two Sobol
+//!   dimensions are used (van der Corput and the Pascal matrix, built at compile time), so no
+//!   imported direction-number tables are needed. The per-bit scramble is a Laine–Karras-style hash (constants
 //!   from Vegdahl 2021's improved variant): every step only lets lower bits affect higher
 //!   ones, which on bit-reversed values is exactly a nested (Owen) scramble.
 //!
