@@ -75,22 +75,6 @@ pub trait RenderObserver: Sync {
 pub struct Silent;
 impl RenderObserver for Silent {}
 
-fn tiles(film: &Film, size: u32) -> Vec<(UVec2, UVec2)> {
-    let (min, max) = film.pixel_bounds();
-    let mut out = Vec::new();
-    let mut y = min.y;
-    while y < max.y {
-        let mut x = min.x;
-        while x < max.x {
-            let hi = UVec2::new((x + size).min(max.x), (y + size).min(max.y));
-            out.push((UVec2::new(x, y), hi));
-            x += size;
-        }
-        y += size;
-    }
-    out
-}
-
 /// Render sample indices `[s0, s1)` of every pixel of one tile.
 #[allow(clippy::too_many_arguments)]
 fn render_tile(
@@ -133,7 +117,7 @@ pub fn render(
     let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop);
     let filter = Filter::new(&scene.film.filter);
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
-    let tile_list = tiles(&film, opts.tile_size.max(1));
+    let tile_list = film.tile_bounds(opts.tile_size.max(1));
     let (pmin, pmax) = film.pixel_bounds();
     let pixels = (pmax - pmin).as_u64vec2();
     let pixels = pixels.x * pixels.y;
