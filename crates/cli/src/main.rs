@@ -35,6 +35,18 @@ enum Command {
         #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
         define: Vec<(String, String)>,
     },
+    /// Compare renders with a reference (relMSE, mean ratio, block t-test of
+    /// ../shared/references/README.md). Exit code 1 when the t-test fails.
+    Compare {
+        /// The reference: NAME, NAME.exr (NAME.stderr.exr must exist beside it).
+        reference: PathBuf,
+        /// K ≥ 2 independent renders of equal spp, or one render with --stderr.
+        #[arg(required = true)]
+        test: Vec<PathBuf>,
+        /// Per-pixel standard error of a single test image (e.g. from `render --stderr`).
+        #[arg(long)]
+        stderr: Option<PathBuf>,
+    },
 }
 
 #[derive(clap::Args)]
@@ -68,6 +80,9 @@ struct RenderArgs {
     /// Which sensor of the scene to render (0-based).
     #[arg(long, default_value_t = 0)]
     sensor: usize,
+    /// Also write the per-pixel standard error of the image (from per-sample second moments).
+    #[arg(long, value_name = "FILE")]
+    stderr: Option<PathBuf>,
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
@@ -195,6 +210,9 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         args.output.clone()
     };
     check_outputs(&outputs)?;
+    if let Some(se) = &args.stderr {
+        check_outputs(std::slice::from_ref(se))?;
+    }
     if let Some(t) = args.time
         && !(t > 0.0 && t.is_finite())
     {
@@ -247,11 +265,44 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
             eprintln!("wrote {}", o.display());
         }
     }
+    if let Some(se) = &args.stderr {
+        write_image(se, &outcome.film.develop_stderr()).map_err(Failure::other)?;
+        if !args.quiet {
+            eprintln!("wrote {}", se.display());
+        }
+    }
     let bad = outcome.film.nonfinite_count();
     if bad > 0 {
         eprintln!("warning: {bad} sample(s) were NaN or infinite and were discarded");
     }
     Ok(())
+}
+
+fn cmd_compare(reference: &Path, test: &[PathBuf], stderr: Option<&Path>) -> Result<(), Failure> {
+    use render::compare::{TestImages, compare, load_reference};
+    use render::image_io::read_image_with;
+    use render::image_io::Decode;
+    let reference = load_reference(reference).map_err(Failure::input)?;
+    let images = match stderr {
+        Some(se) => {
+            if test.len() != 1 {
+                return Err(Failure::input("--stderr goes with exactly one test image"));
+            }
+            TestImages::MeanStderr {
+                mean: read_image_with(&test[0], Decode::Raw).map_err(Failure::input)?,
+                stderr: read_image_with(se, Decode::Raw).map_err(Failure::input)?,
+            }
+        }
+        None => TestImages::load_batches(test).map_err(Failure::input)?,
+    };
+    // Any problem with the inputs (size mismatch, non-finite pixels) is a failed comparison.
+    let result = compare(&reference, &images).map_err(Failure::other)?;
+    println!("{result}");
+    if result.passed {
+        Ok(())
+    } else {
+        Err(Failure::other("the block t-test rejects the test image(s)"))
+    }
 }
 
 fn main() -> ExitCode {
@@ -261,6 +312,11 @@ fn main() -> ExitCode {
         Command::Info { scene, define } => {
             load_scene(&scene, &define).and_then(|doc| info::print(&scene, &doc))
         }
+        Command::Compare {
+            reference,
+            test,
+            stderr,
+        } => cmd_compare(&reference, &test, stderr.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
