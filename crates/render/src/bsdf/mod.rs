@@ -1,1 +1,185 @@
-//! BSDF models in the local shading frame. TO BE WRITTEN (helper: bsdf).
+//! BSDF models in the local shading frame (normal = +z), following Mitsuba 3's definitions
+//! (parameters, defaults, Fresnel conventions) so renders converge to Mitsuba's references.
+//!
+//! Conventions shared by every model:
+//! - `wo` points away from the surface towards the camera / previous path vertex; `wi` is the
+//!   other direction (the one `sample` generates). Both are unit vectors in the local frame.
+//! - `eval(wo, wi)` returns f(wo, wi)·|cos θi| (Mitsuba's convention) and 0 for delta lobes.
+//! - `pdf(wo, wi)` is the solid-angle density with which `sample` produces `wi` through its
+//!   non-delta lobes (delta lobes are excluded).
+//! - `sample` returns `weight = f·|cos θi| / pdf`; for a delta lobe `pdf` is the discrete
+//!   probability of picking that lobe (as in Mitsuba), and `delta` is set.
+//! - One-sided models (everything but the dielectrics) return 0 / `None` for `wo.z ≤ 0`; the
+//!   caller makes a material two-sided by flipping the frame. Dielectrics are naturally
+//!   two-sided: `wo.z < 0` means the query comes from inside the medium.
+//! - Every variant is a small `Copy` struct with already-evaluated parameters: textures are
+//!   looked up by the caller before building the `Bsdf`.
+
+mod conductor;
+mod dielectric;
+mod diffuse;
+pub mod fresnel;
+pub mod microfacet;
+mod nori_microfacet;
+mod plastic;
+mod rough_conductor;
+mod rough_dielectric;
+mod rough_plastic;
+mod thin_dielectric;
+
+pub use conductor::Conductor;
+pub use dielectric::Dielectric;
+pub use diffuse::Diffuse;
+pub use microfacet::{Microfacet, MicrofacetType};
+pub use nori_microfacet::NoriMicrofacet;
+pub use plastic::Plastic;
+pub use rough_conductor::RoughConductor;
+pub use rough_dielectric::RoughDielectric;
+pub use rough_plastic::{RoughPlastic, RoughPlasticTables};
+pub use thin_dielectric::ThinDielectric;
+
+use crate::math::{Vec2, Vec3};
+
+/// Which quantity a path carries: radiance (camera paths) or importance (light paths). Only
+/// matters for refraction, where radiance is scaled by 1/η² and importance is not.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TransportMode {
+    #[default]
+    Radiance,
+    Importance,
+}
+
+/// The result of [`Bsdf::sample`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// Sampled direction (local frame, unit length).
+    pub wi: Vec3,
+    /// eval·|cos θi| / pdf (for delta lobes: the lobe's weight divided by its probability).
+    pub weight: Vec3,
+    /// Solid-angle density of `wi`, or the discrete lobe probability when `delta` is set.
+    pub pdf: f32,
+    /// The direction comes from a delta (perfectly specular) lobe.
+    pub delta: bool,
+    /// The direction crosses the surface (`wi.z` and `wo.z` have opposite signs).
+    pub transmission: bool,
+    /// Relative index of refraction crossed (η_inside/η_outside when entering, its inverse
+    /// when leaving), 1 for reflection. Radiance scales by 1/eta² across the interface.
+    pub eta: f32,
+}
+
+/// The operations every BSDF model implements (dispatched by the [`Bsdf`] enum).
+pub(crate) trait BsdfModel {
+    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample>;
+    fn has_delta(&self) -> bool;
+    fn has_smooth(&self) -> bool;
+    fn albedo(&self) -> Vec3;
+}
+
+/// Closed set of BSDF models.
+#[derive(Clone, Copy, Debug)]
+pub enum Bsdf {
+    Diffuse(Diffuse),
+    Conductor(Conductor),
+    RoughConductor(RoughConductor),
+    Dielectric(Dielectric),
+    ThinDielectric(ThinDielectric),
+    RoughDielectric(RoughDielectric),
+    Plastic(Plastic),
+    RoughPlastic(RoughPlastic),
+    NoriMicrofacet(NoriMicrofacet),
+}
+
+macro_rules! dispatch {
+    ($self:expr, $b:ident => $e:expr) => {
+        match $self {
+            Bsdf::Diffuse($b) => $e,
+            Bsdf::Conductor($b) => $e,
+            Bsdf::RoughConductor($b) => $e,
+            Bsdf::Dielectric($b) => $e,
+            Bsdf::ThinDielectric($b) => $e,
+            Bsdf::RoughDielectric($b) => $e,
+            Bsdf::Plastic($b) => $e,
+            Bsdf::RoughPlastic($b) => $e,
+            Bsdf::NoriMicrofacet($b) => $e,
+        }
+    };
+}
+
+impl Bsdf {
+    /// f(wo, wi)·|cos θi|; 0 for delta lobes.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        dispatch!(self, b => b.eval(wo, wi, mode))
+    }
+
+    /// Solid-angle density of `sample`'s non-delta part.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        dispatch!(self, b => b.pdf(wo, wi))
+    }
+
+    /// Sample a direction `wi` given `wo`, with `u1` choosing the lobe and `u2` the direction.
+    #[inline]
+    pub fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        dispatch!(self, b => b.sample(wo, u1, u2, mode))
+    }
+
+    /// Has at least one delta (perfectly specular) lobe.
+    #[inline]
+    pub fn has_delta(&self) -> bool {
+        dispatch!(self, b => b.has_delta())
+    }
+
+    /// Has at least one non-delta lobe (worth light sampling / MIS).
+    #[inline]
+    pub fn has_smooth(&self) -> bool {
+        dispatch!(self, b => b.has_smooth())
+    }
+
+    /// A colour for the albedo AOV.
+    #[inline]
+    pub fn albedo(&self) -> Vec3 {
+        dispatch!(self, b => b.albedo())
+    }
+}
+
+macro_rules! impl_from {
+    ($($t:ident),*) => {$(
+        impl From<$t> for Bsdf {
+            fn from(b: $t) -> Bsdf {
+                Bsdf::$t(b)
+            }
+        }
+    )*};
+}
+impl_from!(
+    Diffuse,
+    Conductor,
+    RoughConductor,
+    Dielectric,
+    ThinDielectric,
+    RoughDielectric,
+    Plastic,
+    RoughPlastic,
+    NoriMicrofacet
+);
+
+/// Mirror `w` about the normal (+z): the specular reflection direction in the local frame.
+#[inline]
+pub(crate) fn reflect_z(w: Vec3) -> Vec3 {
+    Vec3::new(-w.x, -w.y, w.z)
+}
+
+/// Average of the three channels.
+#[inline]
+pub(crate) fn mean(c: Vec3) -> f32 {
+    (c.x + c.y + c.z) * (1.0 / 3.0)
+}
+
+/// Reflect `w` about the unit vector `m` (both pointing away from the surface).
+#[inline]
+pub(crate) fn reflect_z_about(w: Vec3, m: Vec3) -> Vec3 {
+    2.0 * w.dot(m) * m - w
+}

@@ -1,0 +1,579 @@
+//! A 4-wide BVH with single-precision child boxes in SoA layout, traversed one ray at a time
+//! with 4-wide (SSE via glam `Vec4`) box and triangle tests.
+//!
+//! Construction: obvhs builds a binary BVH (PLOC, Meister & Bittner 2018, followed by SAH
+//! reinsertion optimisation, Meister & Bittner 2017); we collapse it into a 4-wide tree by
+//! repeatedly opening the largest-area child (as in Embree / Wald et al. 2008), and emit a leaf
+//! for any subtree with at most [`LEAF_MAX`] primitives. Triangles of a leaf are packed into one
+//! [`Tri4`]; analytic shapes take one packet each.
+//!
+//! Traversal: closest-hit orders the hit children front to back by entry distance and culls
+//! popped entries that lie beyond the current hit; occlusion skips ordering and returns on the
+//! first hit. The box test is made conservative by scaling the exit distance by `1 + 2γ₃`
+//! (Ize 2013, "Robust BVH Ray Traversal"), so watertight triangles are never lost to box misses.
+
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::node::Bvh2Node;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
+
+use super::prim::{
+    Tri4, WoopRay, WoopRay4, intersect_disk, intersect_sphere, tri4_any, tri4_closest,
+};
+use crate::geometry::Ray;
+use crate::math::{Mat4, Vec3, Vec4};
+
+/// Subtrees with at most this many primitives become leaves (one `Tri4` for triangles).
+pub(crate) const LEAF_MAX: u32 = 4;
+
+const LEAF_BIT: u32 = 1 << 31;
+const COUNT_SHIFT: u32 = 28;
+const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+/// An empty child slot: a leaf with no packets (its box is inverted, so it is never entered).
+const EMPTY: u32 = LEAF_BIT;
+
+/// `1 + 2γ₃` with `γₙ = nε/(1-nε)`, ε = 2⁻²⁴ (pbrt-v4's robust slab test).
+const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// A bounded primitive handed to the builder.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Prim {
+    Tri([Vec3; 3]),
+    Sphere { center: Vec3, radius: f32 },
+    Disk { to_object: Mat4 },
+}
+
+/// What a leaf stores: triangles four at a time, analytic shapes one at a time.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Packet {
+    Tri4(Tri4),
+    Sphere { center: Vec3, radius: f32 },
+    Disk { to_object: Mat4 },
+}
+
+/// Inner node: child boxes as `b[axis][0 = min, 1 = max]`, four children per lane.
+/// A child reference with [`LEAF_BIT`] set encodes `count` packets starting at `first`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+struct Node4 {
+    b: [[Vec4; 2]; 3],
+    child: [u32; 4],
+}
+
+#[derive(Clone, Copy, Debug)]
+enum StackClass {
+    S64,
+    S256,
+    S1024,
+}
+
+pub(crate) struct Bvh4 {
+    nodes: Vec<Node4>,
+    packets: Vec<Packet>,
+    /// `(shape, prim)` per packet lane.
+    ids: Vec<[[u32; 2]; 4]>,
+    root: u32,
+    stack: StackClass,
+    pub(crate) depth: u32,
+}
+
+/// Per-ray traversal constants.
+struct TravRay {
+    o: [Vec4; 3],
+    inv: [Vec4; 3],
+    /// 1 where the direction component is negative (then the near plane is the max plane).
+    neg: [usize; 3],
+    woop: WoopRay4,
+}
+
+impl TravRay {
+    #[inline(always)]
+    fn new(ray: &Ray) -> TravRay {
+        let inv = |d: f32| {
+            let r = 1.0 / d;
+            if r.is_finite() {
+                r
+            } else {
+                f32::MAX.copysign(r)
+            }
+        };
+        let i = Vec3::new(inv(ray.d.x), inv(ray.d.y), inv(ray.d.z));
+        TravRay {
+            o: [
+                Vec4::splat(ray.o.x),
+                Vec4::splat(ray.o.y),
+                Vec4::splat(ray.o.z),
+            ],
+            inv: [Vec4::splat(i.x), Vec4::splat(i.y), Vec4::splat(i.z)],
+            neg: [
+                i.x.is_sign_negative() as usize,
+                i.y.is_sign_negative() as usize,
+                i.z.is_sign_negative() as usize,
+            ],
+            woop: WoopRay4::new(&WoopRay::new(ray)),
+        }
+    }
+
+    /// Entry distances of the four children and the mask of those entered within `(0, t_max)`.
+    #[inline(always)]
+    fn hit_node(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
+        let [nx, ny, nz] = self.neg;
+        let tnx = (n.b[0][nx & 1] - self.o[0]) * self.inv[0];
+        let tny = (n.b[1][ny & 1] - self.o[1]) * self.inv[1];
+        let tnz = (n.b[2][nz & 1] - self.o[2]) * self.inv[2];
+        let tfx = (n.b[0][(nx ^ 1) & 1] - self.o[0]) * self.inv[0];
+        let tfy = (n.b[1][(ny ^ 1) & 1] - self.o[1]) * self.inv[1];
+        let tfz = (n.b[2][(nz ^ 1) & 1] - self.o[2]) * self.inv[2];
+        let tn = tnx.max(tny).max(tnz).max(Vec4::ZERO);
+        let tf = (tfx.min(tfy).min(tfz) * ROBUST).min(Vec4::splat(t_max));
+        (tn, tn.cmple(tf).bitmask())
+    }
+}
+
+/// Closest-hit result inside the BVH: packet index, lane, t, u, v.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RawHit {
+    pub t: f32,
+    pub shape: u32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+impl Bvh4 {
+    /// Builds over `prims`, whose ids are `ids[i] = (shape, prim)`.
+    pub(crate) fn build(prims: &[Prim], ids: &[[u32; 2]], aabbs: &[Aabb]) -> Bvh4 {
+        let n = prims.len();
+        let mut out = Bvh4 {
+            nodes: Vec::new(),
+            packets: Vec::new(),
+            ids: Vec::new(),
+            root: EMPTY,
+            stack: StackClass::S64,
+            depth: 0,
+        };
+        if n == 0 {
+            return out;
+        }
+        let tree = if n as u32 <= LEAF_MAX {
+            // A single leaf: no binary tree needed.
+            Tree2::single_leaf(aabbs)
+        } else {
+            let mut bvh2 = PlocBuilder::with_capacity(n).build(
+                PlocSearchDistance::Medium,
+                aabbs,
+                (0..n as u32).collect(),
+                SortPrecision::U64,
+                3,
+            );
+            ReinsertionOptimizer::default().run(&mut bvh2, 0.1, None);
+            let t = Tree2::from_bvh2(bvh2);
+            // PLOC trees are shallow in practice; a degenerate input (e.g. thousands of
+            // coincident primitives) could make one deep, so bound the traversal stack.
+            if t.depth() > 300 {
+                Tree2::median(aabbs)
+            } else {
+                t
+            }
+        };
+        out.collapse(&tree, prims, ids);
+        out
+    }
+
+    fn collapse(&mut self, tree: &Tree2, prims: &[Prim], ids: &[[u32; 2]]) {
+        let counts = tree.subtree_counts();
+        let mut depth = 0;
+        self.root = self.emit(tree, &counts, prims, ids, 0, 1, &mut depth);
+        self.depth = depth;
+        // Each level pushes at most 3 entries.
+        let need = 3 * depth as usize + 4;
+        self.stack = if need <= 64 {
+            StackClass::S64
+        } else if need <= 256 {
+            StackClass::S256
+        } else {
+            StackClass::S1024
+        };
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn emit(
+        &mut self,
+        tree: &Tree2,
+        counts: &[u32],
+        prims: &[Prim],
+        ids: &[[u32; 2]],
+        node: usize,
+        level: u32,
+        depth: &mut u32,
+    ) -> u32 {
+        if counts[node] <= LEAF_MAX {
+            return self.emit_leaf(tree, node, prims, ids);
+        }
+        *depth = (*depth).max(level);
+        let first = tree.nodes[node].first_index as usize;
+        let mut kids = [first, first + 1, 0, 0];
+        let mut k = 2;
+        while k < 4 {
+            // Open the inner child with the largest surface area.
+            let mut best = None;
+            let mut best_area = -1.0;
+            for (j, &c) in kids[..k].iter().enumerate() {
+                if counts[c] > LEAF_MAX {
+                    let a = tree.nodes[c].aabb().half_area();
+                    if a > best_area {
+                        best_area = a;
+                        best = Some(j);
+                    }
+                }
+            }
+            let Some(j) = best else { break };
+            let c = tree.nodes[kids[j]].first_index as usize;
+            kids[j] = c;
+            kids[k] = c + 1;
+            k += 1;
+        }
+        let index = self.nodes.len();
+        self.nodes.push(Node4 {
+            b: [[Vec4::INFINITY, Vec4::NEG_INFINITY]; 3],
+            child: [EMPTY; 4],
+        });
+        let mut lo = [[f32::INFINITY; 4]; 3];
+        let mut hi = [[f32::NEG_INFINITY; 4]; 3];
+        let mut child = [EMPTY; 4];
+        for (slot, &c) in kids[..k].iter().enumerate() {
+            let bb = tree.nodes[c].aabb();
+            for axis in 0..3 {
+                lo[axis][slot] = bb.min[axis];
+                hi[axis][slot] = bb.max[axis];
+            }
+            child[slot] = self.emit(tree, counts, prims, ids, c, level + 1, depth);
+        }
+        let node4 = &mut self.nodes[index];
+        for axis in 0..3 {
+            node4.b[axis] = [Vec4::from_array(lo[axis]), Vec4::from_array(hi[axis])];
+        }
+        node4.child = child;
+        index as u32
+    }
+
+    fn emit_leaf(&mut self, tree: &Tree2, node: usize, prims: &[Prim], ids: &[[u32; 2]]) -> u32 {
+        let mut items = [0u32; LEAF_MAX as usize];
+        let mut n = 0;
+        tree.gather(node, &mut items, &mut n);
+        let first = self.packets.len() as u32;
+        let mut tris = [[Vec3::ZERO; 3]; 4];
+        let mut tri_ids = [[u32::MAX; 2]; 4];
+        let mut nt = 0;
+        for &i in &items[..n] {
+            let i = i as usize;
+            match prims[i] {
+                Prim::Tri(p) => {
+                    tris[nt] = p;
+                    tri_ids[nt] = ids[i];
+                    nt += 1;
+                }
+                Prim::Sphere { center, radius } => {
+                    self.packets.push(Packet::Sphere { center, radius });
+                    self.ids
+                        .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
+                }
+                Prim::Disk { to_object } => {
+                    self.packets.push(Packet::Disk { to_object });
+                    self.ids
+                        .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
+                }
+            }
+        }
+        if nt > 0 {
+            self.packets.push(Packet::Tri4(Tri4::new(&tris[..nt])));
+            self.ids.push(tri_ids);
+        }
+        let count = self.packets.len() as u32 - first;
+        assert!(
+            first <= FIRST_MASK,
+            "too many primitives for the BVH encoding"
+        );
+        LEAF_BIT | (count << COUNT_SHIFT) | first
+    }
+
+    pub(crate) fn intersect(&self, ray: &Ray, t_max: f32) -> Option<RawHit> {
+        match self.stack {
+            StackClass::S64 => self.intersect_n::<64>(ray, t_max),
+            StackClass::S256 => self.intersect_n::<256>(ray, t_max),
+            StackClass::S1024 => self.intersect_n::<1024>(ray, t_max),
+        }
+    }
+
+    pub(crate) fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        match self.stack {
+            StackClass::S64 => self.occluded_n::<64>(ray, t_max),
+            StackClass::S256 => self.occluded_n::<256>(ray, t_max),
+            StackClass::S1024 => self.occluded_n::<1024>(ray, t_max),
+        }
+    }
+
+    #[inline(always)]
+    fn intersect_n<const N: usize>(&self, ray: &Ray, mut t_max: f32) -> Option<RawHit> {
+        if self.root == EMPTY {
+            return None;
+        }
+        let tr = TravRay::new(ray);
+        let mut stack_node = [0u32; N];
+        let mut stack_t = [0f32; N];
+        let mut sp = 0usize;
+        let mut cur = self.root;
+        // (packet, t, u, v) and the lane within the packet.
+        let mut best: Option<(u32, f32, f32, f32)> = None;
+        let mut best_lane = 0usize;
+        'outer: loop {
+            if cur & LEAF_BIT == 0 {
+                let node = &self.nodes[cur as usize];
+                let (tn, mask) = tr.hit_node(node, t_max);
+                if mask != 0 {
+                    if mask & (mask - 1) == 0 {
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    // Sort the entered children by entry distance; keys are the (non-negative)
+                    // distances' bit patterns with the slot index in the two low bits.
+                    let tb = tn.to_array();
+                    let mut keys = [u32::MAX; 4];
+                    let mut k = 0;
+                    let mut m = mask;
+                    while m != 0 {
+                        let s = m.trailing_zeros();
+                        m &= m - 1;
+                        let key = (tb[s as usize].to_bits() & !3) | s;
+                        // Insertion sort, descending.
+                        let mut j = k;
+                        while j > 0 && keys[j - 1] < key {
+                            keys[j] = keys[j - 1];
+                            j -= 1;
+                        }
+                        keys[j] = key;
+                        k += 1;
+                    }
+                    // Push all but the nearest (far ones first), continue with the nearest.
+                    for &key in &keys[..k - 1] {
+                        let s = (key & 3) as usize;
+                        stack_node[sp] = node.child[s];
+                        stack_t[sp] = tb[s];
+                        sp += 1;
+                    }
+                    cur = node.child[(keys[k - 1] & 3) as usize];
+                    continue;
+                }
+            } else {
+                let first = (cur & FIRST_MASK) as usize;
+                let count = ((cur & !LEAF_BIT) >> COUNT_SHIFT) as usize;
+                for (pi, p) in self.packets[first..first + count].iter().enumerate() {
+                    match p {
+                        Packet::Tri4(tri) => {
+                            if let Some((lane, t, u, v)) = tri4_closest(&tr.woop, tri, t_max) {
+                                t_max = t;
+                                best = Some(((first + pi) as u32, t, u, v));
+                                best_lane = lane;
+                            }
+                        }
+                        Packet::Sphere { center, radius } => {
+                            if let Some(t) = intersect_sphere(ray, *center, *radius, t_max) {
+                                t_max = t;
+                                best = Some(((first + pi) as u32, t, 0.0, 0.0));
+                                best_lane = 0;
+                            }
+                        }
+                        Packet::Disk { to_object } => {
+                            if let Some((t, x, y)) = intersect_disk(ray, to_object, t_max) {
+                                t_max = t;
+                                best = Some(((first + pi) as u32, t, x, y));
+                                best_lane = 0;
+                            }
+                        }
+                    }
+                }
+            }
+            // Pop the next entry that may still hold a closer hit.
+            loop {
+                if sp == 0 {
+                    break 'outer;
+                }
+                sp -= 1;
+                if stack_t[sp] <= t_max {
+                    cur = stack_node[sp];
+                    break;
+                }
+            }
+        }
+        best.map(|(p, t, u, v)| {
+            let [shape, prim] = self.ids[p as usize][best_lane];
+            RawHit {
+                t,
+                shape,
+                prim,
+                u,
+                v,
+            }
+        })
+    }
+
+    #[inline(always)]
+    fn occluded_n<const N: usize>(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.root == EMPTY {
+            return false;
+        }
+        let tr = TravRay::new(ray);
+        let mut stack = [0u32; N];
+        let mut sp = 0usize;
+        let mut cur = self.root;
+        loop {
+            if cur & LEAF_BIT == 0 {
+                let node = &self.nodes[cur as usize];
+                let (_, mut mask) = tr.hit_node(node, t_max);
+                if mask != 0 {
+                    cur = node.child[mask.trailing_zeros() as usize];
+                    mask &= mask - 1;
+                    while mask != 0 {
+                        stack[sp] = node.child[mask.trailing_zeros() as usize];
+                        sp += 1;
+                        mask &= mask - 1;
+                    }
+                    continue;
+                }
+            } else {
+                let first = (cur & FIRST_MASK) as usize;
+                let count = ((cur & !LEAF_BIT) >> COUNT_SHIFT) as usize;
+                for p in &self.packets[first..first + count] {
+                    let hit = match p {
+                        Packet::Tri4(tri) => tri4_any(&tr.woop, tri, t_max),
+                        Packet::Sphere { center, radius } => {
+                            intersect_sphere(ray, *center, *radius, t_max).is_some()
+                        }
+                        Packet::Disk { to_object } => {
+                            intersect_disk(ray, to_object, t_max).is_some()
+                        }
+                    };
+                    if hit {
+                        return true;
+                    }
+                }
+            }
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            cur = stack[sp];
+        }
+    }
+}
+
+/// A binary tree in obvhs's layout (children of an inner node at `first_index` and
+/// `first_index + 1`; leaves index `prim_indices`).
+struct Tree2 {
+    nodes: Vec<Bvh2Node>,
+    prim_indices: Vec<u32>,
+}
+
+impl Tree2 {
+    fn from_bvh2(b: Bvh2) -> Tree2 {
+        Tree2 {
+            nodes: b.nodes,
+            prim_indices: b.primitive_indices,
+        }
+    }
+
+    fn single_leaf(aabbs: &[Aabb]) -> Tree2 {
+        let bb = aabbs.iter().fold(Aabb::INVALID, |a, b| a.union(b));
+        Tree2 {
+            nodes: vec![Bvh2Node::new(bb, aabbs.len() as u32, 0)],
+            prim_indices: (0..aabbs.len() as u32).collect(),
+        }
+    }
+
+    /// Fallback: a balanced tree by object-median splits on the largest centroid axis.
+    fn median(aabbs: &[Aabb]) -> Tree2 {
+        let mut t = Tree2 {
+            nodes: vec![Bvh2Node::new(Aabb::INVALID, 0, 0)],
+            prim_indices: (0..aabbs.len() as u32).collect(),
+        };
+        let n = aabbs.len();
+        t.median_rec(aabbs, 0, 0, n);
+        t
+    }
+
+    fn median_rec(&mut self, aabbs: &[Aabb], node: usize, lo: usize, hi: usize) {
+        let bb = self.prim_indices[lo..hi]
+            .iter()
+            .fold(Aabb::INVALID, |a, &i| a.union(&aabbs[i as usize]));
+        if hi - lo == 1 {
+            self.nodes[node] = Bvh2Node::new(bb, 1, lo as u32);
+            return;
+        }
+        let cb = self.prim_indices[lo..hi]
+            .iter()
+            .fold(Aabb::INVALID, |mut a, &i| {
+                a.extend(aabbs[i as usize].center());
+                a
+            });
+        let axis = cb.largest_axis();
+        let mid = (hi - lo) / 2;
+        self.prim_indices[lo..hi].select_nth_unstable_by(mid, |&a, &b| {
+            let ca = aabbs[a as usize].center_axis(axis);
+            let cb = aabbs[b as usize].center_axis(axis);
+            ca.total_cmp(&cb)
+        });
+        let first = self.nodes.len();
+        self.nodes.push(Bvh2Node::new(Aabb::INVALID, 0, 0));
+        self.nodes.push(Bvh2Node::new(Aabb::INVALID, 0, 0));
+        self.nodes[node] = Bvh2Node::new(bb, 0, first as u32);
+        self.median_rec(aabbs, first, lo, lo + mid);
+        self.median_rec(aabbs, first + 1, lo + mid, hi);
+    }
+
+    /// Nodes in depth-first pre-order (parents before children) with their depths.
+    fn preorder(&self) -> Vec<(u32, u32)> {
+        let mut order = Vec::with_capacity(self.nodes.len());
+        let mut stack = vec![(0u32, 0u32)];
+        while let Some((i, d)) = stack.pop() {
+            order.push((i, d));
+            let n = &self.nodes[i as usize];
+            if !n.is_leaf() {
+                stack.push((n.first_index, d + 1));
+                stack.push((n.first_index + 1, d + 1));
+            }
+        }
+        order
+    }
+
+    fn depth(&self) -> u32 {
+        self.preorder().iter().map(|&(_, d)| d).max().unwrap_or(0)
+    }
+
+    fn subtree_counts(&self) -> Vec<u32> {
+        let mut counts = vec![0u32; self.nodes.len()];
+        for &(i, _) in self.preorder().iter().rev() {
+            let n = &self.nodes[i as usize];
+            counts[i as usize] = if n.is_leaf() {
+                n.prim_count
+            } else {
+                counts[n.first_index as usize] + counts[n.first_index as usize + 1]
+            };
+        }
+        counts
+    }
+
+    /// Collects the primitive indices below `node` (at most `LEAF_MAX` of them).
+    fn gather(&self, node: usize, out: &mut [u32; LEAF_MAX as usize], n: &mut usize) {
+        let nd = &self.nodes[node];
+        if nd.is_leaf() {
+            for k in 0..nd.prim_count {
+                out[*n] = self.prim_indices[(nd.first_index + k) as usize];
+                *n += 1;
+            }
+        } else {
+            self.gather(nd.first_index as usize, out, n);
+            self.gather(nd.first_index as usize + 1, out, n);
+        }
+    }
+}

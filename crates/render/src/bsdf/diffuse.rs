@@ -1,0 +1,72 @@
+//! Lambertian reflector (Mitsuba `diffuse`).
+//!
+//! Parameters: `reflectance` (default 0.5). f = reflectance/π on the front side; sampled with
+//! the cosine-weighted hemisphere, so the sample weight is exactly `reflectance`.
+
+use super::{BsdfModel, BsdfSample, TransportMode};
+use crate::math::{INV_PI, Vec2, Vec3};
+use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Diffuse {
+    pub reflectance: Vec3,
+}
+
+impl Default for Diffuse {
+    fn default() -> Self {
+        Diffuse {
+            reflectance: Vec3::splat(0.5),
+        }
+    }
+}
+
+impl Diffuse {
+    pub fn new(reflectance: Vec3) -> Diffuse {
+        Diffuse { reflectance }
+    }
+}
+
+impl BsdfModel for Diffuse {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        self.reflectance * (INV_PI * wi.z)
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        cosine_hemisphere_pdf(wi)
+    }
+
+    fn sample(&self, wo: Vec3, _u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = square_to_cosine_hemisphere(u2);
+        let pdf = cosine_hemisphere_pdf(wi);
+        if !(pdf > 0.0) {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            weight: self.reflectance,
+            pdf,
+            delta: false,
+            transmission: false,
+            eta: 1.0,
+        })
+    }
+
+    fn has_delta(&self) -> bool {
+        false
+    }
+    fn has_smooth(&self) -> bool {
+        true
+    }
+    fn albedo(&self) -> Vec3 {
+        self.reflectance
+    }
+}

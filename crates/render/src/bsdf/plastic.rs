@@ -1,0 +1,144 @@
+//! Smooth plastic (Mitsuba `plastic`): a diffuse base under a smooth dielectric coating.
+//!
+//! Parameters: `diffuse_reflectance` (default 0.5), `specular_reflectance` (default 1),
+//! `int_ior` (default polypropylene, 1.49), `ext_ior` (default air, 1.000277), `nonlinear`
+//! (default false). The coating reflects F(cos θo) specularly (a delta lobe); the diffuse part
+//! is f = ρ/(1 − F_dr)·(1 − F(cos θo))(1 − F(cos θi))/(η² π), where F_dr is the diffuse
+//! Fresnel reflectance of the inner side (internal scattering summed as a geometric series);
+//! with `nonlinear` the series uses ρ·F_dr, which darkens and saturates colours.
+//!
+//! The specular lobe is picked with probability ∝ F·w_s versus (1 − F)(1 − w_s), where the
+//! `specular_sampling_weight` w_s = mean(specular) / (mean(diffuse) + mean(specular)) is
+//! computed from the *texture means* (the caller passes it when the diffuse is textured).
+
+use super::fresnel::{fresnel_diffuse_reflectance, fresnel_dielectric};
+use super::{BsdfModel, BsdfSample, TransportMode, mean, reflect_z};
+use crate::math::{INV_PI, Vec2, Vec3};
+use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plastic {
+    pub diffuse_reflectance: Vec3,
+    pub specular_reflectance: Vec3,
+    /// Relative index int_ior / ext_ior.
+    pub eta: f32,
+    pub nonlinear: bool,
+    /// Probability weight of the specular lobe (see the module docs).
+    pub specular_sampling_weight: f32,
+    /// Diffuse Fresnel reflectance of the inside of the coating, F_dr(1/η).
+    pub fdr_int: f32,
+}
+
+impl Plastic {
+    /// A plastic with constant parameters (the sampling weight uses these values).
+    pub fn new(
+        diffuse_reflectance: Vec3,
+        specular_reflectance: Vec3,
+        int_ior: f32,
+        ext_ior: f32,
+        nonlinear: bool,
+    ) -> Plastic {
+        let eta = int_ior / ext_ior;
+        Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            eta,
+            nonlinear,
+            specular_sampling_weight: sampling_weight(
+                mean(diffuse_reflectance),
+                mean(specular_reflectance),
+            ),
+            fdr_int: fresnel_diffuse_reflectance(1.0 / eta),
+        }
+    }
+
+    /// Diffuse albedo after the internal-scattering correction.
+    #[inline]
+    fn corrected_diffuse(&self) -> Vec3 {
+        let d = self.diffuse_reflectance;
+        if self.nonlinear {
+            d / (Vec3::ONE - d * self.fdr_int)
+        } else {
+            d / (1.0 - self.fdr_int)
+        }
+    }
+
+    /// Probability of choosing the specular lobe given the coating reflectance `f_o`.
+    #[inline]
+    fn prob_specular(&self, f_o: f32) -> f32 {
+        let ps = f_o * self.specular_sampling_weight;
+        let pd = (1.0 - f_o) * (1.0 - self.specular_sampling_weight);
+        if ps + pd > 0.0 { ps / (ps + pd) } else { 0.0 }
+    }
+}
+
+/// Mitsuba's specular sampling weight from the means of the two reflectances.
+pub fn sampling_weight(diffuse_mean: f32, specular_mean: f32) -> f32 {
+    let s = diffuse_mean + specular_mean;
+    if s > 0.0 { specular_mean / s } else { 0.5 }
+}
+
+impl BsdfModel for Plastic {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let f_o = fresnel_dielectric(wo.z, self.eta).0;
+        let f_i = fresnel_dielectric(wi.z, self.eta).0;
+        let s = (1.0 - f_o) * (1.0 - f_i) / (self.eta * self.eta) * INV_PI * wi.z;
+        self.corrected_diffuse() * s
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let f_o = fresnel_dielectric(wo.z, self.eta).0;
+        (1.0 - self.prob_specular(f_o)) * cosine_hemisphere_pdf(wi)
+    }
+
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let f_o = fresnel_dielectric(wo.z, self.eta).0;
+        let p_spec = self.prob_specular(f_o);
+        if u1 < p_spec {
+            Some(BsdfSample {
+                wi: reflect_z(wo),
+                weight: self.specular_reflectance * (f_o / p_spec),
+                pdf: p_spec,
+                delta: true,
+                transmission: false,
+                eta: 1.0,
+            })
+        } else {
+            let p_diff = 1.0 - p_spec;
+            let wi = square_to_cosine_hemisphere(u2);
+            let pdf = p_diff * cosine_hemisphere_pdf(wi);
+            if !(pdf > 0.0) {
+                return None;
+            }
+            let f_i = fresnel_dielectric(wi.z, self.eta).0;
+            let s = (1.0 - f_o) * (1.0 - f_i) / (self.eta * self.eta * p_diff);
+            Some(BsdfSample {
+                wi,
+                weight: self.corrected_diffuse() * s,
+                pdf,
+                delta: false,
+                transmission: false,
+                eta: 1.0,
+            })
+        }
+    }
+
+    fn has_delta(&self) -> bool {
+        true
+    }
+    fn has_smooth(&self) -> bool {
+        true
+    }
+    fn albedo(&self) -> Vec3 {
+        self.diffuse_reflectance
+    }
+}
