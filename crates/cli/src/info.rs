@@ -33,7 +33,10 @@ fn bounds(desc: &SceneDesc) -> Option<(Vec3, Vec3)> {
     for s in &desc.shapes {
         let m = s.to_world;
         match &s.shape {
-            Shape::Mesh(mesh) => mesh.positions.iter().for_each(|p| grow(m.transform_point3(*p))),
+            Shape::Mesh(mesh) => mesh
+                .positions
+                .iter()
+                .for_each(|p| grow(m.transform_point3(*p))),
             Shape::Sphere { center, radius } => {
                 let c = m.transform_point3(*center);
                 let r = m.transform_vector3(Vec3::new(*radius, 0.0, 0.0)).length();
@@ -41,7 +44,11 @@ fn bounds(desc: &SceneDesc) -> Option<(Vec3, Vec3)> {
                 grow(c + Vec3::splat(r));
             }
             Shape::Rectangle | Shape::Disk | Shape::Cube => {
-                let z = if matches!(s.shape, Shape::Cube) { [-1.0, 1.0] } else { [0.0, 0.0] };
+                let z = if matches!(s.shape, Shape::Cube) {
+                    [-1.0, 1.0]
+                } else {
+                    [0.0, 0.0]
+                };
                 for x in [-1.0, 1.0] {
                     for y in [-1.0, 1.0] {
                         for z in z {
@@ -110,7 +117,10 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
             s.film.height,
             s.film
                 .crop
-                .map(|c| format!(" (crop {}x{} at {},{})", c.width, c.height, c.offset_x, c.offset_y))
+                .map(|c| format!(
+                    " (crop {}x{} at {},{})",
+                    c.width, c.height, c.offset_x, c.offset_y
+                ))
                 .unwrap_or_default(),
             s.sampler.kind,
             s.sampler.spp,

@@ -18,7 +18,11 @@ use render::render::{RenderOptions, render};
 use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
 
 #[derive(Parser)]
-#[command(name = "penumbra", version, about = "A physically based offline renderer")]
+#[command(
+    name = "penumbra",
+    version,
+    about = "A physically based offline renderer"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -104,7 +108,9 @@ fn parse_res(s: &str) -> Result<(u32, u32), String> {
     let w: u32 = w.trim().parse().map_err(|_| err())?;
     let h: u32 = h.trim().parse().map_err(|_| err())?;
     if w == 0 || h == 0 || w > 1 << 16 || h > 1 << 16 {
-        return Err(format!("resolution must be between 1 and 65536 per axis, found '{s}'"));
+        return Err(format!(
+            "resolution must be between 1 and 65536 per axis, found '{s}'"
+        ));
     }
     Ok((w, h))
 }
@@ -119,11 +125,16 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             samples: if arg.is_empty() {
                 1
             } else {
-                arg.parse().map_err(|_| format!("ao:N expects a sample count, found '{arg}'"))?
+                arg.parse()
+                    .map_err(|_| format!("ao:N expects a sample count, found '{arg}'"))?
             },
             length: None,
         },
-        _ => return Err(format!("unknown integrator '{name}' (expected normals, albedo, depth, ao[:N])")),
+        _ => {
+            return Err(format!(
+                "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N])"
+            ));
+        }
     })
 }
 
@@ -216,7 +227,9 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
     if let Some(t) = args.time
         && !(t > 0.0 && t.is_finite())
     {
-        return Err(Failure::input(format!("--time expects a positive number of seconds, found {t}")));
+        return Err(Failure::input(format!(
+            "--time expects a positive number of seconds, found {t}"
+        )));
     }
 
     let opts = BuildOptions {
@@ -227,6 +240,9 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         integrator: args.integrator.clone(),
     };
     let scene = build(&desc, &opts).map_err(Failure::input)?;
+    for w in &scene.warnings {
+        eprintln!("{w}");
+    }
     let integrator = Integrator::from_desc(&scene.integrator).map_err(Failure::input)?;
 
     let cancel = Arc::new(AtomicBool::new(false));
@@ -280,8 +296,8 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
 
 fn cmd_compare(reference: &Path, test: &[PathBuf], stderr: Option<&Path>) -> Result<(), Failure> {
     use render::compare::{TestImages, compare, load_reference};
-    use render::image_io::read_image_with;
     use render::image_io::Decode;
+    use render::image_io::read_image_with;
     let reference = load_reference(reference).map_err(Failure::input)?;
     let images = match stderr {
         Some(se) => {

@@ -32,9 +32,22 @@ fn malformed_inputs_fail_cleanly() {
     for case in &cases {
         let out = penumbra().arg("info").arg(case).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{}: exit {:?}\n{stderr}", case.display(), out.status);
-        assert!(!stderr.contains("panicked"), "{}: panic\n{stderr}", case.display());
-        let line = stderr.lines().find(|l| l.starts_with("error: ")).unwrap_or_default();
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{}: exit {:?}\n{stderr}",
+            case.display(),
+            out.status
+        );
+        assert!(
+            !stderr.contains("panicked"),
+            "{}: panic\n{stderr}",
+            case.display()
+        );
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("error: "))
+            .unwrap_or_default();
         let msg = line.trim_start_matches("error: ");
         // The diagnostic names a file of the case (the scene or the mesh it points to) and,
         // for text formats, a line and column.
@@ -45,7 +58,11 @@ fn malformed_inputs_fail_cleanly() {
             "{}: diagnostic does not name the file: {line}",
             case.display()
         );
-        assert!(!rest.is_empty(), "{}: empty message: {line}", case.display());
+        assert!(
+            !rest.is_empty(),
+            "{}: empty message: {line}",
+            case.display()
+        );
         let is_text = !file_part.ends_with(".ply");
         if is_text && file_part.ends_with(".xml") {
             let pos: Vec<&str> = file.split(':').skip(1).collect();
@@ -60,7 +77,10 @@ fn malformed_inputs_fail_cleanly() {
 
 #[test]
 fn unknown_file_type_and_missing_file_exit_2() {
-    let out = penumbra().args(["info", "no-such-scene.xml"]).output().unwrap();
+    let out = penumbra()
+        .args(["info", "no-such-scene.xml"])
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let out = penumbra().args(["info", "scene.unknown"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
@@ -74,13 +94,26 @@ fn renders_the_example_scene_to_png_and_exr() {
     let out = penumbra()
         .arg("render")
         .arg(repo_root().join("scenes/cornell-box.xml"))
-        .args(["--integrator", "ao:2", "--spp", "2", "--res", "32x32", "-q", "-o"])
+        .args([
+            "--integrator",
+            "ao:2",
+            "--spp",
+            "2",
+            "--res",
+            "32x32",
+            "-q",
+            "-o",
+        ])
         .arg(&png)
         .arg("-o")
         .arg(&exr)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(png.is_file() && exr.is_file());
     // No temporary files left behind.
     let leftovers: Vec<_> = std::fs::read_dir(&dir)
@@ -114,12 +147,26 @@ fn same_seed_same_image_for_any_thread_count() {
         let out = penumbra()
             .arg("render")
             .arg(repo_root().join("scenes/cornell-box.xml"))
-            .args(["--integrator", "ao:4", "--spp", "3", "--res", "24x20", "-q", "--threads", threads])
+            .args([
+                "--integrator",
+                "ao:4",
+                "--spp",
+                "3",
+                "--res",
+                "24x20",
+                "-q",
+                "--threads",
+                threads,
+            ])
             .arg("-o")
             .arg(&out_path)
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         images.push(std::fs::read(&out_path).unwrap());
     }
     assert!(images.windows(2).all(|w| w[0] == w[1]));

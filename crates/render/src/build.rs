@@ -12,12 +12,12 @@ use scene::{
 
 use crate::accel::Accel;
 use crate::camera::Camera;
-use crate::film::Image;
 use crate::geometry::Ray;
-use crate::lights::{EnvMap, Light};
-use crate::sampling::distrib::Distribution1D;
 use crate::image_io::{self, Decode};
+use crate::lights::{EnvMap, Light};
+use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
+use crate::sampling::distrib::Distribution1D;
 use crate::shapes::{ShapeGeom, SurfaceInteraction, interaction};
 use crate::textures::Texture;
 
@@ -51,7 +51,9 @@ pub struct ShapeInfo {
 pub struct Scene {
     pub accel: Accel,
     pub shapes: Vec<ShapeInfo>,
-    pub materials: Vec<Material>,
+    pub materials: Vec<RtMaterial>,
+    /// Findings of the build step worth telling the user (unsupported features).
+    pub warnings: Vec<String>,
     pub textures: Vec<Texture>,
     pub camera: Camera,
     pub film: scene::Film,
@@ -112,65 +114,9 @@ impl Scene {
         }
     }
 
-    /// The material seen at `si` (following `twosided` to the side that was hit).
-    pub fn material_at(&self, si: &SurfaceInteraction) -> Option<&Material> {
-        let mut id = self.shapes[si.shape as usize].material?;
-        // Bounded: a twosided chain longer than the material count is a cycle.
-        for _ in 0..=self.materials.len() {
-            match &self.materials[id.0 as usize] {
-                Material::TwoSided { front, back } => {
-                    id = match back {
-                        Some(b) if si.wo.dot(si.shading.n) < 0.0 => *b,
-                        _ => *front,
-                    };
-                }
-                m => return Some(m),
-            }
-        }
-        None
-    }
-
     /// A representative reflectance colour at `si` (the `albedo` AOV).
     pub fn albedo(&self, si: &SurfaceInteraction) -> Vec3 {
-        let default = Vec3::splat(0.5);
-        let Some(m) = self.material_at(si) else {
-            return default;
-        };
-        match m {
-            Material::Diffuse { reflectance } => self.color(reflectance, si.uv),
-            Material::Conductor {
-                specular_reflectance,
-                ..
-            }
-            | Material::RoughConductor {
-                specular_reflectance,
-                ..
-            }
-            | Material::Dielectric {
-                specular_transmittance: specular_reflectance,
-                ..
-            }
-            | Material::ThinDielectric {
-                specular_transmittance: specular_reflectance,
-                ..
-            }
-            | Material::RoughDielectric {
-                specular_transmittance: specular_reflectance,
-                ..
-            } => self.color(specular_reflectance, si.uv),
-            Material::Plastic {
-                diffuse_reflectance,
-                ..
-            }
-            | Material::RoughPlastic {
-                diffuse_reflectance,
-                ..
-            } => self.color(diffuse_reflectance, si.uv),
-            Material::Mirror { reflectance } => self.color(reflectance, si.uv),
-            Material::NoriMicrofacet { kd, .. } => *kd,
-            Material::PhongFamily { diffuse, .. } => self.color(diffuse, si.uv),
-            Material::TwoSided { .. } | Material::Null => default,
-        }
+        self.bsdf_at(si).map_or(Vec3::ZERO, |(b, _)| b.albedo())
     }
 }
 
@@ -181,14 +127,13 @@ fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {
         .map(|p| to_world.transform_point3(*p))
         .collect();
     let normal_matrix = Mat3::from_mat4(*to_world).inverse().transpose();
-    let normals = (!mesh.normals.is_empty() && mesh.normals.len() == mesh.positions.len()).then(
-        || {
+    let normals =
+        (!mesh.normals.is_empty() && mesh.normals.len() == mesh.positions.len()).then(|| {
             mesh.normals
                 .iter()
                 .map(|n| (normal_matrix * *n).normalize_or_zero())
                 .collect::<Arc<[Vec3]>>()
-        },
-    );
+        });
     let uvs = (!mesh.uvs.is_empty() && mesh.uvs.len() == mesh.positions.len())
         .then(|| Arc::<[Vec2]>::from(mesh.uvs.as_slice()));
     // A reflection in to_world flips the winding, hence the geometric normal: keep triangles
@@ -304,7 +249,9 @@ fn build_lights(
     let mut lights = Vec::new();
     let mut shape_light = vec![None; shapes.len()];
     for (i, (s, d)) in shapes.iter().zip(&desc.shapes).enumerate() {
-        let Some(radiance) = &s.emission else { continue };
+        let Some(radiance) = &s.emission else {
+            continue;
+        };
         let triangles = match &s.geom {
             ShapeGeom::Mesh {
                 positions, indices, ..
@@ -375,12 +322,11 @@ fn build_lights(
                 } else {
                     base.join(path)
                 };
-                let image = image_io::read_image_with(&full, Decode::Srgb).map_err(|err| {
-                    BuildError {
+                let image =
+                    image_io::read_image_with(&full, Decode::Srgb).map_err(|err| BuildError {
                         loc: e.loc.clone(),
                         message: format!("cannot read environment map: {err}"),
-                    }
-                })?;
+                    })?;
                 Light::EnvMap(Arc::new(EnvMap::new(image, *scale, to_world, *mapping)))
             }
         });
@@ -413,7 +359,10 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
             Shape::Sphere { center, radius } => {
                 // Mitsuba: the sphere's to_world may hold a uniform scale and translation.
                 let c = s.to_world.transform_point3(*center);
-                let r = s.to_world.transform_vector3(Vec3::new(*radius, 0.0, 0.0)).length();
+                let r = s
+                    .to_world
+                    .transform_vector3(Vec3::new(*radius, 0.0, 0.0))
+                    .length();
                 ShapeGeom::Sphere {
                     center: c,
                     radius: r,
@@ -457,6 +406,16 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();
 
+    let mut warnings = Vec::new();
+    for m in &desc.materials {
+        if let Material::PhongFamily { .. } = m.material {
+            warnings.push(format!(
+                "{}: warning: the CENG795 Phong-family BRDFs are not implemented yet; rendering its diffuse part only",
+                m.loc
+            ));
+        }
+    }
+
     let mut film = sensor.film.clone();
     if let Some((w, h)) = opts.resolution {
         film.width = w;
@@ -475,7 +434,12 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
     Ok(Scene {
         accel,
         shapes,
-        materials: desc.materials.iter().map(|m| m.material.clone()).collect(),
+        materials: desc
+            .materials
+            .iter()
+            .map(|m| RtMaterial::new(m.material.clone()))
+            .collect(),
+        warnings,
         textures,
         camera,
         film,

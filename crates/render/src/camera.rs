@@ -74,9 +74,10 @@ impl Camera {
     pub fn new(desc: &scene::Camera, width: u32, height: u32) -> Camera {
         let aspect = width as f32 / height as f32;
         let (kind, fov_x) = match desc.projection {
-            Projection::Perspective { fov, fov_axis } => {
-                (Kind::Perspective, Some(fov_x_degrees(fov, fov_axis, aspect)))
-            }
+            Projection::Perspective { fov, fov_axis } => (
+                Kind::Perspective,
+                Some(fov_x_degrees(fov, fov_axis, aspect)),
+            ),
             Projection::ThinLens {
                 fov,
                 fov_axis,
@@ -181,7 +182,10 @@ mod tests {
         }
         // Diagonal of a square: half-diagonal tan = √2 · half-width tan.
         let fx = fov_x_degrees(40.0, FovAxis::Diagonal, 1.0);
-        let expect = 2.0 * ((20f32).to_radians().tan() / 2f32.sqrt()).atan().to_degrees();
+        let expect = 2.0
+            * ((20f32).to_radians().tan() / 2f32.sqrt())
+                .atan()
+                .to_degrees();
         assert!((fx - expect).abs() < 1e-4);
         // Vertical fov on a 2:1 film doubles the tangent.
         let fx = fov_x_degrees(30.0, FovAxis::Y, 2.0);
@@ -230,7 +234,11 @@ mod tests {
             let r = pin.generate_ray(pf, Vec2::ZERO).ray;
             r.at(5.0 / r.d.z)
         };
-        for u in [Vec2::new(0.1, 0.9), Vec2::new(0.7, 0.2), Vec2::new(0.5, 0.5)] {
+        for u in [
+            Vec2::new(0.1, 0.9),
+            Vec2::new(0.7, 0.2),
+            Vec2::new(0.5, 0.5),
+        ] {
             let r = cam.generate_ray(pf, u).ray;
             let hit = r.at((5.0 - r.o.z) / r.d.z);
             assert!((hit - target).length() < 1e-4, "{hit} vs {target}");

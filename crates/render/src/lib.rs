@@ -13,6 +13,7 @@ pub mod geometry;
 pub mod image_io;
 pub mod integrators;
 pub mod lights;
+pub mod materials;
 pub mod math;
 pub mod render;
 pub mod sampling;

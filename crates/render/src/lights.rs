@@ -357,7 +357,8 @@ impl Light {
                         let b0 = 1.0 - b.x - b.y;
                         let (p0, p1, p2) = (positions[i0], positions[i1], positions[i2]);
                         let p = b0 * p0 + b.x * p1 + b.y * p2;
-                        let err = gamma(6) * ((b0 * p0).abs() + (b.x * p1).abs() + (b.y * p2).abs());
+                        let err =
+                            gamma(6) * ((b0 * p0).abs() + (b.x * p1).abs() + (b.y * p2).abs());
                         let mut n = (p1 - p0).cross(p2 - p0).normalize_or_zero() * flip;
                         if let Some(ns) = normals {
                             let s = b0 * ns[i0] + b.x * ns[i1] + b.y * ns[i2];
@@ -380,7 +381,13 @@ impl Light {
                         if phi < 0.0 {
                             phi += 2.0 * PI;
                         }
-                        (p, err, *normal * flip, Vec2::new(rr, phi / (2.0 * PI)), 1.0 / *area)
+                        (
+                            p,
+                            err,
+                            *normal * flip,
+                            Vec2::new(rr, phi / (2.0 * PI)),
+                            1.0 / *area,
+                        )
                     }
                     ShapeGeom::Plane { .. } => return None,
                 };
@@ -407,12 +414,21 @@ impl Light {
 
     /// Solid-angle density with which `sample_li` from `r` produces the direction towards
     /// `si`, a point on this (area) light — or, for environment lights, the direction `wi`.
-    pub fn pdf_li(&self, scene: &Scene, r: &Receiver, wi: Vec3, si: Option<&SurfaceInteraction>) -> f32 {
+    pub fn pdf_li(
+        &self,
+        scene: &Scene,
+        r: &Receiver,
+        wi: Vec3,
+        si: Option<&SurfaceInteraction>,
+    ) -> f32 {
         match self {
             Light::Constant { .. } => warp::uniform_sphere_pdf(),
             Light::EnvMap(env) => env.pdf(wi),
             Light::Area {
-                shape, area, two_sided, ..
+                shape,
+                area,
+                two_sided,
+                ..
             } => {
                 let Some(si) = si else { return 0.0 };
                 let info = &scene.shapes[*shape as usize];
@@ -434,7 +450,9 @@ impl Light {
     pub fn le(&self, scene: &Scene, si: &SurfaceInteraction) -> Vec3 {
         match self {
             Light::Area {
-                radiance, two_sided, ..
+                radiance,
+                two_sided,
+                ..
             } => {
                 if *two_sided || si.shading.n.dot(si.wo) > 0.0 {
                     scene.color(radiance, si.uv)

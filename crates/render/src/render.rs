@@ -140,7 +140,8 @@ pub fn render(
         let finished: Vec<FilmTile> = tile_list
             .par_iter()
             .map(|&bounds| {
-                let tile = render_tile(scene, integrator, &filter, &template, &film, bounds, s0, s1);
+                let tile =
+                    render_tile(scene, integrator, &filter, &template, &film, bounds, s0, s1);
                 let n = (bounds.1 - bounds.0).as_u64vec2();
                 let d = done.fetch_add(n.x * n.y * (s1 - s0) as u64, Ordering::Relaxed)
                     + n.x * n.y * (s1 - s0) as u64;
@@ -174,7 +175,7 @@ pub fn render(
                 break;
             }
         }
-        pass_spp = next.clamp(1.0, 1 << 20) as u32;
+        pass_spp = next.clamp(1.0, (1u32 << 20) as f64) as u32;
     }
     RenderOutcome {
         film,

@@ -208,8 +208,7 @@ impl Grid {
         let fx = (x - self.x0) / (self.x1 - self.x0) * self.nx as f64;
         let fy = (y - self.y0) / (self.y1 - self.y0) * self.ny as f64;
         let eps = 1e-6;
-        if !(fx >= -eps && fx <= self.nx as f64 + eps && fy >= -eps && fy <= self.ny as f64 + eps)
-        {
+        if !(fx >= -eps && fx <= self.nx as f64 + eps && fy >= -eps && fy <= self.ny as f64 + eps) {
             return None;
         }
         let ix = (fx.max(0.0) as usize).min(self.nx - 1);
@@ -416,7 +415,11 @@ impl MeanVar {
 
     /// Unbiased sample variance.
     pub fn variance(&self) -> f64 {
-        if self.n < 2 { 0.0 } else { self.m2 / (self.n - 1) as f64 }
+        if self.n < 2 {
+            0.0
+        } else {
+            self.m2 / (self.n - 1) as f64
+        }
     }
 
     /// Two-sided p-value of the t-test of the mean against `reference`.
@@ -434,7 +437,14 @@ mod tests {
     fn pcg32_matches_reference_sequence() {
         // Reference output of pcg32_random_r seeded with (42, 54) (pcg-c demo).
         let mut r = Pcg32::new(42, 54);
-        let expect = [0xa15c02b7u32, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e];
+        let expect = [
+            0xa15c02b7u32,
+            0x7b47f409,
+            0xba1d3330,
+            0x83d2f293,
+            0xbfa4784b,
+            0xcbed606e,
+        ];
         for e in expect {
             assert_eq!(r.next_u32(), e);
         }

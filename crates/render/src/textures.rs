@@ -85,10 +85,7 @@ impl Texture {
                         let (fx, fy) = (xs - x0, ys - y0);
                         let (x0, y0) = (x0 as i64, y0 as i64);
                         let px = |dx: i64, dy: i64| {
-                            image.get(
-                                wrap_index(x0 + dx, w, *wrap),
-                                wrap_index(y0 + dy, h, *wrap),
-                            )
+                            image.get(wrap_index(x0 + dx, w, *wrap), wrap_index(y0 + dy, h, *wrap))
                         };
                         (px(0, 0) * (1.0 - fx) + px(1, 0) * fx) * (1.0 - fy)
                             + (px(0, 1) * (1.0 - fx) + px(1, 1) * fx) * fy

@@ -31,7 +31,10 @@ pub enum Integrator {
     /// Path tracing and its restrictions (Whitted, Nori's variants).
     Path(PathConfig),
     /// Mitsuba's `direct`: `emitter_samples` + `bsdf_samples` combined with MIS.
-    Direct { emitter_samples: u32, bsdf_samples: u32 },
+    Direct {
+        emitter_samples: u32,
+        bsdf_samples: u32,
+    },
 }
 
 /// An integrator the scene asks for that this build does not have.

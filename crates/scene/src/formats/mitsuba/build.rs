@@ -766,7 +766,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
                 // Mitsuba flips v of OBJ texture coordinates by default, so that v = 0 is
                 // the top row of a bitmap (textures are indexed top-down).
-                if pl.ty == "obj" && pl.props.bool("flip_tex_coords", true)? && !mesh.uvs.is_empty() {
+                if pl.ty == "obj" && pl.props.bool("flip_tex_coords", true)? && !mesh.uvs.is_empty()
+                {
                     let mut m = (*mesh).clone();
                     m.uvs.iter_mut().for_each(|uv| uv.y = 1.0 - uv.y);
                     mesh = Arc::new(m);

@@ -1,0 +1,214 @@
+//! Materials at run time: scene materials plus what is precomputed once per material (rough
+//! plastic's Fresnel tables), and the per-hit construction of a [`Bsdf`] with its textures
+//! evaluated at the hit.
+//!
+//! `twosided` is resolved here: when the viewer is on the back side, the shading frame is
+//! flipped and the back (or front) material is used, as Mitsuba does. Shapes without a material
+//! get Mitsuba's default, a one-sided diffuse of reflectance 0.5.
+
+use scene::{Material, MicrofacetDistribution};
+
+use crate::bsdf::Microfacet;
+use crate::bsdf::{
+    Bsdf, Conductor, Dielectric, Diffuse, MicrofacetType, NoriMicrofacet, Plastic, RoughConductor,
+    RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
+};
+use crate::build::Scene;
+use crate::math::{Frame, Vec3};
+use crate::shapes::SurfaceInteraction;
+
+#[derive(Clone, Debug)]
+pub struct RtMaterial {
+    pub material: Material,
+    /// Rough plastic's tables (depend only on α, the distribution and η).
+    pub rough_plastic: Option<RoughPlasticTables>,
+}
+
+pub fn microfacet_type(d: MicrofacetDistribution) -> MicrofacetType {
+    match d {
+        MicrofacetDistribution::Ggx => MicrofacetType::Ggx,
+        MicrofacetDistribution::Beckmann => MicrofacetType::Beckmann,
+    }
+}
+
+impl RtMaterial {
+    pub fn new(material: Material) -> RtMaterial {
+        let rough_plastic = match &material {
+            Material::RoughPlastic {
+                distribution,
+                alpha,
+                int_ior,
+                ext_ior,
+                ..
+            } => Some(RoughPlasticTables::new(
+                Microfacet::isotropic(microfacet_type(*distribution), *alpha),
+                int_ior / ext_ior,
+            )),
+            _ => None,
+        };
+        RtMaterial {
+            material,
+            rough_plastic,
+        }
+    }
+}
+
+/// Mitsuba clamps roughness away from 0 to keep the microfacet models finite.
+fn alpha(a: f32) -> f32 {
+    a.max(1e-4)
+}
+
+impl Scene {
+    /// The BSDF at `si` and the shading frame it lives in (flipped for the back side of a
+    /// two-sided material). `None`: the surface does not scatter (null material).
+    pub fn bsdf_at(&self, si: &SurfaceInteraction) -> Option<(Bsdf, Frame)> {
+        let mut frame = si.shading;
+        let Some(mut id) = self.shapes[si.shape as usize].material else {
+            return Some((Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))), frame));
+        };
+        // Bounded walk: a longer twosided chain than the material count is a cycle.
+        let mut mat = None;
+        for _ in 0..=self.materials.len() {
+            let m = &self.materials[id.0 as usize];
+            match &m.material {
+                Material::TwoSided { front, back } => {
+                    if si.wo.dot(frame.n) < 0.0 {
+                        frame = Frame {
+                            s: frame.s,
+                            t: -frame.t,
+                            n: -frame.n,
+                        };
+                        id = back.unwrap_or(*front);
+                    } else {
+                        id = *front;
+                    }
+                }
+                _ => {
+                    mat = Some(m);
+                    break;
+                }
+            }
+        }
+        let m = mat?;
+        let uv = si.uv;
+        let bsdf = match &m.material {
+            Material::Diffuse { reflectance } => {
+                Bsdf::Diffuse(Diffuse::new(self.color(reflectance, uv)))
+            }
+            Material::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+            } => Bsdf::Conductor(Conductor::new(
+                *eta,
+                *k,
+                self.color(specular_reflectance, uv),
+            )),
+            Material::Mirror { reflectance } => {
+                Bsdf::Conductor(Conductor::mirror(self.color(reflectance, uv)))
+            }
+            Material::RoughConductor {
+                distribution,
+                alpha_u,
+                alpha_v,
+                eta,
+                k,
+                specular_reflectance,
+            } => Bsdf::RoughConductor(RoughConductor::new(
+                microfacet_type(*distribution),
+                alpha(self.float(alpha_u, uv)),
+                alpha(self.float(alpha_v, uv)),
+                *eta,
+                *k,
+                self.color(specular_reflectance, uv),
+            )),
+            Material::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+                ..
+            } => {
+                let mut d = Dielectric::new(*int_ior, *ext_ior);
+                d.specular_reflectance = self.color(specular_reflectance, uv);
+                d.specular_transmittance = self.color(specular_transmittance, uv);
+                Bsdf::Dielectric(d)
+            }
+            Material::ThinDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = ThinDielectric::new(*int_ior, *ext_ior);
+                d.specular_reflectance = self.color(specular_reflectance, uv);
+                d.specular_transmittance = self.color(specular_transmittance, uv);
+                Bsdf::ThinDielectric(d)
+            }
+            Material::RoughDielectric {
+                distribution,
+                alpha_u,
+                alpha_v,
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = RoughDielectric::new(
+                    microfacet_type(*distribution),
+                    alpha(self.float(alpha_u, uv)),
+                    alpha(self.float(alpha_v, uv)),
+                    *int_ior,
+                    *ext_ior,
+                );
+                d.specular_reflectance = self.color(specular_reflectance, uv);
+                d.specular_transmittance = self.color(specular_transmittance, uv);
+                Bsdf::RoughDielectric(d)
+            }
+            Material::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => Bsdf::Plastic(Plastic::new(
+                self.color(diffuse_reflectance, uv),
+                self.color(specular_reflectance, uv),
+                *int_ior,
+                *ext_ior,
+                *nonlinear,
+            )),
+            Material::RoughPlastic {
+                distribution,
+                alpha: a,
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => {
+                let tables = m.rough_plastic.clone()?;
+                Bsdf::RoughPlastic(RoughPlastic::with_tables(
+                    Microfacet::isotropic(microfacet_type(*distribution), alpha(*a)),
+                    int_ior / ext_ior,
+                    tables,
+                    self.color(diffuse_reflectance, uv),
+                    self.color(specular_reflectance, uv),
+                    *nonlinear,
+                ))
+            }
+            Material::NoriMicrofacet {
+                alpha: a,
+                int_ior,
+                ext_ior,
+                kd,
+            } => Bsdf::NoriMicrofacet(NoriMicrofacet::new(alpha(*a), *int_ior, *ext_ior, *kd)),
+            Material::PhongFamily { diffuse, .. } => {
+                // The Phong family arrives with the CENG795 work; until then its diffuse part.
+                Bsdf::Diffuse(Diffuse::new(self.color(diffuse, uv)))
+            }
+            Material::Null | Material::TwoSided { .. } => return None,
+        };
+        Some((bsdf, frame))
+    }
+}
