@@ -14,7 +14,11 @@ use crate::math::{Vec3, safe_sqrt};
 pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> (f32, f32, f32, f32) {
     let outside = cos_theta_i >= 0.0;
     let rcp_eta = 1.0 / eta;
-    let (eta_it, eta_ti) = if outside { (eta, rcp_eta) } else { (rcp_eta, eta) };
+    let (eta_it, eta_ti) = if outside {
+        (eta, rcp_eta)
+    } else {
+        (rcp_eta, eta)
+    };
 
     let cos_t_sqr = 1.0 - eta_ti * eta_ti * (1.0 - cos_theta_i * cos_theta_i);
     let cos_i = cos_theta_i.abs();
@@ -55,7 +59,11 @@ pub fn fresnel_conductor_1(cos_theta_i: f32, eta: f32, k: f32) -> f32 {
     let term3 = a2pb2 * c2 + s4;
     let term4 = term2 * s2;
     let denom = term3 + term4;
-    let rp = if denom > 0.0 { rs * (term3 - term4) / denom } else { rs };
+    let rp = if denom > 0.0 {
+        rs * (term3 - term4) / denom
+    } else {
+        rs
+    };
     0.5 * (rs + rp)
 }
 
@@ -152,7 +160,10 @@ mod tests {
                 s += fresnel_dielectric(mu as f32, eta).0 as f64 * 2.0 * mu / n as f64;
             }
             let fit = fresnel_diffuse_reflectance(eta) as f64;
-            assert!((fit - s).abs() < 0.01 * s.max(0.05), "eta {eta}: {fit} vs {s}");
+            assert!(
+                (fit - s).abs() < 0.01 * s.max(0.05),
+                "eta {eta}: {fit} vs {s}"
+            );
         }
     }
 }

@@ -84,7 +84,11 @@ impl Microfacet {
             }
         };
         // Prune tiny values (as Mitsuba) so that a zero density never meets a huge weight.
-        if r * m.z > 1e-20 && r.is_finite() { r } else { 0.0 }
+        if r * m.z > 1e-20 && r.is_finite() {
+            r
+        } else {
+            0.0
+        }
     }
 
     /// Smith's shadowing–masking for one direction `v` and microfacet normal `m`.
@@ -278,10 +282,7 @@ fn integrate_visible(distr: &Microfacet, wi: Vec3, res: usize, f: impl Fn(Vec3) 
     let mut acc = 0.0;
     for i in 0..res {
         for j in 0..res {
-            let u = Vec2::new(
-                (0.5 * nodes[i] + 0.5) as f32,
-                (0.5 * nodes[j] + 0.5) as f32,
-            );
+            let u = Vec2::new((0.5 * nodes[i] + 0.5) as f32, (0.5 * nodes[j] + 0.5) as f32);
             let (m, _) = distr.sample(wi, u);
             acc += weights[i] * weights[j] * f(m);
         }
@@ -365,7 +366,11 @@ mod tests {
                             * (2.0 * std::f64::consts::PI / np as f64);
                     }
                 }
-                let tol = if kind == MicrofacetType::Ggx { 2e-2 } else { 2e-3 };
+                let tol = if kind == MicrofacetType::Ggx {
+                    2e-2
+                } else {
+                    2e-3
+                };
                 assert!((s - 1.0).abs() < tol, "{kind:?} {au} {av}: {s}");
             }
         }

@@ -11,7 +11,7 @@
 //! `specular_sampling_weight` w_s = mean(specular) / (mean(diffuse) + mean(specular)) is
 //! computed from the *texture means* (the caller passes it when the diffuse is textured).
 
-use super::fresnel::{fresnel_diffuse_reflectance, fresnel_dielectric};
+use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance};
 use super::{BsdfModel, BsdfSample, TransportMode, mean, reflect_z};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};

@@ -48,7 +48,11 @@ impl RoughDielectric {
             return None;
         }
         let reflect = cos_o * cos_i > 0.0;
-        let eta = if cos_o > 0.0 { self.eta } else { 1.0 / self.eta };
+        let eta = if cos_o > 0.0 {
+            self.eta
+        } else {
+            1.0 / self.eta
+        };
         let h = wo + wi * if reflect { 1.0 } else { eta };
         let len2 = h.length_squared();
         if !(len2 > 0.0) {
@@ -148,8 +152,7 @@ impl BsdfModel for RoughDielectric {
                 TransportMode::Radiance => eta_ti * eta_ti,
                 TransportMode::Importance => 1.0,
             };
-            let weight =
-                self.specular_transmittance * (scale * self.distribution.smith_g1(wi, m));
+            let weight = self.specular_transmittance * (scale * self.distribution.smith_g1(wi, m));
             if !(pdf > 0.0) || !pdf.is_finite() {
                 return None;
             }
