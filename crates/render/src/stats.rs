@@ -148,12 +148,23 @@ pub fn chi2_test(
             }
         }
     };
-    let density = |z: f64, phi: f64| -> f64 {
-        let s = (1.0 - z * z).max(0.0).sqrt();
+    // Integrate over each cell in (θ, φ) with the Jacobian sin θ: smooth at the poles, where
+    // the (cos θ, φ) parametrisation has a square-root singularity that defeats Simpson.
+    let density = |theta: f64, phi: f64| -> f64 {
+        let (s, z) = theta.sin_cos();
         let w = Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, z as f32);
-        pdf(w) as f64
+        pdf(w) as f64 * s
     };
-    run_chi2(&grid, &mut rng, sampler, density, cfg)
+    let cell_integral = |ix: usize, iy: usize, eps: f64, depth: u32| -> f64 {
+        let (z0, z1) = grid.x_range(ix);
+        let (p0, p1) = grid.y_range(iy);
+        let (t0, t1) = (z1.clamp(-1.0, 1.0).acos(), z0.clamp(-1.0, 1.0).acos());
+        // Stay a hair inside the cell so that a density discontinuous across a cell edge (the
+        // horizon) is evaluated on the correct side.
+        let inset = 1e-7 * (t1 - t0);
+        integrate_2d(&density, t0 + inset, t1 - inset, p0, p1, eps, depth)
+    };
+    run_chi2(&grid, &mut rng, sampler, cell_integral, cfg)
 }
 
 /// χ² test of a sampler of points in the rectangle `[lo, hi]` against its area density, on a
@@ -185,7 +196,13 @@ pub fn chi2_test_2d(
         }
     };
     let density = |x: f64, y: f64| pdf(Vec2::new(x as f32, y as f32)) as f64;
-    run_chi2(&grid, &mut rng, sampler, density, cfg)
+    let cell_integral = |ix: usize, iy: usize, eps: f64, depth: u32| -> f64 {
+        let (x0, x1) = grid.x_range(ix);
+        let (y0, y1) = grid.y_range(iy);
+        let (ix_, iy_) = (1e-7 * (x1 - x0), 1e-7 * (y1 - y0));
+        integrate_2d(&density, x0 + ix_, x1 - ix_, y0 + iy_, y1 - iy_, eps, depth)
+    };
+    run_chi2(&grid, &mut rng, sampler, cell_integral, cfg)
 }
 
 enum SampleOutcome {
@@ -204,6 +221,16 @@ struct Grid {
 }
 
 impl Grid {
+    fn x_range(&self, ix: usize) -> (f64, f64) {
+        let d = (self.x1 - self.x0) / self.nx as f64;
+        (self.x0 + ix as f64 * d, self.x0 + (ix + 1) as f64 * d)
+    }
+
+    fn y_range(&self, iy: usize) -> (f64, f64) {
+        let d = (self.y1 - self.y0) / self.ny as f64;
+        (self.y0 + iy as f64 * d, self.y0 + (iy + 1) as f64 * d)
+    }
+
     fn cell(&self, x: f64, y: f64) -> Option<usize> {
         let fx = (x - self.x0) / (self.x1 - self.x0) * self.nx as f64;
         let fy = (y - self.y0) / (self.y1 - self.y0) * self.ny as f64;
@@ -231,7 +258,7 @@ fn run_chi2(
     grid: &Grid,
     rng: &mut Pcg32,
     mut sampler: impl FnMut(&mut Pcg32) -> SampleOutcome,
-    density: impl Fn(f64, f64) -> f64,
+    cell_integral: impl Fn(usize, usize, f64, u32) -> f64,
     cfg: &Chi2Config,
 ) -> Chi2Result {
     let n_cells = grid.nx * grid.ny;
@@ -253,14 +280,15 @@ fn run_chi2(
     }
 
     // Expected counts by nested adaptive Simpson quadrature over each cell.
-    let dx = (grid.x1 - grid.x0) / grid.nx as f64;
-    let dy = (grid.y1 - grid.y0) / grid.ny as f64;
     let mut expected = vec![0.0f64; n_cells];
     let mut total = 0.0;
     for iy in 0..grid.ny {
         for ix in 0..grid.nx {
-            let (xa, ya) = (grid.x0 + ix as f64 * dx, grid.y0 + iy as f64 * dy);
-            let integral = integrate_2d(&density, xa, xa + dx, ya, ya + dy, 1e-8);
+            // Tolerance: 1 % of the Poisson standard deviation of the cell's count, from a
+            // coarse estimate of its probability.
+            let coarse = cell_integral(ix, iy, 0.0, 0).abs();
+            let eps = 0.01 * (coarse.max(1.0 / n as f64) / n as f64).sqrt();
+            let integral = cell_integral(ix, iy, eps, 11);
             if !integral.is_finite() || integral < 0.0 {
                 return fail(format!(
                     "density integral over cell ({ix}, {iy}) is {integral}"
@@ -273,7 +301,7 @@ fn run_chi2(
 
     // The density must integrate to the fraction of calls that produced a sample.
     let frac = successes as f64 / n as f64;
-    let tol = 2e-3 + 5.0 * (frac * (1.0 - frac) / n as f64).sqrt();
+    let tol = 5e-3 + 5.0 * (frac * (1.0 - frac) / n as f64).sqrt();
     if (total - frac).abs() > tol {
         return fail(format!(
             "the density integrates to {total:.5} but {frac:.5} of the calls produced a sample"
@@ -336,47 +364,111 @@ fn run_chi2(
     }
 }
 
-/// ∫∫ f over [x0, x1] × [y0, y1] by nested adaptive Simpson (absolute tolerance `eps`).
-fn integrate_2d(f: &impl Fn(f64, f64) -> f64, x0: f64, x1: f64, y0: f64, y1: f64, eps: f64) -> f64 {
-    let inner_eps = eps / (y1 - y0).abs().max(1e-12);
-    let g = |y: f64| adaptive_simpson(&|x: f64| f(x, y), x0, x1, inner_eps, 18);
-    adaptive_simpson(&g, y0, y1, eps, 14)
+/// ∫∫ f over [x0, x1] × [y0, y1] by two-dimensional adaptive Simpson quadrature (absolute
+/// tolerance `eps`): a rectangle's 3×3 tensor Simpson rule is compared with the sum of its
+/// four quadrants' rules, and quadrants are refined until they agree. Every cell is split at
+/// least twice so that narrow features between the first nodes are seen.
+fn integrate_2d(
+    f: &impl Fn(f64, f64) -> f64,
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    eps: f64,
+    max_depth: u32,
+) -> f64 {
+    let mut v = [[0.0f64; 3]; 3];
+    for (j, row) in v.iter_mut().enumerate() {
+        for (i, e) in row.iter_mut().enumerate() {
+            *e = f(
+                x0 + 0.5 * i as f64 * (x1 - x0),
+                y0 + 0.5 * j as f64 * (y1 - y0),
+            );
+        }
+    }
+    let whole = simpson_3x3(&v, x1 - x0, y1 - y0);
+    simpson_2d_rec(
+        f,
+        x0,
+        x1,
+        y0,
+        y1,
+        &v,
+        whole,
+        eps,
+        max_depth,
+        2.min(max_depth),
+    )
 }
 
-fn adaptive_simpson(f: &impl Fn(f64) -> f64, a: f64, b: f64, eps: f64, depth: u32) -> f64 {
-    let (fa, fb) = (f(a), f(b));
-    let m = 0.5 * (a + b);
-    let fm = f(m);
-    let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
-    // Always split a few times so that narrow features between the first nodes are seen.
-    simpson_rec(f, a, b, fa, fm, fb, whole, eps, depth, 4)
+/// Tensor Simpson rule from a 3×3 grid of values (`v[j][i]`, j along y).
+fn simpson_3x3(v: &[[f64; 3]; 3], wx: f64, wy: f64) -> f64 {
+    const W: [f64; 3] = [1.0, 4.0, 1.0];
+    let mut s = 0.0;
+    for j in 0..3 {
+        for i in 0..3 {
+            s += W[i] * W[j] * v[j][i];
+        }
+    }
+    s * wx * wy / 36.0
 }
 
 #[allow(clippy::too_many_arguments)]
-fn simpson_rec(
-    f: &impl Fn(f64) -> f64,
-    a: f64,
-    b: f64,
-    fa: f64,
-    fm: f64,
-    fb: f64,
+fn simpson_2d_rec(
+    f: &impl Fn(f64, f64) -> f64,
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    v: &[[f64; 3]; 3],
     whole: f64,
     eps: f64,
     depth: u32,
     min_depth: u32,
 ) -> f64 {
-    let m = 0.5 * (a + b);
-    let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
-    let (flm, frm) = (f(lm), f(rm));
-    let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
-    let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
-    let delta = left + right - whole;
+    // 5×5 grid: even indices are the parent's nodes.
+    let mut g = [[0.0f64; 5]; 5];
+    let (hx, hy) = (0.25 * (x1 - x0), 0.25 * (y1 - y0));
+    for (j, row) in g.iter_mut().enumerate() {
+        for (i, e) in row.iter_mut().enumerate() {
+            *e = if i % 2 == 0 && j % 2 == 0 {
+                v[j / 2][i / 2]
+            } else {
+                f(x0 + i as f64 * hx, y0 + j as f64 * hy)
+            };
+        }
+    }
+    let mut subs = [[[0.0f64; 3]; 3]; 4];
+    let mut parts = [0.0f64; 4];
+    for q in 0..4 {
+        let (oi, oj) = (2 * (q % 2), 2 * (q / 2));
+        for j in 0..3 {
+            for i in 0..3 {
+                subs[q][j][i] = g[oj + j][oi + i];
+            }
+        }
+        parts[q] = simpson_3x3(&subs[q], 2.0 * hx, 2.0 * hy);
+    }
+    let sum: f64 = parts.iter().sum();
+    let delta = sum - whole;
     if depth == 0 || (min_depth == 0 && delta.abs() <= 15.0 * eps) {
-        return left + right + delta / 15.0;
+        return sum + delta / 15.0;
     }
     let md = min_depth.saturating_sub(1);
-    simpson_rec(f, a, m, fa, flm, fm, left, 0.5 * eps, depth - 1, md)
-        + simpson_rec(f, m, b, fm, frm, fb, right, 0.5 * eps, depth - 1, md)
+    let xm = 0.5 * (x0 + x1);
+    let ym = 0.5 * (y0 + y1);
+    let rects = [
+        (x0, xm, y0, ym),
+        (xm, x1, y0, ym),
+        (x0, xm, ym, y1),
+        (xm, x1, ym, y1),
+    ];
+    let mut total = 0.0;
+    for q in 0..4 {
+        let (a, b, c, d) = rects[q];
+        total += simpson_2d_rec(f, a, b, c, d, &subs[q], parts[q], 0.25 * eps, depth - 1, md);
+    }
+    total
 }
 
 /// Two-sided p-value of Student's t-test of `mean` (a sample mean with sample `variance` over
@@ -452,12 +544,12 @@ mod tests {
 
     #[test]
     fn simpson_is_accurate() {
-        let v = integrate_2d(&|x, y| x * x * y.cos(), 0.0, 1.0, 0.0, 1.0, 1e-10);
+        let v = integrate_2d(&|x, y| x * x * y.cos(), 0.0, 1.0, 0.0, 1.0, 1e-10, 11);
         assert!((v - 1.0f64.sin() / 3.0).abs() < 1e-9);
         // A narrow peak.
         let s = 0.01;
         let g = |x: f64, _y: f64| (-(x - 0.3) * (x - 0.3) / (2.0 * s * s)).exp();
-        let v = integrate_2d(&g, 0.0, 1.0, 0.0, 1.0, 1e-10);
+        let v = integrate_2d(&g, 0.0, 1.0, 0.0, 1.0, 1e-10, 11);
         let exact = s * (2.0 * PI).sqrt();
         assert!((v - exact).abs() < 1e-7 * exact.max(1.0), "{v} {exact}");
     }

@@ -3,7 +3,7 @@
 //! Parameters: `reflectance` (default 0.5). f = reflectance/π on the front side; sampled with
 //! the cosine-weighted hemisphere, so the sample weight is exactly `reflectance`.
 
-use super::{BsdfModel, BsdfSample, TransportMode};
+use super::{BsdfModel, BsdfSample, TransportMode, is_positive};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
@@ -47,7 +47,7 @@ impl BsdfModel for Diffuse {
         }
         let wi = square_to_cosine_hemisphere(u2);
         let pdf = cosine_hemisphere_pdf(wi);
-        if !(pdf > 0.0) {
+        if !is_positive(pdf) {
             return None;
         }
         Some(BsdfSample {

@@ -26,9 +26,8 @@ pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 
     let r = if eta == 1.0 {
         0.0
-    } else if cos_i == 0.0 {
-        1.0
-    } else if cos_t_sqr <= 0.0 {
+    } else if cos_i == 0.0 || cos_t_sqr <= 0.0 {
+        // Grazing incidence or total internal reflection.
         1.0
     } else {
         let a_s = (cos_i - eta_it * cos_t) / (cos_i + eta_it * cos_t);

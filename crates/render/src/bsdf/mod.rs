@@ -78,6 +78,10 @@ pub(crate) trait BsdfModel {
 }
 
 /// Closed set of BSDF models.
+///
+/// `RoughPlastic` carries its 64-entry transmittance table inline (≈ 300 bytes) so that a
+/// per-hit `Bsdf` needs no heap allocation or shared pointer; the enum lives on the stack.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 pub enum Bsdf {
     Diffuse(Diffuse),
@@ -170,6 +174,12 @@ impl_from!(
 #[inline]
 pub(crate) fn reflect_z(w: Vec3) -> Vec3 {
     Vec3::new(-w.x, -w.y, w.z)
+}
+
+/// `x > 0` (false for NaN): guards densities before dividing by them.
+#[inline]
+pub(crate) fn is_positive(x: f32) -> bool {
+    x > 0.0
 }
 
 /// Average of the three channels.

@@ -13,7 +13,7 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Microfacet, MicrofacetType};
-use super::{BsdfModel, BsdfSample, TransportMode, reflect_z_about};
+use super::{BsdfModel, BsdfSample, TransportMode, is_positive, reflect_z_about};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
@@ -78,7 +78,7 @@ impl BsdfModel for NoriMicrofacet {
             return None;
         }
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) {
+        if !is_positive(pdf) {
             return None;
         }
         Some(BsdfSample {

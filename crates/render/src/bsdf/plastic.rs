@@ -12,7 +12,7 @@
 //! computed from the *texture means* (the caller passes it when the diffuse is textured).
 
 use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance};
-use super::{BsdfModel, BsdfSample, TransportMode, mean, reflect_z};
+use super::{BsdfModel, BsdfSample, TransportMode, is_positive, mean, reflect_z};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
@@ -116,7 +116,7 @@ impl BsdfModel for Plastic {
             let p_diff = 1.0 - p_spec;
             let wi = square_to_cosine_hemisphere(u2);
             let pdf = p_diff * cosine_hemisphere_pdf(wi);
-            if !(pdf > 0.0) {
+            if !is_positive(pdf) {
                 return None;
             }
             let f_i = fresnel_dielectric(wi.z, self.eta).0;

@@ -8,7 +8,7 @@
 
 use super::fresnel::fresnel_conductor;
 use super::microfacet::{Microfacet, MicrofacetType};
-use super::{BsdfModel, BsdfSample, TransportMode, reflect_z_about};
+use super::{BsdfModel, BsdfSample, TransportMode, is_positive, reflect_z_about};
 use crate::math::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,7 +67,7 @@ impl BsdfModel for RoughConductor {
         let (m, pdf_m) = self.distribution.sample(wo, u2);
         let wi = reflect_z_about(wo, m);
         let wo_m = wo.dot(m);
-        if wi.z <= 0.0 || !(pdf_m > 0.0) || wo_m <= 0.0 {
+        if wi.z <= 0.0 || !is_positive(pdf_m) || wo_m <= 0.0 {
             return None;
         }
         let pdf = pdf_m / (4.0 * wo_m);

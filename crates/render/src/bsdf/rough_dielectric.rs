@@ -10,7 +10,7 @@
 
 use super::fresnel::{fresnel_dielectric, refract_m};
 use super::microfacet::{Microfacet, MicrofacetType};
-use super::{BsdfModel, BsdfSample, TransportMode, reflect_z_about};
+use super::{BsdfModel, BsdfSample, TransportMode, is_positive, reflect_z_about};
 use crate::math::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,7 +55,7 @@ impl RoughDielectric {
         };
         let h = wo + wi * if reflect { 1.0 } else { eta };
         let len2 = h.length_squared();
-        if !(len2 > 0.0) {
+        if !is_positive(len2) {
             return None;
         }
         let mut m = h / len2.sqrt();
@@ -119,7 +119,7 @@ impl BsdfModel for RoughDielectric {
         }
         let wo_up = if cos_o < 0.0 { -wo } else { wo };
         let (m, pdf_m) = self.distribution.sample(wo_up, u2);
-        if !(pdf_m > 0.0) {
+        if !is_positive(pdf_m) {
             return None;
         }
         let wo_m = wo.dot(m);
@@ -153,7 +153,7 @@ impl BsdfModel for RoughDielectric {
                 TransportMode::Importance => 1.0,
             };
             let weight = self.specular_transmittance * (scale * self.distribution.smith_g1(wi, m));
-            if !(pdf > 0.0) || !pdf.is_finite() {
+            if !is_positive(pdf) || !pdf.is_finite() {
                 return None;
             }
             Some(BsdfSample {

@@ -17,7 +17,7 @@
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Microfacet, MicrofacetType, eval_reflectance, eval_transmittance};
 use super::plastic::sampling_weight;
-use super::{BsdfModel, BsdfSample, TransportMode, mean, reflect_z_about};
+use super::{BsdfModel, BsdfSample, TransportMode, is_positive, mean, reflect_z_about};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
@@ -175,7 +175,7 @@ impl BsdfModel for RoughPlastic {
             return None;
         }
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) {
+        if !is_positive(pdf) {
             return None;
         }
         Some(BsdfSample {
