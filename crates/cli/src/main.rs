@@ -39,6 +39,15 @@ enum Command {
         #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
         define: Vec<(String, String)>,
     },
+    /// Run Nori statistical test files (`<test type="ttest|chi2test">`). Exit code 0 only
+    /// if every case of every file passes.
+    Test {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Seed of the random streams.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// Compare renders with a reference (relMSE, mean ratio, block t-test of
     /// ../shared/references/README.md). Exit code 1 when the t-test fails.
     Compare {
@@ -294,6 +303,42 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+fn cmd_test(files: &[PathBuf], seed: u64) -> Result<(), Failure> {
+    let mut failed = 0usize;
+    for f in files {
+        let Document::Test(test) = load_scene(f, &[])? else {
+            return Err(Failure::input(format!(
+                "{}: not a test file (<test type=...>)",
+                f.display()
+            )));
+        };
+        let report = render::nori_tests::run(&test, seed).map_err(Failure::input)?;
+        println!(
+            "{}: {} with {} case(s), per-case level {:.3e}",
+            f.display(),
+            report.kind,
+            report.cases.len(),
+            report.case_level
+        );
+        for c in &report.cases {
+            println!(
+                "  {:<4} {}: statistic {:.4}, p = {:.4e}; {}",
+                if c.passed { "ok" } else { "FAIL" },
+                c.name,
+                c.statistic,
+                c.p_value,
+                c.detail
+            );
+        }
+        failed += report.cases.iter().filter(|c| !c.passed).count();
+    }
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(Failure::other(format!("{failed} test case(s) failed")))
+    }
+}
+
 fn cmd_compare(reference: &Path, test: &[PathBuf], stderr: Option<&Path>) -> Result<(), Failure> {
     use render::compare::{TestImages, compare, load_reference};
     use render::image_io::Decode;
@@ -328,6 +373,7 @@ fn main() -> ExitCode {
         Command::Info { scene, define } => {
             load_scene(&scene, &define).and_then(|doc| info::print(&scene, &doc))
         }
+        Command::Test { files, seed } => cmd_test(&files, seed),
         Command::Compare {
             reference,
             test,

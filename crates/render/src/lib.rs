@@ -15,6 +15,7 @@ pub mod integrators;
 pub mod lights;
 pub mod materials;
 pub mod math;
+pub mod nori_tests;
 pub mod render;
 pub mod sampling;
 pub mod shapes;

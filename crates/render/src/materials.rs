@@ -6,7 +6,7 @@
 //! flipped and the back (or front) material is used, as Mitsuba does. Shapes without a material
 //! get Mitsuba's default, a one-sided diffuse of reflectance 0.5.
 
-use scene::{Material, MicrofacetDistribution};
+use scene::{ColorParam, FloatParam, Material, MicrofacetDistribution};
 
 use crate::bsdf::Microfacet;
 use crate::bsdf::{
@@ -14,7 +14,7 @@ use crate::bsdf::{
     RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
 };
 use crate::build::Scene;
-use crate::math::{Frame, Vec3};
+use crate::math::{Frame, Vec2, Vec3};
 use crate::shapes::SurfaceInteraction;
 
 #[derive(Clone, Debug)]
@@ -28,6 +28,39 @@ pub fn microfacet_type(d: MicrofacetDistribution) -> MicrofacetType {
     match d {
         MicrofacetDistribution::Ggx => MicrofacetType::Ggx,
         MicrofacetDistribution::Beckmann => MicrofacetType::Beckmann,
+    }
+}
+
+/// Evaluates colour and scalar parameters (textures) at a uv.
+pub trait Params {
+    fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3;
+    fn float(&self, p: &FloatParam, uv: Vec2) -> f32;
+}
+
+impl Params for Scene {
+    fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3 {
+        Scene::color(self, p, uv)
+    }
+    fn float(&self, p: &FloatParam, uv: Vec2) -> f32 {
+        Scene::float(self, p, uv)
+    }
+}
+
+/// Parameters without textures (statistical tests of single BSDFs); a texture reads as 0.5.
+pub struct ConstantParams;
+
+impl Params for ConstantParams {
+    fn color(&self, p: &ColorParam, _uv: Vec2) -> Vec3 {
+        match p {
+            ColorParam::Const(c) => *c,
+            ColorParam::Texture(_) => Vec3::splat(0.5),
+        }
+    }
+    fn float(&self, p: &FloatParam, _uv: Vec2) -> f32 {
+        match p {
+            FloatParam::Const(c) => *c,
+            FloatParam::Texture(_) => 0.5,
+        }
     }
 }
 
@@ -50,6 +83,128 @@ impl RtMaterial {
             material,
             rough_plastic,
         }
+    }
+}
+
+impl RtMaterial {
+    /// The BSDF of this material with its parameters evaluated at `uv` (`None` for `null`
+    /// and for an unresolved `twosided`).
+    pub fn bsdf<P: Params>(&self, p: &P, uv: Vec2) -> Option<Bsdf> {
+        let bsdf = match &self.material {
+            Material::Diffuse { reflectance } => {
+                Bsdf::Diffuse(Diffuse::new(p.color(reflectance, uv)))
+            }
+            Material::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+            } => Bsdf::Conductor(Conductor::new(*eta, *k, p.color(specular_reflectance, uv))),
+            Material::Mirror { reflectance } => {
+                Bsdf::Conductor(Conductor::mirror(p.color(reflectance, uv)))
+            }
+            Material::RoughConductor {
+                distribution,
+                alpha_u,
+                alpha_v,
+                eta,
+                k,
+                specular_reflectance,
+            } => Bsdf::RoughConductor(RoughConductor::new(
+                microfacet_type(*distribution),
+                alpha(p.float(alpha_u, uv)),
+                alpha(p.float(alpha_v, uv)),
+                *eta,
+                *k,
+                p.color(specular_reflectance, uv),
+            )),
+            Material::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+                ..
+            } => {
+                let mut d = Dielectric::new(*int_ior, *ext_ior);
+                d.specular_reflectance = p.color(specular_reflectance, uv);
+                d.specular_transmittance = p.color(specular_transmittance, uv);
+                Bsdf::Dielectric(d)
+            }
+            Material::ThinDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = ThinDielectric::new(*int_ior, *ext_ior);
+                d.specular_reflectance = p.color(specular_reflectance, uv);
+                d.specular_transmittance = p.color(specular_transmittance, uv);
+                Bsdf::ThinDielectric(d)
+            }
+            Material::RoughDielectric {
+                distribution,
+                alpha_u,
+                alpha_v,
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = RoughDielectric::new(
+                    microfacet_type(*distribution),
+                    alpha(p.float(alpha_u, uv)),
+                    alpha(p.float(alpha_v, uv)),
+                    *int_ior,
+                    *ext_ior,
+                );
+                d.specular_reflectance = p.color(specular_reflectance, uv);
+                d.specular_transmittance = p.color(specular_transmittance, uv);
+                Bsdf::RoughDielectric(d)
+            }
+            Material::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => Bsdf::Plastic(Plastic::new(
+                p.color(diffuse_reflectance, uv),
+                p.color(specular_reflectance, uv),
+                *int_ior,
+                *ext_ior,
+                *nonlinear,
+            )),
+            Material::RoughPlastic {
+                distribution,
+                alpha: a,
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => {
+                let tables = self.rough_plastic.clone()?;
+                Bsdf::RoughPlastic(RoughPlastic::with_tables(
+                    Microfacet::isotropic(microfacet_type(*distribution), alpha(*a)),
+                    int_ior / ext_ior,
+                    tables,
+                    p.color(diffuse_reflectance, uv),
+                    p.color(specular_reflectance, uv),
+                    *nonlinear,
+                ))
+            }
+            Material::NoriMicrofacet {
+                alpha: a,
+                int_ior,
+                ext_ior,
+                kd,
+            } => Bsdf::NoriMicrofacet(NoriMicrofacet::new(alpha(*a), *int_ior, *ext_ior, *kd)),
+            Material::PhongFamily { diffuse, .. } => {
+                // The Phong family arrives with the CENG795 work; until then its diffuse part.
+                Bsdf::Diffuse(Diffuse::new(p.color(diffuse, uv)))
+            }
+            Material::Null | Material::TwoSided { .. } => return None,
+        };
+        Some(bsdf)
     }
 }
 
@@ -89,126 +244,7 @@ impl Scene {
                 }
             }
         }
-        let m = mat?;
-        let uv = si.uv;
-        let bsdf = match &m.material {
-            Material::Diffuse { reflectance } => {
-                Bsdf::Diffuse(Diffuse::new(self.color(reflectance, uv)))
-            }
-            Material::Conductor {
-                eta,
-                k,
-                specular_reflectance,
-            } => Bsdf::Conductor(Conductor::new(
-                *eta,
-                *k,
-                self.color(specular_reflectance, uv),
-            )),
-            Material::Mirror { reflectance } => {
-                Bsdf::Conductor(Conductor::mirror(self.color(reflectance, uv)))
-            }
-            Material::RoughConductor {
-                distribution,
-                alpha_u,
-                alpha_v,
-                eta,
-                k,
-                specular_reflectance,
-            } => Bsdf::RoughConductor(RoughConductor::new(
-                microfacet_type(*distribution),
-                alpha(self.float(alpha_u, uv)),
-                alpha(self.float(alpha_v, uv)),
-                *eta,
-                *k,
-                self.color(specular_reflectance, uv),
-            )),
-            Material::Dielectric {
-                int_ior,
-                ext_ior,
-                specular_reflectance,
-                specular_transmittance,
-                ..
-            } => {
-                let mut d = Dielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = self.color(specular_reflectance, uv);
-                d.specular_transmittance = self.color(specular_transmittance, uv);
-                Bsdf::Dielectric(d)
-            }
-            Material::ThinDielectric {
-                int_ior,
-                ext_ior,
-                specular_reflectance,
-                specular_transmittance,
-            } => {
-                let mut d = ThinDielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = self.color(specular_reflectance, uv);
-                d.specular_transmittance = self.color(specular_transmittance, uv);
-                Bsdf::ThinDielectric(d)
-            }
-            Material::RoughDielectric {
-                distribution,
-                alpha_u,
-                alpha_v,
-                int_ior,
-                ext_ior,
-                specular_reflectance,
-                specular_transmittance,
-            } => {
-                let mut d = RoughDielectric::new(
-                    microfacet_type(*distribution),
-                    alpha(self.float(alpha_u, uv)),
-                    alpha(self.float(alpha_v, uv)),
-                    *int_ior,
-                    *ext_ior,
-                );
-                d.specular_reflectance = self.color(specular_reflectance, uv);
-                d.specular_transmittance = self.color(specular_transmittance, uv);
-                Bsdf::RoughDielectric(d)
-            }
-            Material::Plastic {
-                diffuse_reflectance,
-                specular_reflectance,
-                int_ior,
-                ext_ior,
-                nonlinear,
-            } => Bsdf::Plastic(Plastic::new(
-                self.color(diffuse_reflectance, uv),
-                self.color(specular_reflectance, uv),
-                *int_ior,
-                *ext_ior,
-                *nonlinear,
-            )),
-            Material::RoughPlastic {
-                distribution,
-                alpha: a,
-                diffuse_reflectance,
-                specular_reflectance,
-                int_ior,
-                ext_ior,
-                nonlinear,
-            } => {
-                let tables = m.rough_plastic.clone()?;
-                Bsdf::RoughPlastic(RoughPlastic::with_tables(
-                    Microfacet::isotropic(microfacet_type(*distribution), alpha(*a)),
-                    int_ior / ext_ior,
-                    tables,
-                    self.color(diffuse_reflectance, uv),
-                    self.color(specular_reflectance, uv),
-                    *nonlinear,
-                ))
-            }
-            Material::NoriMicrofacet {
-                alpha: a,
-                int_ior,
-                ext_ior,
-                kd,
-            } => Bsdf::NoriMicrofacet(NoriMicrofacet::new(alpha(*a), *int_ior, *ext_ior, *kd)),
-            Material::PhongFamily { diffuse, .. } => {
-                // The Phong family arrives with the CENG795 work; until then its diffuse part.
-                Bsdf::Diffuse(Diffuse::new(self.color(diffuse, uv)))
-            }
-            Material::Null | Material::TwoSided { .. } => return None,
-        };
+        let bsdf = mat?.bsdf(self, si.uv)?;
         Some((bsdf, frame))
     }
 }

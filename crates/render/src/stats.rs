@@ -514,6 +514,21 @@ impl MeanVar {
         }
     }
 
+    /// The statistics of the union of two samples (Chan et al.'s parallel update).
+    pub fn merge(&self, o: &MeanVar) -> MeanVar {
+        let n = self.n + o.n;
+        if n == 0 {
+            return MeanVar::default();
+        }
+        let d = o.mean - self.mean;
+        let (na, nb) = (self.n as f64, o.n as f64);
+        MeanVar {
+            n,
+            mean: self.mean + d * nb / n as f64,
+            m2: self.m2 + o.m2 + d * d * na * nb / n as f64,
+        }
+    }
+
     /// Two-sided p-value of the t-test of the mean against `reference`.
     pub fn t_test(&self, reference: f64) -> f64 {
         t_test(self.mean, self.variance(), self.n, reference)
@@ -524,6 +539,22 @@ impl MeanVar {
 mod tests {
     use super::*;
     use crate::sampling::warp;
+
+    #[test]
+    fn merged_statistics_equal_the_whole() {
+        let xs: Vec<f64> = (0..101)
+            .map(|i| ((i * 37) % 11) as f64 * 0.3 - 1.0)
+            .collect();
+        let mut whole = MeanVar::default();
+        xs.iter().for_each(|&x| whole.push(x));
+        let (mut a, mut b) = (MeanVar::default(), MeanVar::default());
+        xs[..40].iter().for_each(|&x| a.push(x));
+        xs[40..].iter().for_each(|&x| b.push(x));
+        let m = a.merge(&b);
+        assert_eq!(m.n, whole.n);
+        assert!((m.mean - whole.mean).abs() < 1e-12);
+        assert!((m.variance() - whole.variance()).abs() < 1e-12);
+    }
 
     #[test]
     fn pcg32_matches_reference_sequence() {
