@@ -28,8 +28,8 @@
 //!
 //! # Structure: why one flat BVH
 //! Everything bounded (every triangle of every mesh, every sphere and disk) goes into a single
-//! 4-wide BVH ([`bvh`]), built on obvhs' PLOC builder and collapsed to 4-wide nodes with 4-wide
-//! SIMD box tests. A flat tree over all primitives is at least as good as a two-level tree for
+//! 8-wide BVH ([`bvh`]), built by obvhs' PLOC builder and collapsed to 8-wide float nodes tested
+//! with SIMD. A flat tree over all primitives is at least as good as a two-level tree for
 //! both scene classes we care about: a single 1M-triangle mesh (the top level of a two-level tree
 //! would be one useless node) and small scenes of a few shapes, whose meshes may overlap in
 //! space — a top level over per-shape boxes cannot separate overlapping meshes, whereas the flat
@@ -44,10 +44,11 @@
 //! `instance` field. Nothing in the traversal or the primitive tests has to change.
 //!
 //! # Choice of tree
-//! obvhs' own CWBVH (8-wide, 8-bit quantised boxes) is the GPU-oriented layout; on the CPU,
-//! one ray at a time, decoding its quantised children costs more than the 4-wide float boxes
-//! here save in memory. The benchmark `benches/accel.rs` measures both in the same run (and
-//! Embree 3 with `--features embree`).
+//! obvhs' own CWBVH (8-wide, 8-bit quantised boxes, Ylitie et al. 2017) is a GPU-oriented
+//! layout: one ray at a time on the CPU, its decoding cost outweighs the memory it saves, and its
+//! stock triangle test is not watertight. We keep obvhs for what it is good at (fast, parallel
+//! PLOC construction and reinsertion) and own the traversal layout. `benches/accel.rs` measures
+//! ours, obvhs' stock CWBVH and (with `--features embree`) Embree 3 in the same run.
 
 pub mod bvh;
 pub mod prim;
