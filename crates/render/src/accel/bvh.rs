@@ -324,6 +324,29 @@ impl Bvh4 {
         LEAF_BIT | (count << COUNT_SHIFT) | first
     }
 
+    /// Loads a word from each cache line of the node or first packet `c` refers to. Used as a
+    /// prefetch (without `unsafe` intrinsics): the loads of all entered children are issued
+    /// together and overlap, instead of missing one after the other when they are popped.
+    #[inline(always)]
+    fn touch(&self, c: u32) -> u32 {
+        if c & LEAF_BIT == 0 {
+            let n = &self.nodes[c as usize];
+            n.b[0][0][0].x.to_bits()
+                ^ n.b[0][2][0].x.to_bits()
+                ^ n.b[1][1][0].x.to_bits()
+                ^ n.child[0]
+        } else if c != EMPTY {
+            match &self.packets[(c & FIRST_MASK) as usize] {
+                Packet::Tri4(t) => {
+                    t.p[0][0].x.to_bits() ^ t.p[1][1].x.to_bits() ^ t.p[2][2].x.to_bits()
+                }
+                _ => 0,
+            }
+        } else {
+            0
+        }
+    }
+
     pub(crate) fn intersect(&self, ray: &Ray, t_max: f32) -> Option<RawHit> {
         match self.stack {
             StackClass::S64 => self.intersect_n::<64>(ray, t_max),
@@ -353,6 +376,7 @@ impl Bvh4 {
         // (packet, t, u, v) and the lane within the packet.
         let mut best: Option<(u32, f32, f32, f32)> = None;
         let mut best_lane = 0usize;
+        let mut sink = 0u32;
         'outer: loop {
             if cur & LEAF_BIT == 0 {
                 let node = &self.nodes[cur as usize];
@@ -361,6 +385,11 @@ impl Bvh4 {
                     if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
+                    }
+                    let mut m = mask;
+                    while m != 0 {
+                        sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
+                        m &= m - 1;
                     }
                     // Sort the entered children by entry distance; keys are the (non-negative)
                     // distances' bit patterns with the slot index in the three low bits.
@@ -435,6 +464,7 @@ impl Bvh4 {
                 }
             }
         }
+        std::hint::black_box(sink);
         best.map(|(p, t, u, v)| {
             let [shape, prim] = self.ids[p as usize][best_lane];
             RawHit {
@@ -456,6 +486,7 @@ impl Bvh4 {
         let mut stack = [0u32; N];
         let mut sp = 0usize;
         let mut cur = self.root;
+        let mut sink = 0u32;
         loop {
             if cur & LEAF_BIT == 0 {
                 let node = &self.nodes[cur as usize];
@@ -463,6 +494,11 @@ impl Bvh4 {
                 if mask != 0 {
                     cur = node.child[mask.trailing_zeros() as usize];
                     mask &= mask - 1;
+                    let mut m = mask;
+                    while m != 0 {
+                        sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
+                        m &= m - 1;
+                    }
                     while mask != 0 {
                         stack[sp] = node.child[mask.trailing_zeros() as usize];
                         sp += 1;
@@ -489,6 +525,7 @@ impl Bvh4 {
                 }
             }
             if sp == 0 {
+                std::hint::black_box(sink);
                 return false;
             }
             sp -= 1;
