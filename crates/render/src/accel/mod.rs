@@ -28,7 +28,7 @@
 //!
 //! # Structure: why one flat BVH
 //! Everything bounded (every triangle of every mesh, every sphere and disk) goes into a single
-//! 8-wide BVH ([`bvh`]), built by obvhs' PLOC builder and collapsed to 8-wide float nodes tested
+//! 8-wide BVH (module `bvh`), built by obvhs' PLOC builder and collapsed to 8-wide float nodes tested
 //! with SIMD. A flat tree over all primitives is at least as good as a two-level tree for
 //! both scene classes we care about: a single 1M-triangle mesh (the top level of a two-level tree
 //! would be one useless node) and small scenes of a few shapes, whose meshes may overlap in
@@ -36,7 +36,7 @@
 //! tree splits them primitive by primitive. The cost is build time for scenes that reuse
 //! geometry, which is exactly what instancing is for.
 //!
-//! Path to instancing: the BVH's leaves hold a closed set of [`bvh::Packet`]s. Instancing adds a
+//! Path to instancing: the BVH's leaves hold a closed set of `bvh::Packet`s. Instancing adds a
 //! `Packet::Instance { blas: u32, to_object: Affine3A }` variant and a `Vec<Bvh4>` of bottom-level
 //! trees: the top-level tree is built exactly like today over instance boxes (plus any
 //! non-instanced geometry), and the instance packet transforms the ray and runs the same
@@ -49,8 +49,14 @@
 //! stock triangle test is not watertight. We keep obvhs for what it is good at (fast, parallel
 //! PLOC construction and reinsertion) and own the traversal layout. `benches/accel.rs` measures
 //! ours, obvhs' stock CWBVH and (with `--features embree`) Embree 3 in the same run.
+//!
+//! # Performance (1M-triangle bumpy sphere, 1M incoherent rays, 2 threads, SSE2 baseline build)
+//! About 1.5× obvhs' stock CWBVH traversal for closest hits and 1.1–2× for occlusion, and about
+//! 0.5× Embree 3 (which dispatches to AVX2 at run time). Building takes about as long as
+//! Embree's high-quality build. The traversal is bound by the latency of node and leaf fetches
+//! (~7 nodes and ~2.5 leaf packets per closest-hit ray).
 
-pub mod bvh;
+mod bvh;
 pub mod prim;
 
 use std::sync::Arc;
@@ -238,4 +244,30 @@ impl Accel {
 #[inline]
 fn ray_ok(ray: &Ray, t_max: f32) -> bool {
     t_max > 0.0 && ray.o.is_finite() && ray.d.is_finite() && ray.d != Vec3::ZERO
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn accel_is_shareable_between_threads() {
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<Accel>();
+    }
+
+    #[test]
+    fn single_triangle_root_leaf() {
+        // Fewer primitives than a leaf holds: the root is a leaf, no inner node.
+        let accel = Accel::build(vec![AccelShape::Triangles {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y].into(),
+            indices: vec![[0, 1, 2]].into(),
+        }]);
+        let h = accel
+            .intersect(&Ray::new(Vec3::new(0.2, 0.3, 1.0), -Vec3::Z), f32::INFINITY)
+            .expect("hit");
+        assert_eq!((h.shape, h.prim, h.t), (0, 0, 1.0));
+        assert!((h.u - 0.2).abs() < 1e-6 && (h.v - 0.3).abs() < 1e-6);
+        assert_eq!(accel.bounds(), (Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
+    }
 }
