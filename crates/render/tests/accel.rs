@@ -813,3 +813,37 @@ fn concurrent_queries() {
         }
     });
 }
+
+#[test]
+fn exponentially_spaced_spheres_deep_tree() {
+    // Sizes and gaps growing geometrically give bottom-up builders a deep, caterpillar-like
+    // tree: traversal must stay within its stack and still find the closest hit.
+    let shapes: Vec<AccelShape> = (0..200)
+        .map(|i| {
+            let s = 1.5f32.powi(i);
+            AccelShape::Sphere {
+                center: Vec3::new(s, 0.0, 0.0),
+                radius: 0.2 * s,
+            }
+        })
+        .collect();
+    let accel = Accel::build(shapes.clone());
+    let mut rng = Rng::new(12);
+    for _ in 0..300 {
+        let i = (rng.u32() % 200) as i32;
+        let s = 1.5f32.powi(i);
+        let o = Vec3::new(
+            s * rng.range(0.5, 3.0),
+            s * rng.range(-0.1, 0.1),
+            s * rng.range(-0.1, 0.1),
+        );
+        let ray = Ray::new(
+            o,
+            Vec3::new(-1.0, rng.range(-0.05, 0.05), rng.range(-0.05, 0.05)),
+        );
+        let a = accel.intersect(&ray, f32::INFINITY).map(|h| (h.shape, h.t));
+        let b = brute(&shapes, &ray, f32::INFINITY).map(|h| (h.shape, h.t));
+        assert_eq!(a, b, "ray {ray:?}");
+        assert_eq!(accel.occluded(&ray, f32::INFINITY), b.is_some());
+    }
+}

@@ -16,7 +16,7 @@
 //! popped entries that lie beyond the current hit; occlusion skips ordering and returns on the
 //! first hit. The box test is made conservative by scaling the exit distance by `1 + 2γ₃`
 //! (Ize 2013, "Robust BVH Ray Traversal"), so watertight triangles are never lost to box misses.
-//! The stack is a fixed-size array on the call stack (64, 256 or 1024 entries, chosen at build
+//! The stack is a fixed-size array on the call stack (64 to 1024 entries, chosen at build
 //! from the tree depth), so queries never allocate.
 
 use obvhs::aabb::Aabb;
@@ -41,6 +41,8 @@ const COUNT_SHIFT: u32 = 27;
 const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
 /// An empty child slot: a leaf with no packets (its box is inverted, so it is never entered).
 const EMPTY: u32 = LEAF_BIT;
+/// Largest traversal stack (entries); deeper trees are rebuilt balanced.
+const MAX_STACK: usize = 1024;
 
 /// `1 + 2γ₃` with `γₙ = nε/(1-nε)`, ε = 2⁻²⁴ (pbrt-v4's robust slab test).
 const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
@@ -77,18 +79,20 @@ struct Node {
 #[derive(Clone, Copy, Debug)]
 enum StackClass {
     S64,
+    S128,
     S256,
     S1024,
 }
 
-pub(crate) struct Bvh4 {
+pub(crate) struct WideBvh {
     nodes: Vec<Node>,
     packets: Vec<Packet>,
     /// `(shape, prim)` per packet lane.
     ids: Vec<[[u32; 2]; 4]>,
     root: u32,
     stack: StackClass,
-    pub(crate) depth: u32,
+    /// Number of inner-node levels.
+    depth: u32,
 }
 
 /// Per-ray traversal constants.
@@ -150,7 +154,7 @@ impl TravRay {
     }
 }
 
-/// Closest-hit result inside the BVH: packet index, lane, t, u, v.
+/// Closest-hit result of the BVH.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RawHit {
     pub t: f32,
@@ -160,11 +164,11 @@ pub(crate) struct RawHit {
     pub v: f32,
 }
 
-impl Bvh4 {
+impl WideBvh {
     /// Builds over `prims`, whose ids are `ids[i] = (shape, prim)`.
-    pub(crate) fn build(prims: &[Prim], ids: &[[u32; 2]], aabbs: &[Aabb]) -> Bvh4 {
+    pub(crate) fn build(prims: &[Prim], ids: &[[u32; 2]], aabbs: &[Aabb]) -> WideBvh {
         let n = prims.len();
-        let mut out = Bvh4 {
+        let mut out = WideBvh {
             nodes: Vec::new(),
             packets: Vec::new(),
             ids: Vec::new(),
@@ -189,7 +193,8 @@ impl Bvh4 {
             ReinsertionOptimizer::default().run(&mut bvh2, 0.15, None);
             let t = Tree2::from_bvh2(bvh2);
             // PLOC trees are shallow in practice; a degenerate input (e.g. thousands of
-            // coincident primitives) could make one deep, so bound the traversal stack.
+            // coincident primitives) could make one deep. Bound the recursion here and the
+            // traversal stack below.
             if t.depth() > 300 {
                 Tree2::median(aabbs)
             } else {
@@ -197,7 +202,19 @@ impl Bvh4 {
             }
         };
         out.collapse(&tree, prims, ids);
+        if out.stack_need() > MAX_STACK {
+            // A balanced tree has depth ≤ log2(n) + 1, far below the limit.
+            out.nodes.clear();
+            out.packets.clear();
+            out.ids.clear();
+            out.collapse(&Tree2::median(aabbs), prims, ids);
+        }
         out
+    }
+
+    /// Traversal stack entries needed: each inner level pushes at most `WIDTH - 1`.
+    fn stack_need(&self) -> usize {
+        (WIDTH - 1) * self.depth as usize + 4
     }
 
     fn collapse(&mut self, tree: &Tree2, prims: &[Prim], ids: &[[u32; 2]]) {
@@ -205,10 +222,11 @@ impl Bvh4 {
         let mut depth = 0;
         self.root = self.emit(tree, &counts, prims, ids, 0, 1, &mut depth);
         self.depth = depth;
-        // Each level pushes at most WIDTH - 1 entries.
-        let need = (WIDTH - 1) * depth as usize + 4;
+        let need = self.stack_need();
         self.stack = if need <= 64 {
             StackClass::S64
+        } else if need <= 128 {
+            StackClass::S128
         } else if need <= 256 {
             StackClass::S256
         } else {
@@ -350,6 +368,7 @@ impl Bvh4 {
     pub(crate) fn intersect(&self, ray: &Ray, t_max: f32) -> Option<RawHit> {
         match self.stack {
             StackClass::S64 => self.intersect_n::<64>(ray, t_max),
+            StackClass::S128 => self.intersect_n::<128>(ray, t_max),
             StackClass::S256 => self.intersect_n::<256>(ray, t_max),
             StackClass::S1024 => self.intersect_n::<1024>(ray, t_max),
         }
@@ -358,6 +377,7 @@ impl Bvh4 {
     pub(crate) fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         match self.stack {
             StackClass::S64 => self.occluded_n::<64>(ray, t_max),
+            StackClass::S128 => self.occluded_n::<128>(ray, t_max),
             StackClass::S256 => self.occluded_n::<256>(ray, t_max),
             StackClass::S1024 => self.occluded_n::<1024>(ray, t_max),
         }

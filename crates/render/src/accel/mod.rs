@@ -37,7 +37,7 @@
 //! geometry, which is exactly what instancing is for.
 //!
 //! Path to instancing: the BVH's leaves hold a closed set of `bvh::Packet`s. Instancing adds a
-//! `Packet::Instance { blas: u32, to_object: Affine3A }` variant and a `Vec<Bvh4>` of bottom-level
+//! `Packet::Instance { blas: u32, to_object: Affine3A }` variant and a `Vec<WideBvh>` of bottom-level
 //! trees: the top-level tree is built exactly like today over instance boxes (plus any
 //! non-instanced geometry), and the instance packet transforms the ray and runs the same
 //! traversal in its bottom-level tree with its own fixed-size stack; `Hit` would gain an
@@ -65,7 +65,7 @@ use obvhs::aabb::Aabb;
 
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3, Vec3A};
-use bvh::{Bvh4, Prim};
+use bvh::{Prim, WideBvh};
 
 /// A shape as the acceleration structure sees it.
 #[derive(Clone, Debug)]
@@ -107,7 +107,7 @@ pub struct Hit {
 
 /// The scene's acceleration structure. See the module documentation.
 pub struct Accel {
-    bvh: Bvh4,
+    bvh: WideBvh,
     planes: Vec<(Vec3, Vec3, u32)>,
     bounds: (Vec3, Vec3),
 }
@@ -188,7 +188,7 @@ impl Accel {
             let bb = aabbs.iter().fold(Aabb::INVALID, |a, b| a.union(b));
             (Vec3::from(bb.min), Vec3::from(bb.max))
         };
-        let bvh = Bvh4::build(&prims, &ids, &aabbs);
+        let bvh = WideBvh::build(&prims, &ids, &aabbs);
         Accel {
             bvh,
             planes,
