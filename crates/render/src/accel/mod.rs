@@ -51,12 +51,13 @@
 //! ours, obvhs' stock CWBVH and (with `--features embree`) Embree 3 in the same run.
 //!
 //! # Performance (1M-triangle bumpy sphere, 1M incoherent rays, 2 threads, SSE2 baseline build)
-//! About 1.5× obvhs' stock CWBVH traversal for closest hits and 1.1–2× for occlusion, and about
-//! 0.5× Embree 3 (which dispatches to AVX2 at run time). Building takes about as long as
-//! Embree's high-quality build. The traversal is bound by the latency of node and leaf fetches
+//! Measured in one run with `benches/accel.rs` (per CPU-second, the machine being shared):
+//! ~1.6× obvhs' stock CWBVH traversal for closest hits and ~1.3× for occlusion; ~0.5× Embree 3
+//! for closest hits and ~0.6× for occlusion (Embree dispatches to AVX2 at run time; building
+//! this crate with `-C target-cpu=native` brought us to ~0.6×). Build: ~2 s on 2 cores, ~1.6×
+//! Embree's high-quality build. Traversal is bound by the latency of node and leaf fetches
 //! (~7 nodes and ~2.5 leaf packets per closest-hit ray).
 
-mod bvh;
 pub mod prim;
 
 use std::sync::Arc;
