@@ -58,6 +58,7 @@
 //! Embree's high-quality build. Traversal is bound by the latency of node and leaf fetches
 //! (~7 nodes and ~2.5 leaf packets per closest-hit ray).
 
+mod bvh;
 pub mod prim;
 
 use std::sync::Arc;
@@ -114,7 +115,11 @@ pub struct Accel {
 }
 
 impl Accel {
-    /// Builds the structure; a shape's index is its position in `shapes`.
+    /// Builds the structure; a shape's index is its position in `shapes`. Invalid geometry is
+    /// skipped (see the module documentation). Runs on the current rayon pool.
+    ///
+    /// # Panics
+    /// Beyond 2²⁷ leaf packets (≈ 500M triangles), which the node encoding cannot address.
     pub fn build(shapes: Vec<AccelShape>) -> Accel {
         let mut prims = Vec::new();
         let mut ids = Vec::new();
