@@ -156,9 +156,9 @@ fn degenerate_triangles_never_hit_or_nan() {
     let positions: Arc<[Vec3]> = vec![Vec3::ZERO, q, 2.0 * q, Vec3::X, Vec3::Y].into();
     let indices: Arc<[[u32; 3]]> = vec![[0, 1, 2], [0, 0, 0], [0, 3, 4], [1, 1, 2]].into();
     let accel = Accel::build(vec![AccelShape::Triangles { positions, indices }]);
-    for i in 0..4000 {
+    for i in 0..4000u32 {
         let o = rng.vec(-2.0, 2.0);
-        let ray = if i % 2 == 0 {
+        let ray = if i.is_multiple_of(2) {
             Ray::new(o, rng.dir())
         } else {
             Ray::new(o, q * rng.f() - o) // aimed at the collinear triangle
@@ -657,7 +657,7 @@ fn random_scene(rng: &mut Rng, n_shapes: usize, tris_per_mesh: usize) -> Vec<Acc
                 let indices: Vec<[u32; 3]> = (0..n)
                     .map(|i| {
                         let k = (3 * i) as u32;
-                        if i > 0 && rng.u32() % 2 == 0 {
+                        if i > 0 && rng.u32().is_multiple_of(2) {
                             [k - 1, k, k + 1]
                         } else {
                             [k, k + 1, k + 2]
@@ -679,7 +679,7 @@ fn random_scene(rng: &mut Rng, n_shapes: usize, tris_per_mesh: usize) -> Vec<Acc
                     * Mat4::from_scale(Vec3::new(rng.range(0.2, 2.0), rng.range(0.2, 2.0), 1.0)),
             },
             _ => {
-                if rng.u32() % 4 == 0 {
+                if rng.u32().is_multiple_of(4) {
                     AccelShape::Plane {
                         point: rng.vec(-8.0, 8.0),
                         normal: rng.dir(),
@@ -701,7 +701,7 @@ fn compare_with_brute(shapes: Vec<AccelShape>, rng: &mut Rng, rays: usize) {
         let o = rng.vec(-8.0, 8.0);
         let d = rng.dir() * rng.range(0.5, 2.0);
         let ray = Ray::new(o, d);
-        let t_max = if i % 3 == 0 {
+        let t_max = if i.is_multiple_of(3) {
             rng.range(0.5, 10.0)
         } else {
             f32::INFINITY
@@ -812,4 +812,38 @@ fn concurrent_queries() {
             assert_eq!(h.join().unwrap(), serial);
         }
     });
+}
+
+#[test]
+fn exponentially_spaced_spheres_deep_tree() {
+    // Sizes and gaps growing geometrically give bottom-up builders a deep, caterpillar-like
+    // tree: traversal must stay within its stack and still find the closest hit.
+    let shapes: Vec<AccelShape> = (0..200)
+        .map(|i| {
+            let s = 1.5f32.powi(i);
+            AccelShape::Sphere {
+                center: Vec3::new(s, 0.0, 0.0),
+                radius: 0.2 * s,
+            }
+        })
+        .collect();
+    let accel = Accel::build(shapes.clone());
+    let mut rng = Rng::new(12);
+    for _ in 0..300 {
+        let i = (rng.u32() % 200) as i32;
+        let s = 1.5f32.powi(i);
+        let o = Vec3::new(
+            s * rng.range(0.5, 3.0),
+            s * rng.range(-0.1, 0.1),
+            s * rng.range(-0.1, 0.1),
+        );
+        let ray = Ray::new(
+            o,
+            Vec3::new(-1.0, rng.range(-0.05, 0.05), rng.range(-0.05, 0.05)),
+        );
+        let a = accel.intersect(&ray, f32::INFINITY).map(|h| (h.shape, h.t));
+        let b = brute(&shapes, &ray, f32::INFINITY).map(|h| (h.shape, h.t));
+        assert_eq!(a, b, "ray {ray:?}");
+        assert_eq!(accel.occluded(&ray, f32::INFINITY), b.is_some());
+    }
 }

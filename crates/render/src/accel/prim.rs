@@ -336,7 +336,7 @@ pub fn tri4_any(w: &WoopRay4, tri: &Tri4, t_max: f32) -> bool {
 pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Option<f32> {
     let f = ray.o - center;
     let a = ray.d.length_squared();
-    if !(a > 0.0) {
+    if a.is_nan() || a <= 0.0 {
         return None;
     }
     let b = 2.0 * f.dot(ray.d);
@@ -345,7 +345,7 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
     let l = f - (b / (2.0 * a)) * ray.d;
     let len = l.length();
     let disc = 4.0 * a * (radius + len) * (radius - len);
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return None;
     }
     let root = disc.sqrt();
