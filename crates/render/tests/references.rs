@@ -22,7 +22,10 @@ fn shared() -> Option<PathBuf> {
     if p.join("references").is_dir() {
         Some(p)
     } else {
-        eprintln!("notice: {} is absent; reference comparisons skipped", p.display());
+        eprintln!(
+            "notice: {} is absent; reference comparisons skipped",
+            p.display()
+        );
         None
     }
 }

@@ -96,7 +96,29 @@ pub fn triangle_woop(
     if u == 0.0 || v == 0.0 || wgt == 0.0 {
         (u, v, wgt) = edge_functions_f64([ax, ay, bx, by, cx, cy]);
     }
-    finish_triangle(u, v, wgt, [az, bz, cz], sz, t_max)
+    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_y = ay.abs().max(by.abs()).max(cy.abs());
+    finish_triangle(u, v, wgt, [az, bz, cz], sz, (max_x, max_y), t_max)
+}
+
+/// γ(n) = nε/(1 − nε) for ε = 2⁻²⁴ (Higham; pbrt-v4 §6.8).
+const fn gamma(n: i32) -> f32 {
+    let e = f32::EPSILON * 0.5 * n as f32;
+    e / (1.0 - e)
+}
+
+/// pbrt-v4's conservative lower bound on a computed triangle t, scaled by |det| (so it compares
+/// with |t_scaled| without a division). A hit whose t is within the rounding error of the
+/// test itself is rejected: without it, a ray leaving a surface whose coordinates are exact
+/// (e.g. a wall in the plane x = 0, where the hit point carries no error to offset by) can
+/// re-hit that surface at t ≈ 1e-9.
+#[inline(always)]
+fn delta_t_scaled(max_x: f32, max_y: f32, max_z: f32, max_e: f32) -> f32 {
+    let delta_z = gamma(3) * max_z;
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e)
 }
 
 /// Edge functions recomputed in double precision: products of two `f32` are exact in `f64`, so
@@ -127,6 +149,7 @@ fn finish_triangle(
     w: f32,
     z: [f32; 3],
     sz: f32,
+    (max_x, max_y): (f32, f32),
     t_max: f32,
 ) -> Option<(f32, f32, f32)> {
     if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
@@ -143,7 +166,10 @@ fn finish_triangle(
     let sign = if det < 0.0 { -1.0 } else { 1.0 };
     let ts = t_scaled * sign;
     let adet = det * sign;
-    if !(ts > 0.0 && ts < t_max * adet) {
+    let max_z = az.abs().max(bz.abs()).max(cz.abs());
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    let floor = delta_t_scaled(max_x, max_y, max_z, max_e);
+    if !(ts > floor && ts < t_max * adet) {
         return None;
     }
     // Same operations as the 4-wide path, so both give bit-identical results.
@@ -269,7 +295,17 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
     let sign = Vec4::select(det.cmplt(Vec4::ZERO), Vec4::NEG_ONE, Vec4::ONE);
     let ts = t_scaled * sign;
     let adet = det * sign;
-    let ok = ts.cmpgt(Vec4::ZERO) & ts.cmplt(Vec4::splat(t_max) * adet) & det.cmpne(Vec4::ZERO);
+    let (szs_a, szs_b, szs_c) = ((w.sz * az).abs(), (w.sz * bz).abs(), (w.sz * cz).abs());
+    let max_z = szs_a.max(szs_b).max(szs_c);
+    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_y = ay.abs().max(by.abs()).max(cy.abs());
+    let max_e = u.abs().max(v.abs()).max(wg.abs());
+    let delta_z = gamma(3) * max_z;
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let floor = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e);
+    let ok = ts.cmpgt(floor) & ts.cmplt(Vec4::splat(t_max) * adet) & det.cmpne(Vec4::ZERO);
     let mask = ok.bitmask() & !(neg & pos).bitmask() & lanes;
     Tri4Eval {
         mask,
