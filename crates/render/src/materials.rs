@@ -4,7 +4,7 @@
 //!
 //! `twosided` is resolved here: when the viewer is on the back side, the shading frame is
 //! flipped and the back (or front) material is used, as Mitsuba does. Shapes without a material
-//! get Mitsuba's default, a one-sided diffuse of reflectance 0.5.
+//! get Mitsuba's default, a one-sided diffuse of reflectance 0.5 — or, on an emitter, none.
 
 use scene::{ColorParam, FloatParam, Material, MicrofacetDistribution};
 
@@ -218,8 +218,11 @@ impl Scene {
     /// two-sided material). `None`: the surface does not scatter (null material).
     pub fn bsdf_at(&self, si: &SurfaceInteraction) -> Option<(Bsdf, Frame)> {
         let mut frame = si.shading;
-        let Some(mut id) = self.shapes[si.shape as usize].material else {
-            return Some((Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))), frame));
+        let shape = &self.shapes[si.shape as usize];
+        let Some(mut id) = shape.material else {
+            // Mitsuba's default: diffuse 0.5, but black (non-scattering) on emitters.
+            return (shape.emission.is_none())
+                .then(|| (Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))), frame));
         };
         // Bounded walk: a longer twosided chain than the material count is a cycle.
         let mut mat = None;
