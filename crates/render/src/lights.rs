@@ -105,12 +105,27 @@ pub struct EnvMap {
 impl EnvMap {
     pub fn new(image: Image, scale: f32, to_world: &Mat4, mapping: EnvMapping) -> EnvMap {
         let (w, h) = (image.width as usize, image.height as usize);
+        // The emitted radiance is the *bilinear* interpolant of the pixels, whose support
+        // around a pixel reaches its 8 neighbours. Weighting each cell by the largest luminance
+        // in its 3×3 neighbourhood keeps the pdf from being small where the interpolant is
+        // large (a one-pixel sun would otherwise bleed into cells the pdf barely samples).
+        let lum = |x: usize, y: usize| {
+            let v = luminance(image.get(x as u32, y as u32));
+            if v.is_finite() { v.max(0.0) } else { 0.0 }
+        };
         let mut weights = vec![0f32; w * h];
         for y in 0..h {
             let sin_theta = ((y as f32 + 0.5) / h as f32 * PI).sin();
             for x in 0..w {
-                let v = luminance(image.get(x as u32, y as u32)).max(0.0);
-                weights[y * w + x] = if v.is_finite() { v * sin_theta } else { 0.0 };
+                let mut m = 0f32;
+                for dy in [-1i64, 0, 1] {
+                    let yy = (y as i64 + dy).clamp(0, h as i64 - 1) as usize;
+                    for dx in [-1i64, 0, 1] {
+                        let xx = (x as i64 + dx).rem_euclid(w as i64) as usize;
+                        m = m.max(lum(xx, yy));
+                    }
+                }
+                weights[y * w + x] = m * sin_theta;
             }
         }
         let rot = Mat3::from_mat4(*to_world);
