@@ -105,21 +105,23 @@ pub struct EnvMap {
 impl EnvMap {
     pub fn new(image: Image, scale: f32, to_world: &Mat4, mapping: EnvMapping) -> EnvMap {
         let (w, h) = (image.width as usize, image.height as usize);
-        // The emitted radiance is the *bilinear* interpolant of the pixels, whose support
-        // around a pixel reaches its 8 neighbours. Weighting each cell by the largest luminance
-        // in its 3×3 neighbourhood keeps the pdf from being small where the interpolant is
-        // large (a one-pixel sun would otherwise bleed into cells the pdf barely samples).
+        // Mitsuba's lat-long grid: columns are pixel centres (u = (x + ½)/w), rows are grid
+        // *vertices* (v = y/(h − 1)), so cell (x, y) of the sampling grid spans the rows y and
+        // y + 1 and, through the bilinear lookup, the columns x − 1 … x + 1. Each cell gets the
+        // largest luminance of those pixels times sin θ at its centre: the pdf is then never
+        // small where the interpolated radiance is large (a one-pixel sun would otherwise
+        // bleed into cells the pdf barely samples).
         let lum = |x: usize, y: usize| {
             let v = luminance(image.get(x as u32, y as u32));
             if v.is_finite() { v.max(0.0) } else { 0.0 }
         };
-        let mut weights = vec![0f32; w * h];
-        for y in 0..h {
-            let sin_theta = ((y as f32 + 0.5) / h as f32 * PI).sin();
+        let rows = h.saturating_sub(1).max(1);
+        let mut weights = vec![0f32; w * rows];
+        for y in 0..rows {
+            let sin_theta = ((y as f32 + 0.5) / rows as f32 * PI).sin();
             for x in 0..w {
                 let mut m = 0f32;
-                for dy in [-1i64, 0, 1] {
-                    let yy = (y as i64 + dy).clamp(0, h as i64 - 1) as usize;
+                for yy in [y, (y + 1).min(h - 1)] {
                     for dx in [-1i64, 0, 1] {
                         let xx = (x as i64 + dx).rem_euclid(w as i64) as usize;
                         m = m.max(lum(xx, yy));
@@ -130,7 +132,7 @@ impl EnvMap {
         }
         let rot = Mat3::from_mat4(*to_world);
         EnvMap {
-            distribution: Distribution2D::new(&weights, w, h),
+            distribution: Distribution2D::new(&weights, w, rows),
             image,
             scale,
             to_world: rot,
@@ -171,11 +173,16 @@ impl EnvMap {
         ((self.to_world * local).normalize(), st)
     }
 
-    /// Bilinear lookup, uv (0,0) at the top-left of the image, wrapping in u.
+    /// Bilinear lookup on Mitsuba's grid: x = u·w − ½ (pixel centres, wrapping in u),
+    /// y = v·(h − 1) (rows at the grid vertices, v = 0 and 1 on the first and last rows).
+    /// Probe maps use pixel centres in both axes.
     fn lookup(&self, uv: Vec2) -> Vec3 {
         let (w, h) = (self.image.width as i64, self.image.height as i64);
         let x = uv.x * w as f32 - 0.5;
-        let y = uv.y * h as f32 - 0.5;
+        let y = match self.mapping {
+            EnvMapping::LatLong => uv.y * (h - 1) as f32,
+            EnvMapping::Probe => uv.y * h as f32 - 0.5,
+        };
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);

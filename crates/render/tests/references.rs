@@ -1,7 +1,14 @@
 //! Renders every scene of `../shared/references/` and compares it with Mitsuba 3's reference
-//! by the rule of `../shared/references/README.md`: K = 8 independent batches of 32 spp
-//! (seeds 0–7) must pass the block t-test (α = 0.01, Šidák-corrected over block-channels),
+//! by the rule of `../shared/references/README.md`: K = 16 independent batches of 16 spp
+//! (seeds 0–15) must pass the block t-test (α = 0.01, Šidák-corrected over block-channels),
 //! and the relMSE of their 256-spp mean must be at most 1.5× Mitsuba's at 256 spp.
+//!
+//! Why 16 × 16 rather than the README's minimum of 8 × 32: with K = 8 the per-block variance
+//! is estimated from 7 degrees of freedom, and over 768 block-channels one of them now and then
+//! gets a badly underestimated variance. We met exactly that on `lights` with seeds 0–7: one
+//! block whose 8 batch means spread 4× less than the per-pixel variances imply, t = 10 — while
+//! seeds 20–27 and 28–35 pass, and a 512-spp render agrees with the reference at that block.
+//! Sixteen batches make the variance estimate robust at the same total cost.
 //!
 //! Skipped, with a notice, when `../shared/references` is absent.
 
@@ -14,8 +21,8 @@ use render::integrators::Integrator;
 use render::render::{RenderOptions, Silent, render};
 use scene::{Document, LoadOptions};
 
-const BATCHES: u64 = 8;
-const SPP: u32 = 32;
+const BATCHES: u64 = 16;
+const SPP: u32 = 16;
 
 fn shared() -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
@@ -97,7 +104,7 @@ fn check(name: &str, scene_rel: &str, defines: &[(&str, &str)], mitsuba_rel_mse:
 fn mitsuba_cbox() {
     check(
         "mitsuba-cbox",
-        "../../scenes/standard/mitsuba-cbox/cbox-rgb.xml",
+        "../scenes/standard/mitsuba-cbox/cbox-rgb.xml",
         &[("res", "128")],
         0.00053,
     );
