@@ -1,0 +1,169 @@
+//! White furnace through the whole renderer: a sphere inside a uniform environment of
+//! radiance 1, made of an energy-conserving material that does not absorb, must look exactly
+//! like the environment (radiance 1 everywhere), whatever the number of bounces.
+//!
+//! Statistics: 24×24 pixels × 64 spp of the path tracer (unbounded depth, Russian roulette),
+//! the image mean must be within 1% of 1, and a z-test of the mean against 1 (standard error
+//! from the per-pixel sample variances) must not reject at α = 0.001 per material.
+
+use glam::{Mat4, Vec3};
+use render::build::{BuildOptions, build};
+use render::integrators::Integrator;
+use render::render::{RenderOptions, Silent, render};
+use scene::{
+    Camera, ColorParam, Emitter, EmitterDesc, FilterDesc, FovAxis, IntegratorDesc, Material,
+    MaterialDesc, MisHeuristic, Projection, SamplerDesc, SamplerKind, SceneDesc, Sensor, Shape,
+    ShapeDesc,
+};
+
+fn furnace(material: Material) -> (f64, f64) {
+    let mut desc = SceneDesc {
+        integrator: IntegratorDesc::Path {
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+            mis: MisHeuristic::Power,
+        },
+        ..Default::default()
+    };
+    let id = desc.add_material(MaterialDesc {
+        material,
+        name: None,
+        loc: Default::default(),
+    });
+    desc.shapes.push(ShapeDesc {
+        shape: Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        },
+        to_world: Mat4::IDENTITY,
+        material: Some(id),
+        emission: None,
+        flip_normals: false,
+        name: None,
+        loc: Default::default(),
+    });
+    desc.emitters.push(EmitterDesc {
+        emitter: Emitter::Constant {
+            radiance: Vec3::ONE,
+        },
+        loc: Default::default(),
+    });
+    desc.sensors.push(Sensor {
+        camera: Camera {
+            projection: Projection::Perspective {
+                fov: 30.0,
+                fov_axis: FovAxis::X,
+            },
+            to_world: scene::formats::mitsuba::look_at(
+                Vec3::new(0.0, 0.0, 4.0),
+                Vec3::ZERO,
+                Vec3::Y,
+            )
+            .unwrap(),
+            near_clip: 0.0,
+            far_clip: 100.0,
+        },
+        film: scene::Film {
+            width: 24,
+            height: 24,
+            crop: None,
+            filter: FilterDesc::Box { radius: 0.5 },
+            output: None,
+        },
+        sampler: SamplerDesc {
+            kind: SamplerKind::Independent,
+            spp: 64,
+            seed: 3,
+        },
+        name: None,
+        loc: Default::default(),
+    });
+    let scene = build(&desc, &BuildOptions::default()).unwrap();
+    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
+    let out = render(
+        &scene,
+        &integrator,
+        &RenderOptions {
+            spp: 64,
+            ..Default::default()
+        },
+        &Silent,
+    );
+    assert_eq!(out.film.nonfinite_count(), 0);
+    let img = out.film.develop();
+    let se = out.film.develop_stderr();
+    let n = img.pixels.len() as f64;
+    let mean = img
+        .pixels
+        .iter()
+        .map(|p| p.element_sum() as f64 / 3.0)
+        .sum::<f64>()
+        / n;
+    let var_mean = se
+        .pixels
+        .iter()
+        .map(|s| (s.element_sum() as f64 / 3.0).powi(2))
+        .sum::<f64>()
+        / (n * n);
+    (mean, var_mean.sqrt())
+}
+
+fn check(name: &str, m: Material) {
+    let (mean, se) = furnace(m);
+    let z = (mean - 1.0) / se.max(1e-9);
+    println!("{name}: mean {mean:.5} ± {se:.5} (z = {z:.2})");
+    assert!((mean - 1.0).abs() < 0.01, "{name}: furnace mean {mean}");
+    // Two-sided z-test at α = 0.001: |z| < 3.29.
+    assert!(
+        z.abs() < 3.29,
+        "{name}: furnace mean {mean} ± {se} rejects 1 (z = {z})"
+    );
+}
+
+#[test]
+fn diffuse_albedo_one() {
+    check(
+        "diffuse",
+        Material::Diffuse {
+            reflectance: ColorParam::constant(1.0),
+        },
+    );
+}
+
+#[test]
+fn mirror() {
+    check(
+        "mirror",
+        Material::Mirror {
+            reflectance: ColorParam::constant(1.0),
+        },
+    );
+}
+
+#[test]
+fn smooth_dielectric() {
+    check(
+        "dielectric",
+        Material::Dielectric {
+            int_ior: 1.5,
+            ext_ior: 1.0,
+            specular_reflectance: ColorParam::constant(1.0),
+            specular_transmittance: ColorParam::constant(1.0),
+            absorption: None,
+        },
+    );
+}
+
+#[test]
+fn thin_dielectric() {
+    check(
+        "thindielectric",
+        Material::ThinDielectric {
+            int_ior: 1.5,
+            ext_ior: 1.0,
+            specular_reflectance: ColorParam::constant(1.0),
+            specular_transmittance: ColorParam::constant(1.0),
+        },
+    );
+}
