@@ -47,7 +47,7 @@ pub fn li(
             let Some(ls) = light.sample_li(scene, &receiver, sampler.next_2d()) else {
                 continue;
             };
-            if !(ls.pdf > 0.0) || ls.li == Vec3::ZERO {
+            if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
                 continue;
             }
             let wi = frame.to_local(ls.wi);
