@@ -455,6 +455,10 @@ impl Light {
                 let Some(si) = si else { return 0.0 };
                 let info = &scene.shapes[*shape as usize];
                 if let ShapeGeom::Sphere { center, radius } = &info.geom {
+                    // Zero where `sample_li` yields nothing: the back of a one-sided light.
+                    if !*two_sided && si.shading.n.dot(-wi) <= 0.0 {
+                        return 0.0;
+                    }
                     return sphere_pdf(*center, *radius, r.p, si.p);
                 }
                 let d2 = (si.p - r.p).length_squared();
