@@ -6,6 +6,8 @@
 //! flipped and the back (or front) material is used, as Mitsuba does. Shapes without a material
 //! get Mitsuba's default, a one-sided diffuse of reflectance 0.5 — or, on an emitter, none.
 
+use std::sync::Arc;
+
 use scene::{ColorParam, FloatParam, Material, MicrofacetDistribution};
 
 use crate::bsdf::Microfacet;
@@ -21,7 +23,7 @@ use crate::shapes::SurfaceInteraction;
 pub struct RtMaterial {
     pub material: Material,
     /// Rough plastic's tables (depend only on α, the distribution and η).
-    pub rough_plastic: Option<RoughPlasticTables>,
+    pub rough_plastic: Option<Arc<RoughPlasticTables>>,
 }
 
 pub fn microfacet_type(d: MicrofacetDistribution) -> MicrofacetType {
@@ -73,10 +75,10 @@ impl RtMaterial {
                 int_ior,
                 ext_ior,
                 ..
-            } => Some(RoughPlasticTables::new(
+            } => Some(Arc::new(RoughPlasticTables::new(
                 Microfacet::isotropic(microfacet_type(*distribution), *alpha),
                 int_ior / ext_ior,
-            )),
+            ))),
             _ => None,
         };
         RtMaterial {

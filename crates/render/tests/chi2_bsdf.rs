@@ -33,7 +33,7 @@ fn cases() -> Vec<(String, Bsdf, Vec3)> {
             }
             out.push((
                 format!("{name} θ={a}{}", if inside { " inside" } else { "" }),
-                b,
+                b.clone(),
                 wo,
             ));
         }

@@ -289,7 +289,18 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
     }
     let neg = u.cmplt(Vec4::ZERO) | v.cmplt(Vec4::ZERO) | wg.cmplt(Vec4::ZERO);
     let pos = u.cmpgt(Vec4::ZERO) | v.cmpgt(Vec4::ZERO) | wg.cmpgt(Vec4::ZERO);
+    let inside = !(neg & pos).bitmask() & lanes;
     let det = u + v + wg;
+    if inside == 0 {
+        // Most packets miss on the edge test: skip the depth test and its error bound.
+        return Tri4Eval {
+            mask: 0,
+            v,
+            w: wg,
+            t_scaled: Vec4::ZERO,
+            det,
+        };
+    }
     let t_scaled = u * (w.sz * az) + v * (w.sz * bz) + wg * (w.sz * cz);
     // Multiplying by ±1 is exact: this is |det| and t_scaled·sign(det).
     let sign = Vec4::select(det.cmplt(Vec4::ZERO), Vec4::NEG_ONE, Vec4::ONE);
@@ -306,7 +317,7 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
     let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     let floor = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e);
     let ok = ts.cmpgt(floor) & ts.cmplt(Vec4::splat(t_max) * adet) & det.cmpne(Vec4::ZERO);
-    let mask = ok.bitmask() & !(neg & pos).bitmask() & lanes;
+    let mask = ok.bitmask() & inside;
     Tri4Eval {
         mask,
         v,

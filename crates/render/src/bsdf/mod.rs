@@ -12,8 +12,9 @@
 //! - One-sided models (everything but the dielectrics) return 0 / `None` for `wo.z ≤ 0`; the
 //!   caller makes a material two-sided by flipping the frame. Dielectrics are naturally
 //!   two-sided: `wo.z < 0` means the query comes from inside the medium.
-//! - Every variant is a small `Copy` struct with already-evaluated parameters: textures are
-//!   looked up by the caller before building the `Bsdf`.
+//! - Every variant is a small struct with already-evaluated parameters: textures are
+//!   looked up by the caller before building the `Bsdf`. Rough plastic's precomputed tables
+//!   are shared (`Arc`) rather than copied, so `Bsdf` is `Clone` but not `Copy`.
 
 mod conductor;
 mod dielectric;
@@ -79,10 +80,9 @@ pub(crate) trait BsdfModel {
 
 /// Closed set of BSDF models.
 ///
-/// `RoughPlastic` carries its 64-entry transmittance table inline (≈ 300 bytes) so that a
-/// per-hit `Bsdf` needs no heap allocation or shared pointer; the enum lives on the stack.
-#[allow(clippy::large_enum_variant)]
-#[derive(Clone, Copy, Debug)]
+/// Lives on the stack, built per hit; kept small (no variant carries a table inline) because
+/// it is moved several times per path vertex.
+#[derive(Clone, Debug)]
 pub enum Bsdf {
     Diffuse(Diffuse),
     Conductor(Conductor),

@@ -12,7 +12,11 @@
 //! ∝ T(cos θo)·(1 − w_s); pdf and weight are those of the mixture.
 //!
 //! The tables cost ~10⁵ distribution samples to build: build a [`RoughPlasticTables`] once per
-//! material (at scene build time) and copy it into each per-hit `RoughPlastic`.
+//! material (at scene build time) and share it (an `Arc`) with each per-hit `RoughPlastic`:
+//! stored inline, the 64-entry table made every `Bsdf` ~300 bytes, copied several times per
+//! hit whatever the material.
+
+use std::sync::Arc;
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Microfacet, MicrofacetType, eval_reflectance, eval_transmittance};
@@ -57,7 +61,7 @@ impl RoughPlasticTables {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RoughPlastic {
     pub distribution: Microfacet,
     /// Relative index int_ior / ext_ior.
@@ -67,7 +71,8 @@ pub struct RoughPlastic {
     pub nonlinear: bool,
     /// mean(specular) / (mean(diffuse) + mean(specular)), from the texture means.
     pub specular_sampling_weight: f32,
-    pub tables: RoughPlasticTables,
+    /// Shared with the material (built once per material): keeps the per-hit `Bsdf` small.
+    pub tables: Arc<RoughPlasticTables>,
 }
 
 impl RoughPlastic {
@@ -86,7 +91,7 @@ impl RoughPlastic {
         RoughPlastic::with_tables(
             distribution,
             eta,
-            RoughPlasticTables::new(distribution, eta),
+            Arc::new(RoughPlasticTables::new(distribution, eta)),
             diffuse_reflectance,
             specular_reflectance,
             nonlinear,
@@ -97,7 +102,7 @@ impl RoughPlastic {
     pub fn with_tables(
         distribution: Microfacet,
         eta: f32,
-        tables: RoughPlasticTables,
+        tables: Arc<RoughPlasticTables>,
         diffuse_reflectance: Vec3,
         specular_reflectance: Vec3,
         nonlinear: bool,
