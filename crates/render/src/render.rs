@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use crate::build::Scene;
 use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::Integrator;
-use crate::math::{UVec2, Vec2};
+use crate::math::UVec2;
 use crate::sampling::Sampler;
 
 #[derive(Clone, Debug)]
@@ -75,12 +75,11 @@ pub trait RenderObserver: Sync {
 pub struct Silent;
 impl RenderObserver for Silent {}
 
-/// Render sample indices `[s0, s1)` of every pixel of one tile.
-#[allow(clippy::too_many_arguments)]
+/// Render sample indices `[s0, s1)` of every pixel of one tile (positions uniform in each
+/// pixel, splatted by the film's filter).
 fn render_tile(
     scene: &Scene,
     integrator: &Integrator,
-    filter: &Filter,
     template: &Sampler,
     film: &Film,
     (lo, hi): (UVec2, UVec2),
@@ -94,12 +93,11 @@ fn render_tile(
             let pixel = UVec2::new(x, y);
             for index in s0..s1 {
                 sampler.start_pixel_sample(pixel, index);
-                let fs = filter.sample(sampler.next_2d());
+                let p_film = pixel.as_vec2() + sampler.next_2d();
                 let u_lens = sampler.next_2d();
-                let p_film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + fs.offset;
                 let cray = scene.camera.generate_ray(p_film, u_lens);
                 let l = integrator.li(scene, &cray, &mut sampler);
-                tile.add_sample(pixel, l, fs.weight);
+                tile.add_sample(p_film, l);
             }
         }
     }
@@ -114,8 +112,8 @@ pub fn render(
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
     let start = Instant::now();
-    let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop);
     let filter = Filter::new(&scene.film.filter);
+    let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop, filter);
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
     let tile_list = film.tile_bounds(opts.tile_size.max(1));
     let (pmin, pmax) = film.pixel_bounds();
@@ -140,8 +138,7 @@ pub fn render(
         let finished: Vec<FilmTile> = tile_list
             .par_iter()
             .map(|&bounds| {
-                let tile =
-                    render_tile(scene, integrator, &filter, &template, &film, bounds, s0, s1);
+                let tile = render_tile(scene, integrator, &template, &film, bounds, s0, s1);
                 let n = (bounds.1 - bounds.0).as_u64vec2();
                 let d = done.fetch_add(n.x * n.y * (s1 - s0) as u64, Ordering::Relaxed)
                     + n.x * n.y * (s1 - s0) as u64;

@@ -1,12 +1,12 @@
 //! Film: per-pixel weighted sums ([`Film`], [`FilmTile`]), reconstruction filters
 //! ([`Filter`]) and the developed [`Image`].
 //!
-//! Per camera sample the integrator does (filter importance sampling, pbrt-v4):
+//! Per camera sample the driver does (splatting, as Mitsuba 3):
 //! ```text
 //! sampler.start_pixel_sample(pixel, index);
-//! let fs = filter.sample(sampler.next_2d());
-//! let ray = camera.ray(pixel.as_vec2() + 0.5 + fs.offset, ...);
-//! tile.add_sample(pixel, radiance, fs.weight);
+//! let p_film = pixel.as_vec2() + sampler.next_2d();
+//! let ray = camera.generate_ray(p_film, sampler.next_2d());
+//! tile.add_sample(p_film, radiance);
 //! ```
 
 pub mod accum;
@@ -14,5 +14,5 @@ pub mod filter;
 pub mod image;
 
 pub use accum::{Film, FilmTile, PixelSums};
-pub use filter::{Filter, FilterSample};
+pub use filter::Filter;
 pub use image::Image;
