@@ -343,7 +343,7 @@ def main() -> int:
         wr = row["relmse"] * row["wall"] if row["relmse"] is not None else None
         print(f"| {row['scene']} | {row['renderer']} | {row['spp']} | {row['wall']:.2f} s "
               f"| {row['cpu']:.2f} s | {fmt(row['wall_ratio'], '.2f')} | {fmt(row['cpu_ratio'], '.2f')} "
-              f"| {fmt(row['relmse'], '.5f')} | {fmt(wr, '.4f')} |")
+              f"| {fmt(row['relmse'], '.3g')} | {fmt(wr, '.3g')} |")
     for name, r in sorted(failed):
         print(f"| {name} | {r} | FAILED (see {out_dir / f'{name}.{r}.log'}) |||||||")
 
