@@ -194,7 +194,7 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConf
 
         depth += 1;
         let t_max_component = throughput.max_element();
-        if !(t_max_component > 0.0) {
+        if t_max_component.is_nan() || t_max_component <= 0.0 {
             break;
         }
         let u_rr = sampler.next_1d();
