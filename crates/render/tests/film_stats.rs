@@ -292,63 +292,107 @@ fn constant_radiance_develops_to_itself_with_any_filter() {
     }
 }
 
-#[test]
-fn stderr_matches_a_known_variance() {
-    // L ~ U[0,1) independent of the position: σ² = 1/12. Box filter (unit weights, one pixel
-    // per sample): over M pixels of n samples, the mean of stderr² = s²/n estimates σ²/n; z-test
-    // with Var(s²) = (μ₄ − σ⁴(n−3)/(n−1))/n, μ₄ = 1/80.
-    let (w, h, n) = (64u32, 32u32, 32u32);
-    let box_filter = Filter::new(&FilterDesc::Box { radius: 0.5 });
-    let gauss = Filter::default_gaussian();
-    let a = sidak(ALPHA, 3);
-    for (name, filter) in [("box", box_filter), ("gaussian", gauss)] {
-        let mut film = Film::new(w, h, None, filter);
-        let (lo, hi) = film.pixel_bounds();
-        let mut tile = film.tile(lo, hi);
-        let mut rng = Rng(21);
-        for y in 0..h {
-            for x in 0..w {
-                for _ in 0..n {
-                    let p = Vec2::new(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
-                    tile.add_sample(p, Vec3::splat(rng.next_f32()));
-                }
+/// A `w × h` film of `n` samples per pixel at uniform positions with radiance L ~ U[0,1)
+/// (σ² = 1/12), independent of the position.
+fn uniform_noise_film(filter: Filter, w: u32, h: u32, n: u32, seed: u64) -> Film {
+    let mut film = Film::new(w, h, None, filter);
+    let (lo, hi) = film.pixel_bounds();
+    let mut tile = film.tile(lo, hi);
+    let mut rng = Rng(seed);
+    for y in 0..h {
+        for x in 0..w {
+            for _ in 0..n {
+                let p = Vec2::new(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
+                tile.add_sample(p, Vec3::splat(rng.next_f32()));
             }
         }
-        film.merge(tile);
-        let (img, err) = (film.develop(), film.develop_stderr());
-        let m = (w * h) as f64;
-        let nf = n as f64;
-        if name == "box" {
-            let mean_var: f64 = err.pixels.iter().map(|e| (e.x as f64).powi(2)).sum::<f64>() / m;
-            let sigma2 = 1.0 / 12.0;
-            let var_s2 = (1.0 / 80.0 - sigma2 * sigma2 * (nf - 3.0) / (nf - 1.0)) / nf;
-            let z = (mean_var - sigma2 / nf) / (var_s2.sqrt() / nf / m.sqrt());
-            assert!(z.abs() < z_crit(a), "mean stderr² {mean_var}, z = {z:.2}");
+    }
+    film.merge(tile);
+    film
+}
+
+#[test]
+fn stderr_matches_a_known_variance() {
+    // Box filter (unit weights, one pixel per sample): over M pixels of n samples, the mean of
+    // stderr² = s²/n estimates σ²/n; z-test with Var(s²) = (μ₄ − σ⁴(n−3)/(n−1))/n, μ₄ = 1/80.
+    // Coverage of the ±1.96·stderr interval around the true mean 0.5: ≈ 94% for n = 32
+    // (Student t with 31 dof), binomial z-test.
+    let (w, h, n) = (64u32, 32u32, 32u32);
+    let a = sidak(ALPHA, 2);
+    let film = uniform_noise_film(Filter::new(&FilterDesc::Box { radius: 0.5 }), w, h, n, 21);
+    let (img, err) = (film.develop(), film.develop_stderr());
+    let m = (w * h) as f64;
+    let nf = n as f64;
+    let mean_var: f64 = err.pixels.iter().map(|e| (e.x as f64).powi(2)).sum::<f64>() / m;
+    let sigma2 = 1.0 / 12.0;
+    let var_s2 = (1.0 / 80.0 - sigma2 * sigma2 * (nf - 3.0) / (nf - 1.0)) / nf;
+    let z = (mean_var - sigma2 / nf) / (var_s2.sqrt() / nf / m.sqrt());
+    assert!(z.abs() < z_crit(a), "mean stderr² {mean_var}, z = {z:.2}");
+    let covered = img
+        .pixels
+        .iter()
+        .zip(&err.pixels)
+        .filter(|(v, e)| (v.x - 0.5).abs() <= 1.96 * e.x)
+        .count() as f64
+        / m;
+    let sd = (0.94f64 * 0.06 / m).sqrt();
+    assert!(
+        (covered - 0.94).abs() < z_crit(a) * sd,
+        "coverage {covered:.4}"
+    );
+}
+
+#[test]
+fn film_stderr_adds_up_over_pixels() {
+    // Splatted pixels are correlated; develop_stderr² must still add up to the variance of a
+    // sum of pixels. K independent films of uniform noise: the spread of the means of their
+    // interior (pixels ≥ 3 from the image edges, where develop_stderr underestimates, see the
+    // film docs) against the variance predicted from Σ stderr² / N² (two-sided χ² test, K − 1
+    // dof). With the per-pixel errors alone the prediction would be F times too small (F = π
+    // for the default gaussian, 9 for the r = 1.5 box).
+    let (w, h, n, k, margin) = (64u32, 64u32, 4u32, 64usize, 3u32);
+    let cases = [
+        ("gaussian", Filter::default_gaussian()),
+        ("box r=1.5", Filter::new(&FilterDesc::Box { radius: 1.5 })),
+        (
+            "mitchell",
+            Filter::new(&FilterDesc::Mitchell {
+                b: 1.0 / 3.0,
+                c: 1.0 / 3.0,
+                radius: 2.0,
+            }),
+        ),
+    ];
+    let a = sidak(ALPHA, cases.len());
+    let chi2 = statrs::distribution::ChiSquared::new((k - 1) as f64).unwrap();
+    let (lo, hi) = (chi2.inverse_cdf(a / 2.0), chi2.inverse_cdf(1.0 - a / 2.0));
+    let npix = ((w - 2 * margin) * (h - 2 * margin)) as f64;
+    let interior = |img: &render::film::Image, f: fn(Vec3) -> f64| -> f64 {
+        let mut s = 0.0;
+        for y in margin..h - margin {
+            for x in margin..w - margin {
+                s += f(img.get(x, y));
+            }
         }
-        // Coverage of the ±1.96·stderr interval around the true mean 0.5: ≈ 94% for n = 32
-        // (Student t with 31 dof), also with the gaussian's splatted, non-unit weights (delta
-        // method, ~16n contributions). Bounds: ±z binomial standard deviations around 0.94,
-        // inflated for the gaussian by √π: neighbouring pixels share samples, the correlations
-        // of their values sum to (∫f)²/∫f² = π, and those of the coverage indicators are
-        // smaller.
-        let covered = img
-            .pixels
-            .iter()
-            .zip(&err.pixels)
-            .filter(|(v, e)| (v.x - 0.5).abs() <= 1.96 * e.x)
-            .count() as f64
-            / m;
-        let inflation = if name == "box" {
-            1.0
-        } else {
-            std::f64::consts::PI.sqrt()
-        };
-        let sd = (0.94f64 * 0.06 / m).sqrt() * inflation;
+        s
+    };
+    for (name, filter) in cases {
+        let (mut means, mut predicted) = (Vec::new(), 0.0f64);
+        for seed in 0..k {
+            let film = uniform_noise_film(filter, w, h, n, 100 + seed as u64);
+            means.push(interior(&film.develop(), |v| v.x as f64) / npix);
+            let se2 = interior(&film.develop_stderr(), |e| (e.x as f64).powi(2));
+            predicted += se2 / (npix * npix) / k as f64;
+        }
+        let mean = means.iter().sum::<f64>() / k as f64;
+        let ss: f64 = means.iter().map(|m| (m - mean).powi(2)).sum();
+        let stat = ss / predicted;
+        let ratio = stat / (k - 1) as f64;
+        println!("{name}: spread/predicted = {ratio:.3}");
         assert!(
-            (covered - 0.94).abs() < z_crit(a) * sd,
-            "{name}: coverage {covered:.4}"
+            (lo..hi).contains(&stat),
+            "{name}: χ² = {stat:.1} outside [{lo:.1}, {hi:.1}] (spread/predicted {ratio:.3})"
         );
-        println!("{name}: 95% interval coverage {covered:.4}");
     }
 }
 

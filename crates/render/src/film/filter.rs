@@ -45,7 +45,17 @@ fn radius_or(v: f32, default: f32) -> f32 {
 }
 
 #[inline]
-fn gaussian_1d(x: f32, stddev: f32, radius: f32) -> f32 {
+pub(crate) fn box_1d(x: f32, radius: f32) -> f32 {
+    if x.abs() <= radius { 1.0 } else { 0.0 }
+}
+
+#[inline]
+pub(crate) fn tent_1d(x: f32, radius: f32) -> f32 {
+    (1.0 - x.abs() / radius).max(0.0)
+}
+
+#[inline]
+pub(crate) fn gaussian_1d(x: f32, stddev: f32, radius: f32) -> f32 {
     if x.abs() > radius {
         return 0.0;
     }
@@ -54,7 +64,7 @@ fn gaussian_1d(x: f32, stddev: f32, radius: f32) -> f32 {
 }
 
 #[inline]
-fn mitchell_1d(x: f32, b: f32, c: f32, radius: f32) -> f32 {
+pub(crate) fn mitchell_1d(x: f32, b: f32, c: f32, radius: f32) -> f32 {
     let t = (2.0 * x / radius).abs();
     let (t2, t3) = (t * t, t * t * t);
     let v = if t < 1.0 {
@@ -120,14 +130,8 @@ impl Filter {
     #[inline]
     pub fn eval_1d(&self, x: f32) -> f32 {
         match *self {
-            Filter::Box { radius } => {
-                if x.abs() <= radius {
-                    1.0
-                } else {
-                    0.0
-                }
-            }
-            Filter::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
+            Filter::Box { radius } => box_1d(x, radius),
+            Filter::Tent { radius } => tent_1d(x, radius),
             Filter::Gaussian { stddev, radius } => gaussian_1d(x, stddev, radius),
             Filter::Mitchell { b, c, radius } => mitchell_1d(x, b, c, radius),
         }
@@ -137,6 +141,25 @@ impl Filter {
     #[inline]
     pub fn eval(&self, p: Vec2) -> f32 {
         self.eval_1d(p.x) * self.eval_1d(p.y)
+    }
+
+    /// `(∫f)² / ∫f²` in pixels, at least 1: the effective number of pixels a splatted sample
+    /// is spread over (1 for the box filter, π for the default gaussian). Midpoint rule.
+    pub fn footprint(&self) -> f64 {
+        let n = 4096;
+        let r = self.radius() as f64;
+        let dx = 2.0 * r / n as f64;
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for k in 0..n {
+            let g = self.eval_1d((-r + (k as f64 + 0.5) * dx) as f32) as f64;
+            s1 += g * dx;
+            s2 += g * g * dx;
+        }
+        if s2 > 0.0 {
+            (s1 * s1 / s2).powi(2).max(1.0)
+        } else {
+            1.0
+        }
     }
 }
 
@@ -166,6 +189,22 @@ mod tests {
         assert!((m.eval_1d(1.0) - 1.0 / 18.0).abs() < 1e-6);
         assert!(m.eval_1d(1.5) < 0.0, "negative lobe");
         assert_eq!(m.eval_1d(2.0), 0.0);
+    }
+
+    #[test]
+    fn footprints() {
+        let bx = Filter::new(&FilterDesc::Box { radius: 0.5 });
+        assert!((bx.footprint() - 1.0).abs() < 1e-9);
+        let narrow = Filter::new(&FilterDesc::Box { radius: 0.3 });
+        assert_eq!(narrow.footprint(), 1.0);
+        let wide = Filter::new(&FilterDesc::Box { radius: 1.5 });
+        assert!((wide.footprint() - 9.0).abs() < 1e-5);
+        // Tent: ∫g = r, ∫g² = 2r/3.
+        let tent = Filter::new(&FilterDesc::Tent { radius: 1.0 });
+        assert!((tent.footprint() - 2.25).abs() < 1e-4);
+        // Gaussian σ = ½ (truncation at 4σ changes little): (2σ√π)² = π.
+        let g = Filter::default_gaussian().footprint();
+        assert!((g - std::f64::consts::PI).abs() < 0.05, "{g}");
     }
 
     #[test]
