@@ -1,8 +1,8 @@
 //! The render driver: tiles × passes on the current rayon pool.
 //!
 //! A pass adds samples `[s0, s1)` to every pixel. Tiles of a pass run in parallel and are
-//! merged into the film after the pass; each pixel's samples are accumulated in index order,
-//! so the image is bit-identical for any thread count and any split into passes. Passes are
+//! merged into the film after the pass in a fixed order, so the image is bit-identical for any
+//! thread count (a different split into passes changes only the f64 rounding of the sums). Passes are
 //! sized from the measured speed (about a second each), so a time budget, Ctrl-C (the
 //! `cancel` flag) or a progressive writer stops at a pass boundary with a consistent image.
 
