@@ -50,14 +50,7 @@ impl BsdfModel for Diffuse {
         if !is_positive(pdf) {
             return None;
         }
-        Some(BsdfSample {
-            wi,
-            weight: self.reflectance,
-            pdf,
-            delta: false,
-            transmission: false,
-            eta: 1.0,
-        })
+        Some(BsdfSample::glossy_reflection(wi, self.reflectance, pdf))
     }
 
     fn has_delta(&self) -> bool {

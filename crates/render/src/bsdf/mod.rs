@@ -68,6 +68,21 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
+impl BsdfSample {
+    /// A sample of a non-delta reflection lobe (no interface crossed).
+    #[inline]
+    pub fn glossy_reflection(wi: Vec3, weight: Vec3, pdf: f32) -> BsdfSample {
+        BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta: false,
+            transmission: false,
+            eta: 1.0,
+        }
+    }
+}
+
 /// The operations every BSDF model implements (dispatched by the [`Bsdf`] enum).
 pub(crate) trait BsdfModel {
     fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;

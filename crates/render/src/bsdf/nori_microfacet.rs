@@ -81,14 +81,11 @@ impl BsdfModel for NoriMicrofacet {
         if !is_positive(pdf) {
             return None;
         }
-        Some(BsdfSample {
+        Some(BsdfSample::glossy_reflection(
             wi,
-            weight: self.eval(wo, wi, mode) / pdf,
+            self.eval(wo, wi, mode) / pdf,
             pdf,
-            delta: false,
-            transmission: false,
-            eta: 1.0,
-        })
+        ))
     }
 
     fn has_delta(&self) -> bool {

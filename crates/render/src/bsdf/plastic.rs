@@ -121,14 +121,11 @@ impl BsdfModel for Plastic {
             }
             let f_i = fresnel_dielectric(wi.z, self.eta).0;
             let s = (1.0 - f_o) * (1.0 - f_i) / (self.eta * self.eta * p_diff);
-            Some(BsdfSample {
+            Some(BsdfSample::glossy_reflection(
                 wi,
-                weight: self.corrected_diffuse() * s,
+                self.corrected_diffuse() * s,
                 pdf,
-                delta: false,
-                transmission: false,
-                eta: 1.0,
-            })
+            ))
         }
     }
 

@@ -73,14 +73,7 @@ impl BsdfModel for RoughConductor {
         let pdf = pdf_m / (4.0 * wo_m);
         let f = fresnel_conductor(wo_m, self.eta, self.k);
         let weight = self.specular_reflectance * f * self.distribution.smith_g1(wi, m);
-        Some(BsdfSample {
-            wi,
-            weight,
-            pdf,
-            delta: false,
-            transmission: false,
-            eta: 1.0,
-        })
+        Some(BsdfSample::glossy_reflection(wi, weight, pdf))
     }
 
     fn has_delta(&self) -> bool {

@@ -131,14 +131,7 @@ impl BsdfModel for RoughDielectric {
             }
             let pdf = pdf_m * f / (4.0 * wi.dot(m).abs());
             let weight = self.specular_reflectance * self.distribution.smith_g1(wi, m);
-            Some(BsdfSample {
-                wi,
-                weight,
-                pdf,
-                delta: false,
-                transmission: false,
-                eta: 1.0,
-            })
+            Some(BsdfSample::glossy_reflection(wi, weight, pdf))
         } else {
             let wi = refract_m(wo, m, cos_t, eta_ti);
             if wi.z * cos_o >= 0.0 {

@@ -183,14 +183,11 @@ impl BsdfModel for RoughPlastic {
         if !is_positive(pdf) {
             return None;
         }
-        Some(BsdfSample {
+        Some(BsdfSample::glossy_reflection(
             wi,
-            weight: self.eval(wo, wi, mode) / pdf,
+            self.eval(wo, wi, mode) / pdf,
             pdf,
-            delta: false,
-            transmission: false,
-            eta: 1.0,
-        })
+        ))
     }
 
     fn has_delta(&self) -> bool {
