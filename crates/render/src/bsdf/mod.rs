@@ -191,6 +191,28 @@ pub(crate) fn reflect_z(w: Vec3) -> Vec3 {
     Vec3::new(-w.x, -w.y, w.z)
 }
 
+/// The sample of a mixture of reflection lobes once the direction `wi` is chosen: the
+/// weight is the full `eval / pdf` (both over all lobes), as a one-sample MIS estimate.
+pub(crate) fn mixture_reflection_sample<B: BsdfModel>(
+    b: &B,
+    wo: Vec3,
+    wi: Vec3,
+    mode: TransportMode,
+) -> Option<BsdfSample> {
+    if wi.z <= 0.0 {
+        return None;
+    }
+    let pdf = b.pdf(wo, wi);
+    if !is_positive(pdf) {
+        return None;
+    }
+    Some(BsdfSample::glossy_reflection(
+        wi,
+        b.eval(wo, wi, mode) / pdf,
+        pdf,
+    ))
+}
+
 /// `x > 0` (false for NaN): guards densities before dividing by them.
 #[inline]
 pub(crate) fn is_positive(x: f32) -> bool {

@@ -13,7 +13,7 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Microfacet, MicrofacetType};
-use super::{BsdfModel, BsdfSample, TransportMode, is_positive, reflect_z_about};
+use super::{BsdfModel, BsdfSample, TransportMode, mixture_reflection_sample, reflect_z_about};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
@@ -74,18 +74,7 @@ impl BsdfModel for NoriMicrofacet {
         } else {
             square_to_cosine_hemisphere(u2)
         };
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let pdf = self.pdf(wo, wi);
-        if !is_positive(pdf) {
-            return None;
-        }
-        Some(BsdfSample::glossy_reflection(
-            wi,
-            self.eval(wo, wi, mode) / pdf,
-            pdf,
-        ))
+        mixture_reflection_sample(self, wo, wi, mode)
     }
 
     fn has_delta(&self) -> bool {

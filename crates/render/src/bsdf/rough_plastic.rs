@@ -21,7 +21,9 @@ use std::sync::Arc;
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Microfacet, MicrofacetType, eval_reflectance, eval_transmittance};
 use super::plastic::sampling_weight;
-use super::{BsdfModel, BsdfSample, TransportMode, is_positive, mean, reflect_z_about};
+use super::{
+    BsdfModel, BsdfSample, TransportMode, mean, mixture_reflection_sample, reflect_z_about,
+};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 
@@ -176,18 +178,7 @@ impl BsdfModel for RoughPlastic {
         } else {
             square_to_cosine_hemisphere(u2)
         };
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let pdf = self.pdf(wo, wi);
-        if !is_positive(pdf) {
-            return None;
-        }
-        Some(BsdfSample::glossy_reflection(
-            wi,
-            self.eval(wo, wi, mode) / pdf,
-            pdf,
-        ))
+        mixture_reflection_sample(self, wo, wi, mode)
     }
 
     fn has_delta(&self) -> bool {
