@@ -1,6 +1,9 @@
 //! The `penumbra` command. Thin: parses arguments, reports progress and errors, writes files;
 //! all rendering logic lives in `penumbra-render`.
 
+mod comp30019;
+mod cs184;
+mod debug_paths;
 mod info;
 mod progress;
 
@@ -50,6 +53,12 @@ enum Command {
     },
     /// Compare renders with a reference (relMSE, mean ratio, block t-test of
     /// ../shared/references/README.md). Exit code 1 when the t-test fails.
+    /// Render a COMP30019 (University of Melbourne) scene with the original program's flags.
+    Comp30019(comp30019::Args),
+    /// Render a CS184 (UC Berkeley) COLLADA scene with the original program's flags.
+    Cs184(cs184::Args),
+    /// Trace a few paths through one pixel and write their segments (PLY edges or JSON).
+    DebugPaths(debug_paths::Args),
     Compare {
         /// The reference: NAME, NAME.exr (NAME.stderr.exr must exist beside it).
         reference: PathBuf,
@@ -148,19 +157,19 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
 }
 
 /// An error for the user, with its exit code (2: bad input, 1: anything else).
-struct Failure {
+pub(crate) struct Failure {
     message: String,
     code: u8,
 }
 
 impl Failure {
-    fn input(message: impl ToString) -> Self {
+    pub(crate) fn input(message: impl ToString) -> Self {
         Failure {
             message: message.to_string(),
             code: 2,
         }
     }
-    fn other(message: impl ToString) -> Self {
+    pub(crate) fn other(message: impl ToString) -> Self {
         Failure {
             message: message.to_string(),
             code: 1,
@@ -168,7 +177,7 @@ impl Failure {
     }
 }
 
-fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<Document, Failure> {
+pub(crate) fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<Document, Failure> {
     let opts = LoadOptions {
         defines: defines.to_vec(),
     };
@@ -176,7 +185,7 @@ fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<Document, Fai
     Ok(doc)
 }
 
-fn print_warnings(desc: &SceneDesc) {
+pub(crate) fn print_warnings(desc: &SceneDesc) {
     for w in &desc.warnings {
         eprintln!("{w}");
     }
@@ -224,16 +233,47 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         )));
     };
     print_warnings(&desc);
-    let outputs = if args.output.is_empty() {
-        default_outputs(&args.scene)
-    } else {
-        args.output.clone()
+    let job = RenderJob {
+        outputs: if args.output.is_empty() {
+            default_outputs(&args.scene)
+        } else {
+            args.output.clone()
+        },
+        stderr: args.stderr.clone(),
+        build: BuildOptions {
+            sensor: args.sensor,
+            spp: args.spp,
+            resolution: args.res,
+            seed: args.seed,
+            integrator: args.integrator.clone(),
+        },
+        time: args.time,
+        threads: args.threads,
+        quiet: args.quiet,
     };
-    check_outputs(&outputs)?;
-    if let Some(se) = &args.stderr {
+    render_scene(&desc, &job)
+}
+
+/// Everything `render_scene` needs besides the scene: the shared back end of `render` and
+/// of the course-compatible commands.
+pub(crate) struct RenderJob {
+    pub outputs: Vec<PathBuf>,
+    /// Also write the per-pixel standard error here.
+    pub stderr: Option<PathBuf>,
+    pub build: BuildOptions,
+    /// Time budget in seconds.
+    pub time: Option<f64>,
+    pub threads: Option<usize>,
+    pub quiet: bool,
+}
+
+/// Build, render (progress, Ctrl-C, time budget) and write the outputs of one sensor.
+pub(crate) fn render_scene(desc: &SceneDesc, job: &RenderJob) -> Result<(), Failure> {
+    check_outputs(&job.outputs)?;
+    if let Some(se) = &job.stderr {
         check_outputs(std::slice::from_ref(se))?;
     }
-    if let Some(t) = args.time
+    if let Some(t) = job.time
         && !(t > 0.0 && t.is_finite())
     {
         return Err(Failure::input(format!(
@@ -241,14 +281,7 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         )));
     }
 
-    let opts = BuildOptions {
-        sensor: args.sensor,
-        spp: args.spp,
-        resolution: args.res,
-        seed: args.seed,
-        integrator: args.integrator.clone(),
-    };
-    let scene = build(&desc, &opts).map_err(Failure::input)?;
+    let scene = build(desc, &job.build).map_err(Failure::input)?;
     for w in &scene.warnings {
         eprintln!("{w}");
     }
@@ -266,33 +299,33 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         });
     }
     let ropts = RenderOptions {
-        spp: if args.time.is_some() && args.spp.is_none() {
+        spp: if job.time.is_some() && job.build.spp.is_none() {
             u32::MAX / 2
         } else {
             scene.sampler.spp
         },
-        time_budget: args.time.map(Duration::from_secs_f64),
+        time_budget: job.time.map(Duration::from_secs_f64),
         cancel,
         ..RenderOptions::default()
     };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
+        .num_threads(job.threads.unwrap_or(0))
         .build()
         .map_err(Failure::other)?;
-    let reporter = progress::Reporter::new(args.quiet);
+    let reporter = progress::Reporter::new(job.quiet);
     let outcome = pool.install(|| render(&scene, &integrator, &ropts, &reporter));
     reporter.finish(&outcome);
 
     let image = outcome.film.develop();
-    for o in &outputs {
+    for o in &job.outputs {
         write_image(o, &image).map_err(Failure::other)?;
-        if !args.quiet {
+        if !job.quiet {
             eprintln!("wrote {}", o.display());
         }
     }
-    if let Some(se) = &args.stderr {
+    if let Some(se) = &job.stderr {
         write_image(se, &outcome.film.develop_stderr()).map_err(Failure::other)?;
-        if !args.quiet {
+        if !job.quiet {
             eprintln!("wrote {}", se.display());
         }
     }
@@ -379,6 +412,9 @@ fn main() -> ExitCode {
             test,
             stderr,
         } => cmd_compare(&reference, &test, stderr.as_deref()),
+        Command::Comp30019(args) => comp30019::run(args),
+        Command::Cs184(args) => cs184::run(args),
+        Command::DebugPaths(args) => debug_paths::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

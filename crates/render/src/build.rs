@@ -14,7 +14,8 @@ use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::image_io::{self, Decode};
-use crate::lights::{EnvMap, Light};
+use crate::integrators::Integrator;
+use crate::lights::{EnvMap, Light, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
 use crate::sampling::distrib::Distribution1D;
@@ -60,6 +61,8 @@ pub struct Scene {
     pub sampler: SamplerDesc,
     pub integrator: IntegratorDesc,
     pub background: Option<Vec3>,
+    /// Sum of the scene's ambient terms ([`scene::Emitter::Ambient`]), used by Whitted.
+    pub ambient: Vec3,
     pub lights: Vec<Light>,
     /// The light of each shape that emits.
     pub shape_light: Vec<Option<u32>>,
@@ -79,17 +82,22 @@ impl Scene {
         Some(interaction(&shape.geom, &hit, ray, shape.flip_normals))
     }
 
-    /// Pick a light uniformly (as Mitsuba does): the light and its selection probability.
+    /// Choose one light for next-event estimation at receiver `r`: its index, the light and
+    /// the probability of that choice (`None` when the scene has no light). Uniform, as
+    /// Mitsuba does.
     #[inline]
-    pub fn sample_light(&self, u: f32) -> (&Light, f32) {
+    pub fn sample_light(&self, u: f32, _r: &Receiver) -> Option<(u32, &Light, f32)> {
         let n = self.lights.len();
+        if n == 0 {
+            return None;
+        }
         let i = ((u * n as f32) as usize).min(n - 1);
-        (&self.lights[i], 1.0 / n as f32)
+        Some((i as u32, &self.lights[i], 1.0 / n as f32))
     }
 
-    /// Probability that `sample_light` picks any given light.
+    /// Probability that `sample_light` picks light `light` at receiver `r`.
     #[inline]
-    pub fn light_pmf(&self) -> f32 {
+    pub fn light_pmf(&self, _r: &Receiver, _light: u32) -> f32 {
         1.0 / self.lights.len().max(1) as f32
     }
 
@@ -288,6 +296,8 @@ fn build_lights(
     }
     for e in &desc.emitters {
         lights.push(match &e.emitter {
+            // Not a light: the Whitted integrator's ambient term (`Scene::ambient`).
+            scene::Emitter::Ambient { .. } => continue,
             scene::Emitter::Point {
                 position,
                 intensity,
@@ -430,6 +440,26 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         sampler.seed = seed;
     }
     let camera = Camera::new(&sensor.camera, film.width, film.height);
+    let integrator = opts
+        .integrator
+        .clone()
+        .or_else(|| sensor.integrator.clone())
+        .unwrap_or_else(|| desc.integrator.clone());
+    let ambient: Vec3 = desc
+        .emitters
+        .iter()
+        .filter_map(|e| match e.emitter {
+            scene::Emitter::Ambient { radiance } => Some(radiance),
+            _ => None,
+        })
+        .sum();
+    if ambient != Vec3::ZERO && !matches!(integrator, IntegratorDesc::Whitted { .. }) {
+        warnings.push(format!(
+            "{}: warning: the ambient light is used only by the Whitted ray tracer; the {} integrator ignores it",
+            desc.source.display(),
+            Integrator::from_desc(&integrator).map_or("selected", |i| i.name()),
+        ));
+    }
 
     Ok(Scene {
         accel,
@@ -437,18 +467,16 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         materials: desc
             .materials
             .iter()
-            .map(|m| RtMaterial::new(m.material.clone()))
+            .map(|m| RtMaterial::new(m.material.clone(), m.ambient))
             .collect(),
         warnings,
         textures,
         camera,
         film,
         sampler,
-        integrator: opts
-            .integrator
-            .clone()
-            .unwrap_or_else(|| desc.integrator.clone()),
+        integrator,
         background: desc.background,
+        ambient,
         lights,
         shape_light,
         infinite_lights,

@@ -22,6 +22,8 @@ use crate::shapes::SurfaceInteraction;
 #[derive(Clone, Debug)]
 pub struct RtMaterial {
     pub material: Material,
+    /// Ambient reflectance (the Whitted integrator's ambient term).
+    pub ambient: Vec3,
     /// Rough plastic's tables (depend only on α, the distribution and η).
     pub rough_plastic: Option<Arc<RoughPlasticTables>>,
 }
@@ -67,7 +69,7 @@ impl Params for ConstantParams {
 }
 
 impl RtMaterial {
-    pub fn new(material: Material) -> RtMaterial {
+    pub fn new(material: Material, ambient: Vec3) -> RtMaterial {
         let rough_plastic = match &material {
             Material::RoughPlastic {
                 distribution,
@@ -83,6 +85,7 @@ impl RtMaterial {
         };
         RtMaterial {
             material,
+            ambient,
             rough_plastic,
         }
     }
@@ -218,6 +221,12 @@ fn alpha(a: f32) -> f32 {
 impl Scene {
     /// The BSDF at `si` and the shading frame it lives in (flipped for the back side of a
     /// two-sided material). `None`: the surface does not scatter (null material).
+    /// The ambient reflectance of the material at `si` (`None` without a material).
+    pub fn ambient_reflectance(&self, si: &SurfaceInteraction) -> Option<Vec3> {
+        let id = self.shapes[si.shape as usize].material?;
+        Some(self.materials[id.0 as usize].ambient)
+    }
+
     pub fn bsdf_at(&self, si: &SurfaceInteraction) -> Option<(Bsdf, Frame)> {
         let mut frame = si.shading;
         let shape = &self.shapes[si.shape as usize];

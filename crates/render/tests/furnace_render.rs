@@ -12,22 +12,17 @@ use render::integrators::Integrator;
 use render::render::{RenderOptions, Silent, render};
 use scene::{
     Camera, ColorParam, Emitter, EmitterDesc, FilterDesc, FovAxis, IntegratorDesc, Material,
-    MaterialDesc, MisHeuristic, Projection, SamplerDesc, SamplerKind, SceneDesc, Sensor, Shape,
-    ShapeDesc,
+    MaterialDesc, Projection, SamplerDesc, SamplerKind, SceneDesc, Sensor, Shape, ShapeDesc,
 };
 
 fn furnace(material: Material) -> (f64, f64) {
     let mut desc = SceneDesc {
-        integrator: IntegratorDesc::Path {
-            max_depth: -1,
-            rr_depth: 5,
-            hide_emitters: false,
-            mis: MisHeuristic::Power,
-        },
+        integrator: IntegratorDesc::Path(scene::PathDesc::default()),
         ..Default::default()
     };
     let id = desc.add_material(MaterialDesc {
         material,
+        ambient: Default::default(),
         name: None,
         loc: Default::default(),
     });
@@ -70,12 +65,14 @@ fn furnace(material: Material) -> (f64, f64) {
             crop: None,
             filter: FilterDesc::Box { radius: 0.5 },
             output: None,
+            tonemap: None,
         },
         sampler: SamplerDesc {
             kind: SamplerKind::Independent,
             spp: 64,
             seed: 3,
         },
+        integrator: None,
         name: None,
         loc: Default::default(),
     });

@@ -66,6 +66,8 @@ pub struct SceneDesc {
     pub integrator: IntegratorDesc,
     /// Background radiance seen by rays that escape (formats with a "background colour").
     pub background: Option<Rgb>,
+    /// How integrators pick one emitter for next-event estimation.
+    pub light_selection: LightSelection,
     /// Non-fatal findings of the loader (unknown parameters, ignored features...).
     pub warnings: Vec<Warning>,
 }
@@ -165,6 +167,9 @@ pub struct AreaEmission {
 #[derive(Clone, Debug)]
 pub struct MaterialDesc {
     pub material: Material,
+    /// Ambient reflectance (CENG795 `AmbientReflectance`), used only with an
+    /// [`Emitter::Ambient`] by the course ray tracers; zero elsewhere.
+    pub ambient: Rgb,
     pub name: Option<String>,
     pub loc: Loc,
 }
@@ -375,6 +380,10 @@ pub enum Emitter {
     Directional { direction: Vec3, irradiance: Rgb },
     /// Uniform environment radiance.
     Constant { radiance: Rgb },
+    /// The course ray tracers' ambient term: adds `ambient reflectance × radiance` at every
+    /// hit of the Whitted integrator (CENG795 `AmbientLight`). Not a physical emitter: the
+    /// path tracers ignore it (with a warning at build time).
+    Ambient { radiance: Rgb },
     /// Image-based environment light.
     EnvMap {
         path: PathBuf,
@@ -392,6 +401,7 @@ impl Emitter {
             Emitter::Directional { .. } => "directional",
             Emitter::Constant { .. } => "constant",
             Emitter::EnvMap { .. } => "envmap",
+            Emitter::Ambient { .. } => "ambient",
         }
     }
 }
@@ -404,6 +414,8 @@ pub struct Sensor {
     pub camera: Camera,
     pub film: Film,
     pub sampler: SamplerDesc,
+    /// This camera's own integrator (CENG795 `Renderer` per camera); `None`: the scene's.
+    pub integrator: Option<IntegratorDesc>,
     pub name: Option<String>,
     pub loc: Loc,
 }
@@ -473,6 +485,23 @@ pub struct Film {
     pub filter: FilterDesc,
     /// Output file requested by the scene itself (CENG795 `ImageName`), if any.
     pub output: Option<PathBuf>,
+    /// Tone mapping for 8-bit outputs (CENG795 `Tonemap`); `None`: clamp + sRGB curve.
+    /// Linear outputs (EXR, PFM, HDR) are never tone mapped.
+    pub tonemap: Option<Tonemap>,
+}
+
+/// A tone-mapping operator for display outputs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Tonemap {
+    /// Reinhard et al. 2002 photographic global operator: scale by `key` / log-average
+    /// luminance, burn out the brightest `burn_percent` % of pixels, then colour
+    /// `saturation` and display `gamma` (CENG795 `TMO Photographic`).
+    Photographic {
+        key: f32,
+        burn_percent: f32,
+        saturation: f32,
+        gamma: f32,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -525,13 +554,8 @@ pub enum IntegratorDesc {
         emitter_samples: u32,
         bsdf_samples: u32,
     },
-    /// Unidirectional path tracer (Mitsuba `path`); `max_depth` −1 means unbounded.
-    Path {
-        max_depth: i32,
-        rr_depth: u32,
-        hide_emitters: bool,
-        mis: MisHeuristic,
-    },
+    /// Unidirectional path tracer (Mitsuba `path` and the course variants).
+    Path(PathDesc),
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },
     /// Nori's `simple` (one point light, no shadows from area lights).
@@ -552,13 +576,87 @@ pub enum NoriIntegrator {
 
 impl Default for IntegratorDesc {
     fn default() -> Self {
-        IntegratorDesc::Path {
+        IntegratorDesc::Path(PathDesc::default())
+    }
+}
+
+/// The path tracer's settings. `PathDesc::default()` is Mitsuba's `path`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathDesc {
+    /// Maximum number of path segments (Mitsuba `max_depth`); −1 means unbounded.
+    pub max_depth: i32,
+    pub rr: RussianRoulette,
+    /// Emitters seen directly by camera rays are not shown.
+    pub hide_emitters: bool,
+    /// How emitter sampling and direction sampling are combined.
+    pub mis: MisHeuristic,
+    /// Next-event estimation at non-delta vertices. Off ("brute force"): emitters contribute
+    /// only when a sampled direction hits them.
+    pub nee: bool,
+    /// How the next direction is drawn at non-delta vertices.
+    pub directions: DirectionSampling,
+    /// Emitter samples per non-delta vertex, averaged (with `all_lights`: per emitter, as
+    /// CS184's `-l`; delta emitters get one).
+    pub light_samples: u32,
+    /// Next-event estimation visits every emitter instead of choosing one (CS184, Whitted).
+    pub all_lights: bool,
+    /// Directions traced from the first vertex, each carrying 1/N of the throughput
+    /// (CENG795 `SplittingFactor`).
+    pub splitting: u32,
+}
+
+impl Default for PathDesc {
+    fn default() -> Self {
+        PathDesc {
             max_depth: -1,
-            rr_depth: 5,
+            rr: RussianRoulette::Throughput { from_depth: 5 },
             hide_emitters: false,
             mis: MisHeuristic::Power,
+            nee: true,
+            directions: DirectionSampling::Bsdf,
+            light_samples: 1,
+            all_lights: false,
+            splitting: 1,
         }
     }
+}
+
+/// When paths are terminated at random (and survivors reweighted, so the mean is unchanged).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RussianRoulette {
+    Off,
+    /// Mitsuba: from `from_depth` segments on, continue with probability
+    /// min(max component of throughput × η², 0.95).
+    Throughput {
+        from_depth: u32,
+    },
+    /// The courses' rule: after `after` segments, terminate with fixed probability `q`.
+    Fixed {
+        after: u32,
+        q: f32,
+    },
+}
+
+/// How a path picks its next direction at a non-delta vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DirectionSampling {
+    /// Importance sampling of the BSDF (the default).
+    Bsdf,
+    /// Uniform over the hemisphere of the shading normal on the side of `wo` (CS184 `-H`,
+    /// CENG795 without `ImportanceSampling`); transmission is not sampled.
+    UniformHemisphere,
+}
+
+/// How one emitter is chosen for next-event estimation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSelection {
+    /// Every emitter equally likely (Mitsuba).
+    #[default]
+    Uniform,
+    /// Proportional to emitted power (alias table).
+    Power,
+    /// A light BVH over position and orientation bounds (Conty & Kulla 2018, as pbrt-v4).
+    Bvh,
 }
 
 // ---------------------------------------------------------------------------------------------

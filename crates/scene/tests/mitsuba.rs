@@ -164,12 +164,17 @@ fn mitsuba_defaults() {
     let s = scene_of(r#"<scene version="3.0.0"><shape type="sphere"/></scene>"#);
     assert_eq!(
         s.integrator,
-        IntegratorDesc::Path {
+        IntegratorDesc::Path(PathDesc {
             max_depth: -1,
-            rr_depth: 5,
+            rr: RussianRoulette::Throughput { from_depth: 5 },
             hide_emitters: false,
-            mis: MisHeuristic::Power
-        }
+            mis: MisHeuristic::Power,
+            nee: true,
+            directions: DirectionSampling::Bsdf,
+            light_samples: 1,
+            all_lights: false,
+            splitting: 1,
+        })
     );
     assert_eq!(s.sensors.len(), 1);
     let sensor = &s.sensors[0];

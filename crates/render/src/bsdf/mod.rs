@@ -157,6 +157,12 @@ impl Bsdf {
         dispatch!(self, b => b.has_smooth())
     }
 
+    /// Has a non-delta transmission lobe.
+    #[inline]
+    pub fn has_transmission(&self) -> bool {
+        matches!(self, Bsdf::RoughDielectric(_))
+    }
+
     /// A colour for the albedo AOV.
     #[inline]
     pub fn albedo(&self) -> Vec3 {

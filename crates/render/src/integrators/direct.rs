@@ -43,7 +43,10 @@ pub fn li(
 
     if bsdf.has_smooth() && !scene.lights.is_empty() {
         for _ in 0..emitter_samples {
-            let (light, pmf) = scene.sample_light(sampler.next_1d());
+            let u = sampler.next_1d();
+            let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
+                continue;
+            };
             let Some(ls) = light.sample_li(scene, &receiver, sampler.next_2d()) else {
                 continue;
             };
@@ -71,12 +74,15 @@ pub fn li(
         };
         let wi = frame.to_world(bs.wi);
         let ray = si.spawn_ray(wi);
+        // Emission found and the density with which emitter sampling (selection included)
+        // would have produced the same direction.
         let (le, light_pdf) = match scene.intersect(&ray, f32::INFINITY) {
             Some(hit) => match scene.shape_light[hit.shape as usize] {
                 Some(l) => {
                     let light = &scene.lights[l as usize];
                     let le = light.le(scene, &hit);
-                    (le, light.pdf_li(scene, &receiver, wi, Some(&hit)))
+                    let pmf = scene.light_pmf(&receiver, l);
+                    (le, pmf * light.pdf_li(scene, &receiver, wi, Some(&hit)))
                 }
                 None => continue,
             },
@@ -86,7 +92,7 @@ pub fn li(
                 for &i in &scene.infinite_lights {
                     let l = &scene.lights[i as usize];
                     le += l.environment(wi);
-                    pdf += l.pdf_li(scene, &receiver, wi, None);
+                    pdf += scene.light_pmf(&receiver, i) * l.pdf_li(scene, &receiver, wi, None);
                 }
                 (le, pdf)
             }
@@ -97,7 +103,7 @@ pub fn li(
         let w = if bs.delta || emitter_samples == 0 {
             1.0
         } else {
-            power(bs.pdf * frac_bsdf, light_pdf * scene.light_pmf() * frac_em)
+            power(bs.pdf * frac_bsdf, light_pdf * frac_em)
         };
         result += bs.weight * le * (w / bsdf_samples as f32);
     }

@@ -8,7 +8,7 @@ mod aov;
 mod direct;
 pub mod path;
 
-use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator};
+use scene::{IntegratorDesc, NoriIntegrator};
 
 use self::path::{Combine, PathConfig};
 
@@ -52,20 +52,7 @@ impl Integrator {
                 samples: (*samples).max(1),
                 length: length.unwrap_or(f32::INFINITY),
             },
-            IntegratorDesc::Path {
-                max_depth,
-                rr_depth,
-                hide_emitters,
-                mis,
-            } => Integrator::Path(PathConfig::mitsuba(
-                *max_depth,
-                *rr_depth,
-                *hide_emitters,
-                match mis {
-                    MisHeuristic::Power => Combine::Power,
-                    MisHeuristic::Balance => Combine::Balance,
-                },
-            )),
+            IntegratorDesc::Path(d) => Integrator::Path(PathConfig::from_desc(d)),
             IntegratorDesc::Direct {
                 emitter_samples,
                 bsdf_samples,
@@ -73,13 +60,9 @@ impl Integrator {
                 emitter_samples: *emitter_samples,
                 bsdf_samples: *bsdf_samples,
             },
-            IntegratorDesc::Whitted { max_depth } => Integrator::Path(PathConfig {
-                max_depth: *max_depth,
-                rr_depth: u32::MAX,
-                hide_emitters: false,
-                combine: Combine::EmitterOnly,
-                continue_diffuse: false,
-            }),
+            IntegratorDesc::Whitted { max_depth } => {
+                Integrator::Path(PathConfig::whitted(*max_depth))
+            }
             IntegratorDesc::NoriSimple => Integrator::Path(nori(2, Combine::EmitterOnly)),
             IntegratorDesc::Nori(n) => Integrator::Path(match n {
                 NoriIntegrator::DirectEms => nori(2, Combine::EmitterOnly),
@@ -126,9 +109,6 @@ impl Integrator {
 fn nori(max_depth: u32, combine: Combine) -> PathConfig {
     PathConfig {
         max_depth,
-        rr_depth: 3,
-        hide_emitters: false,
-        combine,
-        continue_diffuse: true,
+        ..PathConfig::mitsuba(-1, 3, false, combine)
     }
 }

@@ -6,13 +6,25 @@
 //! to continue, both combined with the power heuristic; Russian roulette from depth `rr_depth`
 //! with continuation probability min(max(throughput)·η², 0.95); `max_depth` counts path
 //! segments (1: emitters seen directly, 2: direct lighting, −1: unbounded).
+//!
+//! The course variants change one thing each: no next-event estimation (brute force), uniform
+//! hemisphere directions instead of BSDF sampling, several emitter samples per vertex or one
+//! per emitter (Whitted, CS184), fixed-probability Russian roulette, splitting at the first
+//! vertex. Every combination converges to the same image; only the noise differs.
+//!
+//! A [`PathRecorder`] sees every vertex, scattering event and contribution of a path (render
+//! layers, the path visualiser); [`NoRecorder`] compiles to nothing.
 
-use crate::bsdf::TransportMode;
+use scene::{DirectionSampling, RussianRoulette};
+
+use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::build::Scene;
 use crate::camera::CameraRay;
+use crate::geometry::Ray;
 use crate::lights::{Receiver, ShadowTarget};
-use crate::math::Vec3;
-use crate::sampling::Sampler;
+use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::{Sampler, warp};
+use crate::shapes::SurfaceInteraction;
 
 /// How emission found by BSDF-sampled rays is weighted against emitter sampling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,13 +43,20 @@ pub enum Combine {
 pub struct PathConfig {
     /// Maximum number of path segments; `u32::MAX` for unbounded.
     pub max_depth: u32,
-    /// Depth from which Russian roulette starts.
-    pub rr_depth: u32,
+    pub rr: RussianRoulette,
     /// Do not show emitters hit by camera rays.
     pub hide_emitters: bool,
     pub combine: Combine,
     /// Continue paths after non-delta vertices (false: Whitted-style, only delta chains).
     pub continue_diffuse: bool,
+    pub directions: DirectionSampling,
+    /// Emitter samples per non-delta vertex.
+    pub light_samples: u32,
+    /// Next-event estimation visits every emitter (`light_samples` each, delta emitters once)
+    /// instead of choosing one; Whitted-style tracers.
+    pub all_lights: bool,
+    /// Continuations traced from the first vertex, each with 1/N of the throughput.
+    pub splitting: u32,
 }
 
 impl PathConfig {
@@ -48,10 +67,49 @@ impl PathConfig {
             } else {
                 max_depth as u32
             },
-            rr_depth,
+            rr: RussianRoulette::Throughput {
+                from_depth: rr_depth,
+            },
             hide_emitters,
             combine,
             continue_diffuse: true,
+            directions: DirectionSampling::Bsdf,
+            light_samples: 1,
+            all_lights: false,
+            splitting: 1,
+        }
+    }
+
+    /// The path tracer a scene description asks for.
+    pub fn from_desc(d: &scene::PathDesc) -> Self {
+        let combine = match (d.nee, d.mis) {
+            (false, _) => Combine::BsdfOnly,
+            (true, scene::MisHeuristic::Power) => Combine::Power,
+            (true, scene::MisHeuristic::Balance) => Combine::Balance,
+        };
+        PathConfig {
+            rr: d.rr,
+            directions: d.directions,
+            light_samples: d.light_samples.max(1),
+            all_lights: d.all_lights,
+            splitting: d.splitting.max(1),
+            ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
+        }
+    }
+
+    /// A Whitted-style ray tracer: every emitter sampled at the first non-delta vertex (plus
+    /// the scene's ambient term), delta chains followed up to `max_depth` segments.
+    pub fn whitted(max_depth: u32) -> Self {
+        PathConfig {
+            max_depth,
+            rr: RussianRoulette::Off,
+            hide_emitters: false,
+            combine: Combine::EmitterOnly,
+            continue_diffuse: false,
+            directions: DirectionSampling::Bsdf,
+            light_samples: 1,
+            all_lights: true,
+            splitting: 1,
         }
     }
 }
@@ -69,144 +127,472 @@ fn mis(combine: Combine, a: f32, b: f32) -> f32 {
     if w.is_finite() { w } else { 0.0 }
 }
 
-/// Where the previous vertex was and how its BSDF sample was drawn.
+/// How a path left a vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Scatter {
+    /// Perfectly specular (mirror reflection or smooth refraction).
+    pub delta: bool,
+    /// Crossed the surface.
+    pub transmission: bool,
+}
+
+/// How a contribution reached the estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Via {
+    /// A path segment hit an emitter (or escaped to the environment).
+    Emission,
+    /// Next-event estimation (a shadow ray to a sampled emitter point).
+    EmitterSample,
+    /// The ambient term of the Whitted integrator.
+    Ambient,
+}
+
+/// Where a contribution to the estimate comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Contribution {
+    /// Path segments from the camera to the emitting point (1: emitter seen directly).
+    pub depth: u32,
+    /// How the path left its first surface vertex (`None`: it had not left it yet).
+    pub first: Option<Scatter>,
+    pub via: Via,
+}
+
+/// A surface vertex as recorded.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordedVertex {
+    pub p: Vec3,
+    /// Shading normal.
+    pub n: Vec3,
+    /// Segments traced before reaching this vertex (1 for the first hit).
+    pub depth: u32,
+    /// Throughput of the path up to this vertex.
+    pub throughput: Vec3,
+}
+
+/// A direction sampled at the last recorded vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordedScatter {
+    pub scatter: Scatter,
+    /// Solid-angle density (or discrete probability for delta lobes).
+    pub pdf: f32,
+    /// Throughput after the bounce (and after Russian roulette reweighting).
+    pub throughput: Vec3,
+}
+
+/// Why a path stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PathEnd {
+    /// No surface hit: the path left the scene.
+    Escaped,
+    /// `max_depth` reached.
+    MaxDepth,
+    /// Russian roulette.
+    Roulette,
+    /// The surface does not scatter (no BSDF, failed sample, zero throughput, or a non-delta
+    /// vertex of a Whitted tracer).
+    Absorbed,
+}
+
+/// Observes the events of the paths traced by [`li_recorded`].
+pub trait PathRecorder {
+    fn camera_ray(&mut self, _ray: &Ray) {}
+    fn vertex(&mut self, _v: &RecordedVertex) {}
+    fn scatter(&mut self, _s: &RecordedScatter) {}
+    fn end(&mut self, _why: PathEnd) {}
+    /// Radiance `l` was added to the estimate.
+    fn contribution(&mut self, _l: Vec3, _c: Contribution) {}
+}
+
+/// Records nothing.
+pub struct NoRecorder;
+impl PathRecorder for NoRecorder {}
+
+/// Where the previous vertex was and how its direction sample was drawn.
+#[derive(Clone, Copy)]
 struct Previous {
     receiver: Receiver,
-    bsdf_pdf: f32,
+    /// Density of the direction sample (including the number of direction samples, which is
+    /// always 1 here).
+    dir_pdf: f32,
     delta: bool,
 }
 
+/// The state of a path between two segments.
+#[derive(Clone, Copy)]
+struct PathState {
+    ray: Ray,
+    t_max: f32,
+    throughput: Vec3,
+    eta: f32,
+    /// Segments traced so far.
+    depth: u32,
+    prev: Option<Previous>,
+    first: Option<Scatter>,
+    /// Splitting still to be done at the next vertex.
+    split: bool,
+}
+
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConfig) -> Vec3 {
+    li_recorded(scene, cray, sampler, cfg, &mut NoRecorder)
+}
+
+/// [`li`], telling `rec` everything that happens along the path.
+pub fn li_recorded(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    cfg: &PathConfig,
+    rec: &mut impl PathRecorder,
+) -> Vec3 {
     let mut result = Vec3::ZERO;
     if cfg.max_depth == 0 {
         return result;
     }
-    let mut ray = cray.ray;
-    let mut t_max = cray.t_max;
-    let mut throughput = Vec3::ONE;
-    let mut eta = 1.0f32;
-    let mut depth = 0u32;
-    let mut prev: Option<Previous> = None;
+    rec.camera_ray(&cray.ray);
+    let state = PathState {
+        ray: cray.ray,
+        t_max: cray.t_max,
+        throughput: Vec3::ONE,
+        eta: 1.0,
+        depth: 0,
+        prev: None,
+        first: None,
+        split: cfg.splitting > 1,
+    };
+    trace(scene, sampler, cfg, rec, state, &mut result);
+    result
+}
 
-    // Weight of emission reached by the BSDF-sampled ray from `prev`, given the pdf with which
-    // emitter sampling would have produced the same direction.
-    let emission_weight = |prev: &Option<Previous>, light_pdf: &dyn Fn(&Receiver) -> f32| match prev
-    {
+/// Density with which next-event estimation produces direction `wi` from `r` towards `light`
+/// (selection and the number of emitter samples included).
+#[inline]
+fn nee_pdf(scene: &Scene, cfg: &PathConfig, r: &Receiver, light: u32, pdf_li: f32) -> f32 {
+    let selection = if cfg.all_lights {
+        1.0
+    } else {
+        scene.light_pmf(r, light)
+    };
+    selection * pdf_li * cfg.light_samples as f32
+}
+
+fn trace(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    cfg: &PathConfig,
+    rec: &mut impl PathRecorder,
+    mut st: PathState,
+    result: &mut Vec3,
+) {
+    // Weight of emission reached by the sampled ray from `prev`, given the density with which
+    // next-event estimation would have produced the same direction.
+    let emission_weight = |prev: &Option<Previous>, nee_pdf: &dyn Fn(&Receiver) -> f32| match prev {
         None => 1.0,
         Some(p) if p.delta => 1.0,
         Some(p) => match cfg.combine {
             Combine::BsdfOnly => 1.0,
             Combine::EmitterOnly => 0.0,
-            c => mis(c, p.bsdf_pdf, light_pdf(&p.receiver)),
+            c => mis(c, p.dir_pdf, nee_pdf(&p.receiver)),
         },
     };
 
     loop {
-        let Some(si) = scene.intersect(&ray, t_max) else {
-            if !(depth == 0 && cfg.hide_emitters) {
+        let contribution = |via, depth| Contribution {
+            depth,
+            first: st.first,
+            via,
+        };
+        let Some(si) = scene.intersect(&st.ray, st.t_max) else {
+            if !(st.depth == 0 && cfg.hide_emitters) {
+                let mut l = Vec3::ZERO;
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
-                    let le = light.environment(ray.d);
+                    let le = light.environment(st.ray.d);
                     if le == Vec3::ZERO {
                         continue;
                     }
-                    let pmf = scene.light_pmf();
-                    let w = emission_weight(&prev, &|r| pmf * light.pdf_li(scene, r, ray.d, None));
-                    result += throughput * le * w;
+                    let w = emission_weight(&st.prev, &|r| {
+                        nee_pdf(scene, cfg, r, i, light.pdf_li(scene, r, st.ray.d, None))
+                    });
+                    l += st.throughput * le * w;
                 }
                 if let Some(bg) = scene.background
-                    && depth == 0
+                    && st.depth == 0
                 {
-                    result += bg;
+                    l += bg;
+                }
+                if l != Vec3::ZERO {
+                    *result += l;
+                    rec.contribution(l, contribution(Via::Emission, st.depth + 1));
                 }
             }
-            break;
+            rec.end(PathEnd::Escaped);
+            return;
         };
-        t_max = f32::INFINITY;
+        st.t_max = f32::INFINITY;
 
         if let Some(li) = scene.shape_light[si.shape as usize]
-            && !(depth == 0 && cfg.hide_emitters)
+            && !(st.depth == 0 && cfg.hide_emitters)
         {
             let light = &scene.lights[li as usize];
             let le = light.le(scene, &si);
             if le != Vec3::ZERO {
-                let pmf = scene.light_pmf();
-                let w = emission_weight(&prev, &|r| {
-                    pmf * light.pdf_li(scene, r, ray.d.normalize(), Some(&si))
+                let w = emission_weight(&st.prev, &|r| {
+                    let pdf = light.pdf_li(scene, r, st.ray.d.normalize(), Some(&si));
+                    nee_pdf(scene, cfg, r, li, pdf)
                 });
-                result += throughput * le * w;
+                let l = st.throughput * le * w;
+                *result += l;
+                rec.contribution(l, contribution(Via::Emission, st.depth + 1));
             }
         }
 
-        if depth.saturating_add(1) >= cfg.max_depth {
-            break;
+        let bsdf = scene.bsdf_at(&si);
+        rec.vertex(&RecordedVertex {
+            p: si.p,
+            n: si.shading.n,
+            depth: st.depth + 1,
+            throughput: st.throughput,
+        });
+        if st.depth.saturating_add(1) >= cfg.max_depth {
+            rec.end(PathEnd::MaxDepth);
+            return;
         }
-        let Some((bsdf, frame)) = scene.bsdf_at(&si) else {
-            break;
+        let Some((bsdf, frame)) = bsdf else {
+            rec.end(PathEnd::Absorbed);
+            return;
         };
         let wo = frame.to_local(si.wo);
         let receiver = Receiver::from(&si);
 
+        if !cfg.continue_diffuse
+            && scene.ambient != Vec3::ZERO
+            && let Some(ka) = scene.ambient_reflectance(&si)
+        {
+            let l = st.throughput * ka * scene.ambient;
+            if l != Vec3::ZERO {
+                *result += l;
+                rec.contribution(l, contribution(Via::Ambient, st.depth + 1));
+            }
+        }
+
         // Emitter sampling.
-        if bsdf.has_smooth() && cfg.combine != Combine::BsdfOnly && !scene.lights.is_empty() {
-            let (light, pmf) = scene.sample_light(sampler.next_1d());
-            let u = sampler.next_2d();
-            if let Some(ls) = light.sample_li(scene, &receiver, u)
-                && ls.pdf > 0.0
-                && ls.li != Vec3::ZERO
-            {
-                let wi = frame.to_local(ls.wi);
-                let f = bsdf.eval(wo, wi, TransportMode::Radiance);
-                if f != Vec3::ZERO && !scene.shadowed(&si, &ls.target, ls.wi) {
-                    let light_pdf = ls.pdf * pmf;
-                    let w = if ls.delta || cfg.combine == Combine::EmitterOnly {
-                        1.0
-                    } else {
-                        mis(cfg.combine, light_pdf, bsdf.pdf(wo, wi))
-                    };
-                    result += throughput * f * ls.li * (w / light_pdf);
+        let nee = bsdf.has_smooth() && cfg.combine != Combine::BsdfOnly;
+        if cfg.all_lights {
+            if nee {
+                for i in 0..scene.lights.len() as u32 {
+                    let l = sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, sampler);
+                    if l != Vec3::ZERO {
+                        *result += st.throughput * l;
+                        rec.contribution(
+                            st.throughput * l,
+                            contribution(Via::EmitterSample, st.depth + 2),
+                        );
+                    }
                 }
             }
         } else {
-            // Keep the sample dimensions aligned whatever the material.
-            sampler.next_1d();
-            sampler.next_2d();
-        }
-
-        // BSDF sampling.
-        let u1 = sampler.next_1d();
-        let u2 = sampler.next_2d();
-        let Some(bs) = bsdf.sample(wo, u1, u2, TransportMode::Radiance) else {
-            break;
-        };
-        if !bs.delta && !cfg.continue_diffuse {
-            break;
-        }
-        throughput *= bs.weight;
-        eta *= bs.eta;
-        let wi = frame.to_world(bs.wi);
-        ray = si.spawn_ray(wi);
-        prev = Some(Previous {
-            receiver,
-            bsdf_pdf: bs.pdf,
-            delta: bs.delta,
-        });
-
-        depth += 1;
-        let t_max_component = throughput.max_element();
-        if t_max_component.is_nan() || t_max_component <= 0.0 {
-            break;
-        }
-        let u_rr = sampler.next_1d();
-        if depth >= cfg.rr_depth {
-            let q = (t_max_component * eta * eta).min(0.95);
-            if u_rr >= q {
-                break;
+            for _ in 0..cfg.light_samples {
+                let u = sampler.next_1d();
+                let picked = if nee {
+                    scene.sample_light(u, &receiver)
+                } else {
+                    None
+                };
+                match picked {
+                    Some((i, _, pmf)) => {
+                        let l =
+                            sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, sampler) / pmf;
+                        if l != Vec3::ZERO {
+                            *result += st.throughput * l;
+                            rec.contribution(
+                                st.throughput * l,
+                                contribution(Via::EmitterSample, st.depth + 2),
+                            );
+                        }
+                    }
+                    // Keep the sample dimensions aligned whatever the material.
+                    None => {
+                        sampler.next_2d();
+                    }
+                }
             }
-            throughput /= q;
+        }
+
+        // Splitting: N continuations from this vertex, each carrying 1/N.
+        if st.split {
+            st.split = false;
+            let n = cfg.splitting;
+            st.throughput /= n as f32;
+            for _ in 1..n {
+                if let Some(next) = scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
+                    trace(scene, sampler, cfg, rec, next, result);
+                }
+            }
+        }
+        match scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
+            Some(next) => st = next,
+            None => return,
         }
     }
-    result
+}
+
+/// Next-event estimation towards light `i` (one sample; `light_samples` are averaged by the
+/// caller through the MIS densities): f·L·w / p, selection probability not included.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn sample_emitter(
+    scene: &Scene,
+    cfg: &PathConfig,
+    si: &SurfaceInteraction,
+    bsdf: &Bsdf,
+    frame: &Frame,
+    wo: Vec3,
+    i: u32,
+    sampler: &mut Sampler,
+) -> Vec3 {
+    let light = &scene.lights[i as usize];
+    let receiver = Receiver::from(si);
+    let n = if cfg.all_lights && light.is_delta() {
+        1
+    } else if cfg.all_lights {
+        cfg.light_samples
+    } else {
+        1
+    };
+    let mut sum = Vec3::ZERO;
+    for _ in 0..n {
+        let u = sampler.next_2d();
+        let Some(ls) = light.sample_li(scene, &receiver, u) else {
+            continue;
+        };
+        if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
+            continue;
+        }
+        let wi = frame.to_local(ls.wi);
+        let f = bsdf.eval(wo, wi, TransportMode::Radiance);
+        if f == Vec3::ZERO || scene.shadowed(si, &ls.target, ls.wi) {
+            continue;
+        }
+        // Density of this strategy for MIS: all samples of all lights considered.
+        let w = if ls.delta || cfg.combine == Combine::EmitterOnly {
+            1.0
+        } else {
+            let p_nee = nee_pdf(scene, cfg, &receiver, i, ls.pdf);
+            mis(cfg.combine, p_nee, direction_pdf(cfg, bsdf, wo, wi))
+        };
+        sum += f * ls.li * (w / ls.pdf);
+    }
+    let per_light = if cfg.all_lights { n } else { cfg.light_samples };
+    sum / per_light as f32
+}
+
+/// Density of the direction strategy at a non-delta vertex.
+#[inline]
+fn direction_pdf(cfg: &PathConfig, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    match cfg.directions {
+        DirectionSampling::Bsdf => bsdf.pdf(wo, wi),
+        DirectionSampling::UniformHemisphere => uniform_direction(bsdf, wo, None).1,
+    }
+}
+
+/// Uniform directions: over the hemisphere of `wo` for opaque BSDFs, over the sphere for
+/// those that transmit. Returns the direction (when `u` is given) and its density.
+#[inline]
+fn uniform_direction(bsdf: &Bsdf, wo: Vec3, u: Option<Vec2>) -> (Vec3, f32) {
+    if bsdf.has_transmission() {
+        let w = u.map_or(Vec3::Z, warp::square_to_uniform_sphere);
+        (w, warp::uniform_sphere_pdf())
+    } else {
+        let mut w = u.map_or(Vec3::Z, warp::square_to_uniform_hemisphere);
+        if wo.z < 0.0 {
+            w.z = -w.z;
+        }
+        (w, std::f32::consts::FRAC_1_PI * 0.5)
+    }
+}
+
+/// Draw the next direction at `si`, update the state (throughput, Russian roulette) and tell
+/// the recorder; `None` when the path ends here.
+#[allow(clippy::too_many_arguments)]
+fn scatter(
+    sampler: &mut Sampler,
+    cfg: &PathConfig,
+    rec: &mut impl PathRecorder,
+    si: &SurfaceInteraction,
+    bsdf: &Bsdf,
+    frame: &Frame,
+    wo: Vec3,
+    st: &PathState,
+) -> Option<PathState> {
+    let u1 = sampler.next_1d();
+    let u2 = sampler.next_2d();
+    let sample = if cfg.directions == DirectionSampling::UniformHemisphere && !bsdf.has_delta() {
+        let (wi, pdf) = uniform_direction(bsdf, wo, Some(u2));
+        let f = bsdf.eval(wo, wi, TransportMode::Radiance);
+        (f != Vec3::ZERO).then(|| BsdfSample {
+            wi,
+            weight: f / pdf,
+            pdf,
+            delta: false,
+            transmission: wi.z * wo.z < 0.0,
+            // Only Russian roulette reads η; 1 keeps it unbiased.
+            eta: 1.0,
+        })
+    } else {
+        bsdf.sample(wo, u1, u2, TransportMode::Radiance)
+    };
+    let Some(bs) = sample else {
+        rec.end(PathEnd::Absorbed);
+        return None;
+    };
+    if !bs.delta && !cfg.continue_diffuse {
+        rec.end(PathEnd::Absorbed);
+        return None;
+    }
+    let mut next = *st;
+    next.throughput *= bs.weight;
+    next.eta *= bs.eta;
+    next.ray = si.spawn_ray(frame.to_world(bs.wi));
+    next.prev = Some(Previous {
+        receiver: Receiver::from(si),
+        dir_pdf: bs.pdf,
+        delta: bs.delta,
+    });
+    let scatter = Scatter {
+        delta: bs.delta,
+        transmission: bs.transmission,
+    };
+    if next.first.is_none() {
+        next.first = Some(scatter);
+    }
+    next.depth += 1;
+    let t_max_component = next.throughput.max_element();
+    if t_max_component.is_nan() || t_max_component <= 0.0 {
+        rec.end(PathEnd::Absorbed);
+        return None;
+    }
+    let u_rr = sampler.next_1d();
+    let q = match cfg.rr {
+        RussianRoulette::Off => 1.0,
+        RussianRoulette::Throughput { from_depth } if next.depth >= from_depth => {
+            (t_max_component * next.eta * next.eta).min(0.95)
+        }
+        RussianRoulette::Fixed { after, q } if next.depth >= after => 1.0 - q,
+        _ => 1.0,
+    };
+    if q < 1.0 {
+        if u_rr >= q {
+            rec.end(PathEnd::Roulette);
+            return None;
+        }
+        next.throughput /= q;
+    }
+    rec.scatter(&RecordedScatter {
+        scatter,
+        pdf: bs.pdf,
+        throughput: next.throughput,
+    });
+    Some(next)
 }
 
 impl Scene {

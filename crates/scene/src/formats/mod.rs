@@ -1,7 +1,11 @@
 //! One module per input format, and the registry that picks one for a file.
 
+pub mod ceng795;
+pub mod collada;
+pub mod comp30019;
 pub mod mitsuba;
 pub mod obj;
+pub mod objmtl;
 pub mod ply;
 
 use std::path::Path;
@@ -16,10 +20,17 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     match ext.as_str() {
+        "xml" if ceng795::is_ceng795_xml(path) => ceng795::load(path, opts),
         "xml" => mitsuba::load(path, opts),
+        "json" => ceng795::load(path, opts),
+        "txt" => comp30019::load(path, opts),
+        "obj" => objmtl::load(path, opts),
+        "dae" => collada::load(path, opts),
         _ => Err(LoadError::new(
             Loc::file(path),
-            format!("unsupported scene file extension '.{ext}' (supported: .xml)"),
+            format!(
+                "unsupported scene file extension '.{ext}' (supported: .xml (Mitsuba, Nori, CENG795), .json (CENG795), .txt (COMP30019), .obj (OBJ+MTL), .dae (COLLADA))"
+            ),
         )),
     }
 }

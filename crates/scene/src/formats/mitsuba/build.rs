@@ -448,6 +448,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             Err(nested) => nested,
             Ok(material) => self.scene.add_material(MaterialDesc {
                 material,
+                ambient: Default::default(),
                 name: c.id().map(str::to_string),
                 loc: pl.loc().clone(),
             }),
@@ -1036,6 +1037,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             crop,
             filter,
             output: None,
+            tonemap: None,
         })
     }
 
@@ -1169,6 +1171,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                         radius: 2.0,
                     }),
                     output: None,
+                    tonemap: None,
                 }
             }
             None => Film {
@@ -1180,6 +1183,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     radius: 2.0,
                 }),
                 output: None,
+                tonemap: None,
             },
         };
         self.ctx.finish(pl);
@@ -1193,6 +1197,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             },
             film,
             sampler: sampler.unwrap_or_else(|| self.default_sampler()),
+            integrator: None,
             name: pl
                 .elem
                 .value("id")
@@ -1215,12 +1220,14 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                         format!("integrator '{}' approximated by 'path' (no media)", pl.ty),
                     );
                 }
-                IntegratorDesc::Path {
+                IntegratorDesc::Path(PathDesc {
                     max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
-                    rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
+                    rr: RussianRoulette::Throughput {
+                        from_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
+                    },
                     hide_emitters: pl.props.bool("hide_emitters", false)?,
-                    mis: MisHeuristic::Power,
-                }
+                    ..PathDesc::default()
+                })
             }
             "direct" => {
                 let shading = pl.props.int_in("shading_samples", 1, 0, 1 << 20)?;
@@ -1468,8 +1475,10 @@ fn default_sensor(scene: &SceneDesc, loc: &Loc) -> Sensor {
                 radius: 2.0,
             },
             output: None,
+            tonemap: None,
         },
         sampler: SamplerDesc::default(),
+        integrator: None,
         name: None,
         loc: loc.clone(),
     }
