@@ -1,0 +1,233 @@
+//! The path tracer's course variants change only the noise, never the mean: brute force (no
+//! next-event estimation), uniform hemisphere directions (CS184 `-H`), several emitter samples
+//! per vertex, one sample per emitter (CS184 `-l`), splitting at the first vertex (CENG795),
+//! fixed-probability and no Russian roulette, the balance heuristic.
+//!
+//! Reference: the default configuration (Mitsuba's `path`) in 32 batches, turned into a mean
+//! and a standard error with 31 degrees of freedom exactly as a Mitsuba reference is. Each
+//! variant: 8 independent batches, block t-test of `render::compare` (α = 0.01 family-wise,
+//! Šidák over the block-channels). The scene is a closed box with a large ceiling light plus
+//! a small spherical one (so NEE chooses between two emitters), diffuse walls, a rough metal
+//! sphere and a glass sphere (delta chains for splitting and caustics for brute force), and a
+//! fixed depth of 6 segments so that "no Russian roulette" terminates.
+
+use render::build::{BuildOptions, build};
+use render::compare::{Reference, TestImages, compare};
+use render::film::Image;
+use render::integrators::Integrator;
+use render::render::{RenderOptions, Silent, render};
+use scene::{
+    DirectionSampling, Document, IntegratorDesc, LoadOptions, MisHeuristic, PathDesc,
+    RussianRoulette, SceneDesc,
+};
+
+const SCENE: &str = r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="45"/>
+        <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm">
+            <integer name="width" value="32"/><integer name="height" value="32"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>
+    <bsdf type="diffuse" id="white"><rgb name="reflectance" value="0.7, 0.7, 0.7"/></bsdf>
+    <bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.6, 0.1, 0.1"/></bsdf>
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/></transform><ref id="white"/></shape>
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="90"/><translate y="2"/></transform><ref id="white"/></shape>
+    <shape type="rectangle"><transform name="to_world"><translate y="1" z="-1"/></transform><ref id="white"/></shape>
+    <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="90"/><translate x="-1" y="1"/></transform><ref id="red"/></shape>
+    <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="-90"/><translate x="1" y="1"/></transform><ref id="white"/></shape>
+    <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="180"/><translate y="1" z="3.5"/></transform><ref id="white"/></shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.6" y="0.6"/><rotate x="1" angle="90"/><translate y="1.99"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+        <emitter type="area"><rgb name="radiance" value="4, 4, 4"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="0.7" y="1.5" z="-0.6"/><float name="radius" value="0.08"/>
+        <emitter type="area"><rgb name="radiance" value="8, 6, 3"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="-0.45" y="0.4" z="-0.3"/><float name="radius" value="0.4"/>
+        <bsdf type="roughconductor"><string name="material" value="Au"/><float name="alpha" value="0.3"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="0.45" y="0.35" z="0.3"/><float name="radius" value="0.35"/>
+        <bsdf type="dielectric"/>
+    </shape>
+</scene>"#;
+
+const SPP: u32 = 16;
+
+fn scene_desc() -> SceneDesc {
+    let dir = std::env::temp_dir().join(format!("penumbra-path-variants-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("box.xml");
+    std::fs::write(&file, SCENE).unwrap();
+    let Document::Scene(desc) = scene::load(&file, &LoadOptions::default()).unwrap() else {
+        panic!("not a scene")
+    };
+    *desc
+}
+
+fn batches(desc: &SceneDesc, path: &PathDesc, seeds: std::ops::Range<u64>) -> Vec<Image> {
+    let integrator_desc = IntegratorDesc::Path(path.clone());
+    seeds
+        .map(|seed| {
+            let scene = build(
+                desc,
+                &BuildOptions {
+                    spp: Some(SPP),
+                    seed: Some(seed),
+                    integrator: Some(integrator_desc.clone()),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let integrator = Integrator::from_desc(&scene.integrator).unwrap();
+            let out = render(
+                &scene,
+                &integrator,
+                &RenderOptions {
+                    spp: SPP,
+                    ..Default::default()
+                },
+                &Silent,
+            );
+            assert_eq!(out.film.nonfinite_count(), 0);
+            out.film.develop()
+        })
+        .collect()
+}
+
+/// Mean and standard error of the mean of independent batch images.
+fn reference_of(images: &[Image]) -> Reference {
+    let n = images.len() as f64;
+    let (w, h) = (images[0].width, images[0].height);
+    let mut mean = Image::new(w, h);
+    let mut stderr = Image::new(w, h);
+    for i in 0..mean.pixels.len() {
+        for c in 0..3 {
+            let m = images.iter().map(|im| im.pixels[i][c] as f64).sum::<f64>() / n;
+            let var = images
+                .iter()
+                .map(|im| (im.pixels[i][c] as f64 - m).powi(2))
+                .sum::<f64>()
+                / (n - 1.0);
+            mean.pixels[i][c] = m as f32;
+            stderr.pixels[i][c] = (var / n).sqrt() as f32;
+        }
+    }
+    Reference { mean, stderr }
+}
+
+fn base() -> PathDesc {
+    PathDesc {
+        max_depth: 6,
+        ..PathDesc::default()
+    }
+}
+
+#[test]
+fn variants_converge_to_the_default() {
+    let desc = scene_desc();
+    let reference = reference_of(&batches(&desc, &base(), 1000..1032));
+    let variants: Vec<(&str, PathDesc)> = vec![
+        (
+            "brute force",
+            PathDesc {
+                nee: false,
+                ..base()
+            },
+        ),
+        (
+            "uniform hemisphere",
+            PathDesc {
+                directions: DirectionSampling::UniformHemisphere,
+                ..base()
+            },
+        ),
+        (
+            "uniform hemisphere, brute force",
+            PathDesc {
+                directions: DirectionSampling::UniformHemisphere,
+                nee: false,
+                ..base()
+            },
+        ),
+        (
+            "4 emitter samples",
+            PathDesc {
+                light_samples: 4,
+                ..base()
+            },
+        ),
+        (
+            "all emitters, 3 samples each",
+            PathDesc {
+                light_samples: 3,
+                all_lights: true,
+                ..base()
+            },
+        ),
+        (
+            "splitting 4",
+            PathDesc {
+                splitting: 4,
+                ..base()
+            },
+        ),
+        (
+            "fixed roulette",
+            PathDesc {
+                rr: RussianRoulette::Fixed { after: 2, q: 0.3 },
+                ..base()
+            },
+        ),
+        (
+            "no roulette",
+            PathDesc {
+                rr: RussianRoulette::Off,
+                ..base()
+            },
+        ),
+        (
+            "balance heuristic",
+            PathDesc {
+                mis: MisHeuristic::Balance,
+                ..base()
+            },
+        ),
+    ];
+    let mut failures = Vec::new();
+    for (i, (name, v)) in variants.iter().enumerate() {
+        let seeds = 100 * (i as u64 + 1);
+        let result = compare(
+            &reference,
+            &TestImages::Batches(batches(&desc, v, seeds..seeds + 8)),
+        )
+        .unwrap();
+        println!("{name}: {result}");
+        if !result.passed {
+            failures.push(format!("{name}: {result}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The test above can fail: direct light only (indirect light missing) must be rejected.
+#[test]
+fn a_biased_variant_is_rejected() {
+    let desc = scene_desc();
+    let reference = reference_of(&batches(&desc, &base(), 1000..1032));
+    let biased = PathDesc {
+        max_depth: 2,
+        ..base()
+    };
+    let result = compare(
+        &reference,
+        &TestImages::Batches(batches(&desc, &biased, 50..58)),
+    )
+    .unwrap();
+    assert!(!result.passed, "{result}");
+}
