@@ -26,9 +26,10 @@ use render::render::{RenderOptions, Silent, render};
 use scene::{Document, LoadOptions};
 
 const BATCHES: u64 = 16;
+/// Samples per pixel of one batch (envmap-materials uses more: see its test).
 const SPP: u32 = 32;
-/// Batches whose mean is compared with Mitsuba's relMSE at 256 spp.
-const PARITY_BATCHES: usize = 8;
+/// The noise-parity figure is taken at 256 spp (the first 256 / batch-spp batches).
+const PARITY_SPP: u32 = 256;
 
 fn shared() -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
@@ -43,7 +44,7 @@ fn shared() -> Option<PathBuf> {
     }
 }
 
-fn render_batches(scene_file: &Path, defines: &[(&str, &str)]) -> Vec<Image> {
+fn render_batches(scene_file: &Path, defines: &[(&str, &str)], spp: u32) -> Vec<Image> {
     let opts = LoadOptions {
         defines: defines
             .iter()
@@ -58,7 +59,7 @@ fn render_batches(scene_file: &Path, defines: &[(&str, &str)]) -> Vec<Image> {
             let scene = build(
                 &desc,
                 &BuildOptions {
-                    spp: Some(SPP),
+                    spp: Some(spp),
                     seed: Some(seed),
                     ..Default::default()
                 },
@@ -69,7 +70,7 @@ fn render_batches(scene_file: &Path, defines: &[(&str, &str)]) -> Vec<Image> {
                 &scene,
                 &integrator,
                 &RenderOptions {
-                    spp: SPP,
+                    spp,
                     ..Default::default()
                 },
                 &Silent,
@@ -91,6 +92,16 @@ fn mean_image(images: &[Image]) -> Image {
 }
 
 fn check(name: &str, scene_rel: &str, defines: &[(&str, &str)], mitsuba_rel_mse: f64) {
+    check_with(name, scene_rel, defines, mitsuba_rel_mse, SPP)
+}
+
+fn check_with(
+    name: &str,
+    scene_rel: &str,
+    defines: &[(&str, &str)],
+    mitsuba_rel_mse: f64,
+    spp: u32,
+) {
     let Some(shared) = shared() else { return };
     let refs = shared.join("references");
     let scene_file = if scene_rel.starts_with("../") {
@@ -99,14 +110,14 @@ fn check(name: &str, scene_rel: &str, defines: &[(&str, &str)], mitsuba_rel_mse:
         refs.join("scenes").join(scene_rel)
     };
     let reference = load_reference(&refs.join(name)).expect("reference loads");
-    let batches = render_batches(&scene_file, defines);
-    let parity = mean_image(&batches[..PARITY_BATCHES]);
+    let batches = render_batches(&scene_file, defines, spp);
+    let parity = mean_image(&batches[..(PARITY_SPP / spp) as usize]);
     let rel_mse = rel_mse(&parity, &reference.mean).expect("same size");
     let result = compare(&reference, &TestImages::Batches(batches)).expect("comparable");
     println!("{name}: {result}");
     println!(
         "{name}: relMSE {rel_mse:.3e} at {} spp vs Mitsuba {mitsuba_rel_mse:.3e} (ratio {:.2})",
-        PARITY_BATCHES as u32 * SPP,
+        PARITY_SPP,
         rel_mse / mitsuba_rel_mse
     );
     assert!(result.passed, "{name}: block t-test fails: {result}");
@@ -141,13 +152,15 @@ fn lights() {
     check("lights", "lights.xml", &[], 0.0027);
 }
 
-/// Ignored for now: one block under the rough-plastic sphere (x 24–32, y 64–72, the floor in
-/// its contact shadow) fails the t-test (p ≈ 4e-7 against a threshold of 1.7e-5) while the
-/// image as a whole agrees (mean ratio 0.999, relMSE equal to Mitsuba's). That region is
-/// dominated by rare sun paths (heavy-tailed); whether it is a small bias of ours (rough
-/// plastic, envmap) or the skew of the batch means is still open. Run it with `--ignored`.
+/// Batches of 128 spp here (16 × 128; the README allows any K ≥ 8 of equal spp). The floor
+/// in the contact shadow of the rough-plastic sphere (block x 24–32, y 64–72) is lit mostly by
+/// rare sun paths: its 32-spp batch means have skewness ≈ 3, and the t-test is not calibrated
+/// there for *either* renderer. Measured on that block alone, 40 independent sets of
+/// 16 × 32 spp: our grand mean / reference = 1.004 ± 0.009, Mitsuba 3 (scalar_rgb) 1.008 ±
+/// 0.010 — no bias — but the block fails the image's Šidák level in 5/40 of our sets and
+/// 2/40 of Mitsuba's own. With 128-spp batches the skewness drops to ≈ 2.3, the t statistics
+/// have sd 1.35 instead of ≈ 2, and 0/30 sets fail (smallest p 9e-4).
 #[test]
-#[ignore = "one heavy-tailed block fails the t-test; under investigation (see the comment)"]
 fn envmap_materials() {
-    check("envmap-materials", "envmap-materials.xml", &[], 0.0114);
+    check_with("envmap-materials", "envmap-materials.xml", &[], 0.0114, 128);
 }
