@@ -203,6 +203,12 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
             let e1 = p1 - p0;
             let e2 = p2 - p0;
             let ng = e1.cross(e2).normalize_or_zero();
+            if uvs.is_none() && normals.is_none() {
+                // Flat, unparameterised mesh (the common case for OBJ/PLY without `vt`/`vn`):
+                // the shading frame is the geometric one, with `s` along the first edge,
+                // which is already orthogonal to `ng`, so no Gram–Schmidt step is needed.
+                return flat_interaction(p, p_error, ng, e1, Vec2::new(b1, b2), wo, hit, flip);
+            }
             let (uv, dpdu) = match uvs {
                 Some(uv) => {
                     let (t0, t1, t2) = (uv[i0], uv[i1], uv[i2]);
@@ -278,6 +284,46 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
         p_error,
         ng,
         shading: Frame::from_normal_tangent(ns, dpdu),
+        uv,
+        wo,
+        t: hit.t,
+        shape: hit.shape,
+        prim: hit.prim,
+    }
+}
+
+/// [`interaction`] for a triangle without shading normals or uvs: shading frame = geometric
+/// frame, tangent along the edge `e1` (orthogonal to `ng` by construction).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn flat_interaction(
+    p: Vec3,
+    p_error: Vec3,
+    ng: Vec3,
+    e1: Vec3,
+    uv: Vec2,
+    wo: Vec3,
+    hit: &Hit,
+    flip: bool,
+) -> SurfaceInteraction {
+    let n = if flip { -ng } else { ng };
+    let len2 = e1.length_squared();
+    // Accel drops zero-area triangles, so `e1` is non-zero; keep the generic fallback anyway.
+    let shading = if len2 > 1e-12 && len2.is_finite() && n != Vec3::ZERO {
+        let s = e1 / len2.sqrt();
+        Frame {
+            s,
+            t: n.cross(s),
+            n,
+        }
+    } else {
+        Frame::from_normal_tangent(n, e1)
+    };
+    SurfaceInteraction {
+        p,
+        p_error,
+        ng: n,
+        shading,
         uv,
         wo,
         t: hit.t,

@@ -16,8 +16,8 @@
 //! popped entries that lie beyond the current hit; occlusion skips ordering and returns on the
 //! first hit. The box test is made conservative by scaling the exit distance by `1 + 2γ₃`
 //! (Ize 2013, "Robust BVH Ray Traversal"), so watertight triangles are never lost to box misses.
-//! The stack is a fixed-size array on the call stack (32 to 1024 entries, chosen at build
-//! from the tree depth), so queries never allocate.
+//! The stack is a fixed-size array on the call stack (8 to 1024 entries, chosen at build
+//! from the exact worst case of the tree's shape), so queries never allocate.
 
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
@@ -87,6 +87,8 @@ struct Node {
 
 #[derive(Clone, Copy, Debug)]
 enum StackClass {
+    S8,
+    S16,
     S32,
     S64,
     S128,
@@ -101,11 +103,19 @@ pub(crate) struct WideBvh {
     ids: Vec<[[u32; 2]; 4]>,
     root: u32,
     stack: StackClass,
-    /// Number of inner-node levels.
-    depth: u32,
+    /// Traversal stack entries needed: the largest, over root-to-leaf paths, of the pushes a
+    /// traversal may leave on the stack along the path (`children - 1` per inner node).
+    stack_need: u32,
     /// Subtrees with at most this many primitives become leaves.
     leaf_max: u32,
+    /// Whether traversal touches the entered children ahead of time (see [`WideBvh::touch`]):
+    /// only worth its loads when the tree does not fit in cache.
+    prefetch: bool,
 }
+
+/// Trees smaller than this (nodes and packets, bytes) are assumed cache resident: traversal
+/// skips the prefetching loads, which then only cost instructions.
+const PREFETCH_MIN_BYTES: usize = 256 * 1024;
 
 /// Per-ray traversal constants.
 struct TravRay {
@@ -186,12 +196,13 @@ impl WideBvh {
             ids: Vec::new(),
             root: EMPTY,
             stack: StackClass::S64,
-            depth: 0,
+            stack_need: 0,
             leaf_max: if prims.len() <= SMALL_SCENE {
                 SMALL_LEAF_MAX
             } else {
                 LEAF_MAX
             },
+            prefetch: false,
         };
         if n == 0 {
             return out;
@@ -222,6 +233,10 @@ impl WideBvh {
             }
         };
         out.collapse(&tree, prims, ids);
+        out.prefetch = out.nodes.len() * size_of::<Node>()
+            + out.packets.len() * size_of::<Packet>()
+            + out.ids.len() * size_of::<[[u32; 2]; 4]>()
+            >= PREFETCH_MIN_BYTES;
         if out.stack_need() > MAX_STACK {
             // A balanced tree has depth ≤ log2(n) + 1, far below the limit.
             out.nodes.clear();
@@ -232,18 +247,22 @@ impl WideBvh {
         out
     }
 
-    /// Traversal stack entries needed: each inner level pushes at most `WIDTH - 1`.
+    /// Traversal stack entries needed (see the `stack_need` field).
     fn stack_need(&self) -> usize {
-        (WIDTH - 1) * self.depth as usize + 4
+        self.stack_need as usize
     }
 
     fn collapse(&mut self, tree: &Tree2, prims: &[Prim], ids: &[[u32; 2]]) {
         let counts = tree.subtree_counts();
-        let mut depth = 0;
-        self.root = self.emit(tree, &counts, prims, ids, 0, 1, &mut depth);
-        self.depth = depth;
+        let mut need = 0;
+        self.root = self.emit(tree, &counts, prims, ids, 0, 0, &mut need);
+        self.stack_need = need;
         let need = self.stack_need();
-        self.stack = if need <= 32 {
+        self.stack = if need <= 8 {
+            StackClass::S8
+        } else if need <= 16 {
+            StackClass::S16
+        } else if need <= 32 {
             StackClass::S32
         } else if need <= 64 {
             StackClass::S64
@@ -264,13 +283,12 @@ impl WideBvh {
         prims: &[Prim],
         ids: &[[u32; 2]],
         node: usize,
-        level: u32,
-        depth: &mut u32,
+        pushed: u32,
+        need: &mut u32,
     ) -> u32 {
         if counts[node] <= self.leaf_max {
             return self.emit_leaf(tree, node, prims, ids);
         }
-        *depth = (*depth).max(level);
         let first = tree.nodes[node].first_index as usize;
         let mut kids = [0usize; WIDTH];
         kids[0] = first;
@@ -295,6 +313,10 @@ impl WideBvh {
             kids[k] = c + 1;
             k += 1;
         }
+        // Visiting this node leaves at most `k - 1` of its children on the stack while the
+        // traversal descends into one of them.
+        let pushed = pushed + k as u32 - 1;
+        *need = (*need).max(pushed);
         let index = self.nodes.len();
         self.nodes.push(Node {
             b: [[[Vec4::INFINITY, Vec4::NEG_INFINITY]; 3]; HALVES],
@@ -309,7 +331,7 @@ impl WideBvh {
                 lo[axis][slot] = bb.min[axis];
                 hi[axis][slot] = bb.max[axis];
             }
-            child[slot] = self.emit(tree, counts, prims, ids, c, level + 1, depth);
+            child[slot] = self.emit(tree, counts, prims, ids, c, pushed, need);
         }
         let node = &mut self.nodes[index];
         for (h, b) in node.b.iter_mut().enumerate() {
@@ -389,6 +411,8 @@ impl WideBvh {
 
     pub(crate) fn intersect(&self, ray: &Ray, t_max: f32) -> Option<RawHit> {
         match self.stack {
+            StackClass::S8 => self.intersect_n::<8>(ray, t_max),
+            StackClass::S16 => self.intersect_n::<16>(ray, t_max),
             StackClass::S32 => self.intersect_n::<32>(ray, t_max),
             StackClass::S64 => self.intersect_n::<64>(ray, t_max),
             StackClass::S128 => self.intersect_n::<128>(ray, t_max),
@@ -399,6 +423,8 @@ impl WideBvh {
 
     pub(crate) fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         match self.stack {
+            StackClass::S8 => self.occluded_n::<8>(ray, t_max),
+            StackClass::S16 => self.occluded_n::<16>(ray, t_max),
             StackClass::S32 => self.occluded_n::<32>(ray, t_max),
             StackClass::S64 => self.occluded_n::<64>(ray, t_max),
             StackClass::S128 => self.occluded_n::<128>(ray, t_max),
@@ -430,10 +456,12 @@ impl WideBvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    let mut m = mask;
-                    while m != 0 {
-                        sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
-                        m &= m - 1;
+                    if self.prefetch {
+                        let mut m = mask;
+                        while m != 0 {
+                            sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
+                            m &= m - 1;
+                        }
                     }
                     // Sort the entered children by entry distance; keys are the (non-negative)
                     // distances' bit patterns with the slot index in the three low bits.
@@ -538,10 +566,12 @@ impl WideBvh {
                 if mask != 0 {
                     cur = node.child[mask.trailing_zeros() as usize];
                     mask &= mask - 1;
-                    let mut m = mask;
-                    while m != 0 {
-                        sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
-                        m &= m - 1;
+                    if self.prefetch {
+                        let mut m = mask;
+                        while m != 0 {
+                            sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
+                            m &= m - 1;
+                        }
                     }
                     while mask != 0 {
                         stack[sp] = node.child[mask.trailing_zeros() as usize];

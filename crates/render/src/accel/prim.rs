@@ -33,17 +33,21 @@ impl WoopRay {
         } else {
             2
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Swap to preserve the winding of the triangle (so det has a consistent sign).
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        // Array indexing: glam's `Index` for `Vec3` is a three-way match per access.
+        let d = d.to_array();
+        let o = ray.o.to_array();
         let dz = d[kz];
+        // (kz + 1) % 3 and (kz + 2) % 3, swapped to preserve the winding of the triangle (so
+        // det has a consistent sign).
+        let (kx, ky) = if dz < 0.0 {
+            ([2, 0, 1][kz], [1, 2, 0][kz])
+        } else {
+            ([1, 2, 0][kz], [2, 0, 1][kz])
+        };
         WoopRay {
             k: [kx, ky, kz],
             s: Vec3::new(d[kx] / dz, d[ky] / dz, 1.0 / dz),
-            o: Vec3::new(ray.o[kx], ray.o[ky], ray.o[kz]),
+            o: Vec3::new(o[kx], o[ky], o[kz]),
         }
     }
 }
