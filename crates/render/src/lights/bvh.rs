@@ -129,11 +129,55 @@ impl LightBounds {
     /// Conservative importance of these lights for a receiver at `r.p` with normal `r.n`
     /// (zero normal: none): φ · cos θ' / d² (· cos θ'_i), as pbrt-v4's `LightBounds::Importance`.
     pub fn importance(&self, r: &Receiver) -> f32 {
-        let pc = self.centroid();
-        let d = r.p - pc;
-        let diag = (self.hi - self.lo).length();
-        let d2 = d.length_squared().max(0.5 * diag);
-        let wi = d.normalize_or_zero();
+        NodeBounds::new(self).importance(r)
+    }
+}
+
+/// [`LightBounds`] with what `importance` needs precomputed.
+#[derive(Clone, Copy, Debug)]
+struct NodeBounds {
+    lo: Vec3,
+    hi: Vec3,
+    centre: Vec3,
+    w: Vec3,
+    phi: f32,
+    /// Half the box diagonal (pbrt's lower bound of d²) and its square (the bounding sphere).
+    half_diag: f32,
+    radius2: f32,
+    cos_o: f32,
+    sin_o: f32,
+    cos_e: f32,
+    two_sided: bool,
+}
+
+impl NodeBounds {
+    fn new(b: &LightBounds) -> NodeBounds {
+        let half_diag = 0.5 * (b.hi - b.lo).length();
+        NodeBounds {
+            lo: b.lo,
+            hi: b.hi,
+            centre: b.centroid(),
+            w: b.w,
+            phi: b.phi,
+            half_diag,
+            radius2: half_diag * half_diag,
+            cos_o: b.cos_o,
+            sin_o: safe_sqrt(1.0 - b.cos_o * b.cos_o),
+            cos_e: b.cos_e,
+            two_sided: b.two_sided,
+        }
+    }
+
+    #[inline]
+    fn importance(&self, r: &Receiver) -> f32 {
+        let d = r.p - self.centre;
+        let dist2 = d.length_squared();
+        let d2 = dist2.max(self.half_diag);
+        let wi = if dist2 > 0.0 {
+            d * dist2.sqrt().recip()
+        } else {
+            Vec3::ZERO
+        };
         let mut cos_w = self.w.dot(wi);
         if self.two_sided {
             cos_w = cos_w.abs();
@@ -141,17 +185,14 @@ impl LightBounds {
         let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
         // The cone of directions from p that the box subtends (its bounding sphere).
         let inside = r.p.cmpge(self.lo).all() && r.p.cmple(self.hi).all();
-        let radius2 = 0.25 * diag * diag;
-        let dist2 = (r.p - pc).length_squared();
-        let cos_b = if inside || dist2 < radius2 {
+        let cos_b = if inside || dist2 < self.radius2 {
             -1.0
         } else {
-            safe_sqrt(1.0 - radius2 / dist2)
+            safe_sqrt(1.0 - self.radius2 / dist2)
         };
         let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
-        let sin_o = safe_sqrt(1.0 - self.cos_o * self.cos_o);
-        let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, self.cos_o);
-        let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, self.cos_o);
+        let cos_x = cos_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
+        let sin_x = sin_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
         let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
         // `<` rather than pbrt's `<=`: a hard-edged spot (θe = 0) must keep its inside.
         if cos_p < self.cos_e {
@@ -184,7 +225,7 @@ enum NodeKind {
 
 #[derive(Clone, Debug)]
 struct Node {
-    bounds: LightBounds,
+    bounds: NodeBounds,
     kind: NodeKind,
 }
 
@@ -250,7 +291,7 @@ impl LightBvh {
         if let [(light, b)] = items {
             self.trail[*light as usize] = Some(trail);
             self.nodes.push(Node {
-                bounds: *b,
+                bounds: NodeBounds::new(b),
                 kind: NodeKind::Leaf { light: *light },
             });
             return *b;
@@ -272,7 +313,7 @@ impl LightBvh {
         });
         let at = self.nodes.len();
         self.nodes.push(Node {
-            bounds: items[0].1,
+            bounds: NodeBounds::new(&items[0].1),
             kind: NodeKind::Interior { second: 0 },
         });
         let (left, right) = items.split_at_mut(mid);
@@ -281,7 +322,7 @@ impl LightBvh {
         let b1 = self.build(right, trail | (1u64 << depth), depth + 1);
         let b = b0.union(&b1);
         self.nodes[at] = Node {
-            bounds: b,
+            bounds: NodeBounds::new(&b),
             kind: NodeKind::Interior { second },
         };
         b
