@@ -37,7 +37,7 @@ fn demo(defines: &[(&str, &str)]) -> SceneDesc {
     let Document::Scene(desc) = scene::load(&path, &opts).expect("scene loads") else {
         panic!("not a scene")
     };
-    desc
+    *desc
 }
 
 fn built(desc: &SceneDesc, sel: LightSelection) -> Scene {
