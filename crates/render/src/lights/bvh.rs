@@ -453,7 +453,7 @@ fn sah_split(items: &mut [(u32, LightBounds)]) -> Option<usize> {
     };
     let mut best: Option<(f32, usize, usize)> = None;
     for dim in 0..3 {
-        if !(chi[dim] > clo[dim]) {
+        if chi[dim] <= clo[dim] || chi[dim].is_nan() || clo[dim].is_nan() {
             continue;
         }
         let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];

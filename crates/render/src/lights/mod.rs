@@ -393,7 +393,7 @@ impl Light {
                         uvs,
                         indices,
                     } => {
-                        if !(*area > 0.0) {
+                        if area.is_nan() || *area <= 0.0 {
                             return None;
                         }
                         let (tri, ux) = match (prim, triangles) {
