@@ -84,6 +84,13 @@ fn pmf_matches_sampling() {
         let scene = built(&desc, sel);
         let n = scene.lights.len();
         assert_eq!(n, 460, "one light per emitting triangle");
+        if let render::lights::select::LightSampler::Bvh(bvh) = &scene.light_sampler {
+            println!(
+                "light BVH: {} nodes, deepest right turn at depth {}",
+                bvh.node_count(),
+                bvh.depth()
+            );
+        }
         for (k, r) in receivers(&scene, RECEIVERS, 3).iter().enumerate() {
             let pmf: Vec<f64> = (0..n as u32)
                 .map(|i| scene.light_pmf(r, i) as f64)

@@ -431,6 +431,16 @@ impl LightBvh {
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }
+
+    /// Depth of the deepest leaf (0 for a single light or none).
+    pub fn depth(&self) -> u32 {
+        self.trail
+            .iter()
+            .flatten()
+            .map(|t| 64 - t.leading_zeros())
+            .max()
+            .unwrap_or(0)
+    }
 }
 
 fn centroid_bounds(items: &[(u32, LightBounds)]) -> (Vec3, Vec3) {
