@@ -4,6 +4,8 @@
 //!   points to) unless two-sided. Spheres seen from outside are sampled uniformly in the cone
 //!   they subtend (solid angle); meshes by area (triangle chosen in proportion to its area,
 //!   then a uniform point), disks by area; area densities are converted to solid angle.
+//!   Under light selection by power or BVH ([`select`], [`bvh`]) an emitting mesh becomes one
+//!   `Area` light per triangle (`prim`), so that each triangle is chosen on its own.
 //! - `Point` (intensity / d²), `Spot` (Mitsuba's linear falloff between `beam_width` and
 //!   `cutoff_angle`), `Directional` (irradiance along `direction`): delta lights.
 //! - `Constant` environment (sampled uniformly over the sphere) and `EnvMap`: an
