@@ -102,6 +102,9 @@ struct RenderArgs {
     /// Which sensor of the scene to render (0-based).
     #[arg(long, default_value_t = 0)]
     sensor: usize,
+    /// How next-event estimation picks a light: uniform, power or bvh (default: the scene's).
+    #[arg(long, value_name = "uniform|power|bvh", value_parser = parse_light_sampler)]
+    light_sampler: Option<scene::LightSelection>,
     /// Also write the per-pixel standard error of the image (from per-sample second moments).
     #[arg(long, value_name = "FILE")]
     stderr: Option<PathBuf>,
@@ -118,6 +121,15 @@ fn parse_define(s: &str) -> Result<(String, String), String> {
         return Err(format!("expected NAME=VALUE, found '{s}'"));
     }
     Ok((k.to_string(), v.to_string()))
+}
+
+fn parse_light_sampler(s: &str) -> Result<scene::LightSelection, String> {
+    match s {
+        "uniform" => Ok(scene::LightSelection::Uniform),
+        "power" => Ok(scene::LightSelection::Power),
+        "bvh" => Ok(scene::LightSelection::Bvh),
+        _ => Err(format!("expected uniform, power or bvh, found '{s}'")),
+    }
 }
 
 fn parse_res(s: &str) -> Result<(u32, u32), String> {
@@ -246,6 +258,7 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
             resolution: args.res,
             seed: args.seed,
             integrator: args.integrator.clone(),
+            light_selection: args.light_sampler,
         },
         time: args.time,
         threads: args.threads,

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use scene::{
-    ColorParam, FloatParam, IntegratorDesc, Loc, Material, MaterialId, SamplerDesc, SceneDesc,
-    Shape, TriMesh,
+    ColorParam, FloatParam, IntegratorDesc, LightSelection, Loc, Material, MaterialId, SamplerDesc,
+    SceneDesc, Shape, TriMesh,
 };
 
 use crate::accel::Accel;
@@ -15,6 +15,7 @@ use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::image_io::{self, Decode};
 use crate::integrators::Integrator;
+use crate::lights::select::LightSampler;
 use crate::lights::{EnvMap, Light, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
@@ -39,6 +40,8 @@ pub struct BuildOptions {
     pub resolution: Option<(u32, u32)>,
     pub seed: Option<u64>,
     pub integrator: Option<IntegratorDesc>,
+    /// Overrides `SceneDesc::light_selection`.
+    pub light_selection: Option<LightSelection>,
 }
 
 #[derive(Clone, Debug)]
@@ -47,6 +50,19 @@ pub struct ShapeInfo {
     pub material: Option<MaterialId>,
     pub emission: Option<ColorParam>,
     pub flip_normals: bool,
+}
+
+/// The lights of one shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeLights {
+    None,
+    /// One light for the whole shape.
+    Whole(u32),
+    /// One light per triangle: triangle `t` is light `first + t`.
+    PerTriangle {
+        first: u32,
+        count: u32,
+    },
 }
 
 pub struct Scene {
@@ -64,8 +80,10 @@ pub struct Scene {
     /// Sum of the scene's ambient terms ([`scene::Emitter::Ambient`]), used by Whitted.
     pub ambient: Vec3,
     pub lights: Vec<Light>,
-    /// The light of each shape that emits.
-    pub shape_light: Vec<Option<u32>>,
+    /// The light(s) of each shape; see [`Scene::shape_light`].
+    pub shape_lights: Vec<ShapeLights>,
+    /// How `sample_light` chooses.
+    pub light_sampler: LightSampler,
     /// Lights seen by escaping rays (environment).
     pub infinite_lights: Vec<u32>,
     /// Bounds of the bounded geometry.
@@ -83,22 +101,31 @@ impl Scene {
     }
 
     /// Choose one light for next-event estimation at receiver `r`: its index, the light and
-    /// the probability of that choice (`None` when the scene has no light). Uniform, as
-    /// Mitsuba does.
+    /// the probability of that choice (`None` when no light can be chosen). Uniform (as
+    /// Mitsuba), by power or with the light BVH, as the scene's light selection says.
     #[inline]
-    pub fn sample_light(&self, u: f32, _r: &Receiver) -> Option<(u32, &Light, f32)> {
-        let n = self.lights.len();
-        if n == 0 {
-            return None;
-        }
-        let i = ((u * n as f32) as usize).min(n - 1);
-        Some((i as u32, &self.lights[i], 1.0 / n as f32))
+    pub fn sample_light(&self, u: f32, r: &Receiver) -> Option<(u32, &Light, f32)> {
+        let (i, pmf) = self.light_sampler.sample(u, r, self.lights.len())?;
+        Some((i, &self.lights[i as usize], pmf))
     }
 
     /// Probability that `sample_light` picks light `light` at receiver `r`.
     #[inline]
-    pub fn light_pmf(&self, _r: &Receiver, _light: u32) -> f32 {
-        1.0 / self.lights.len().max(1) as f32
+    pub fn light_pmf(&self, r: &Receiver, light: u32) -> f32 {
+        self.light_sampler.pmf(r, light, self.lights.len())
+    }
+
+    /// The light that emits at `si` (the emitting shape's light, or with light selection by
+    /// power or BVH the light of its triangle), if any.
+    #[inline]
+    pub fn shape_light(&self, si: &SurfaceInteraction) -> Option<u32> {
+        match self.shape_lights.get(si.shape as usize)? {
+            ShapeLights::None => None,
+            ShapeLights::Whole(l) => Some(*l),
+            ShapeLights::PerTriangle { first, count } => {
+                (si.prim < *count).then_some(*first + si.prim)
+            }
+        }
     }
 
     #[inline]
@@ -248,18 +275,21 @@ fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, Build
     })
 }
 
-/// Every emitter of the scene: area lights (one per emitting shape) first, then the others.
+/// Every emitter of the scene: area lights (one per emitting shape, or with `split` one per
+/// triangle of an emitting mesh) first, then the others.
 fn build_lights(
     desc: &SceneDesc,
     shapes: &[ShapeInfo],
     base: &Path,
-) -> Result<(Vec<Light>, Vec<Option<u32>>), BuildError> {
+    split: bool,
+) -> Result<(Vec<Light>, Vec<ShapeLights>), BuildError> {
     let mut lights = Vec::new();
-    let mut shape_light = vec![None; shapes.len()];
+    let mut shape_light = vec![ShapeLights::None; shapes.len()];
     for (i, (s, d)) in shapes.iter().zip(&desc.shapes).enumerate() {
         let Some(radiance) = &s.emission else {
             continue;
         };
+        let two_sided = d.emission.as_ref().is_some_and(|e| e.two_sided);
         let triangles = match &s.geom {
             ShapeGeom::Mesh {
                 positions, indices, ..
@@ -271,6 +301,25 @@ fn build_lights(
                         0.5 * (b - a).cross(c - a).length()
                     })
                     .collect();
+                if split {
+                    // Degenerate triangles stay (so that triangle t is light first + t):
+                    // they have no power and are never chosen.
+                    shape_light[i] = ShapeLights::PerTriangle {
+                        first: lights.len() as u32,
+                        count: areas.len() as u32,
+                    };
+                    for (t, area) in areas.into_iter().enumerate() {
+                        lights.push(Light::Area {
+                            shape: i as u32,
+                            radiance: radiance.clone(),
+                            two_sided,
+                            triangles: None,
+                            prim: Some(t as u32),
+                            area: if area.is_finite() { area } else { 0.0 },
+                        });
+                    }
+                    continue;
+                }
                 Some(Arc::new(Distribution1D::new(&areas)))
             }
             ShapeGeom::Plane { .. } => {
@@ -285,12 +334,13 @@ fn build_lights(
         if !(area > 0.0 && area.is_finite()) {
             continue;
         }
-        shape_light[i] = Some(lights.len() as u32);
+        shape_light[i] = ShapeLights::Whole(lights.len() as u32);
         lights.push(Light::Area {
             shape: i as u32,
             radiance: radiance.clone(),
-            two_sided: d.emission.as_ref().is_some_and(|e| e.two_sided),
+            two_sided,
             triangles,
+            prim: None,
             area,
         });
     }
@@ -411,7 +461,9 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         .map(|t| load_texture(t, &base))
         .collect::<Result<Vec<_>, _>>()?;
 
-    let (lights, shape_light) = build_lights(desc, &shapes, &base)?;
+    let selection = opts.light_selection.unwrap_or(desc.light_selection);
+    let split = selection != LightSelection::Uniform;
+    let (lights, shape_lights) = build_lights(desc, &shapes, &base, split)?;
     let infinite_lights = (0..lights.len() as u32)
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();
@@ -461,7 +513,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         ));
     }
 
-    Ok(Scene {
+    let mut scene = Scene {
         accel,
         shapes,
         materials: desc
@@ -478,11 +530,14 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         background: desc.background,
         ambient,
         lights,
-        shape_light,
+        shape_lights,
+        light_sampler: LightSampler::Uniform,
         infinite_lights,
         bounds,
         triangle_count,
-    })
+    };
+    scene.light_sampler = LightSampler::new(selection, &scene);
+    Ok(scene)
 }
 
 #[cfg(test)]

@@ -68,7 +68,7 @@ fn emitting(shape: Shape, to_world: Mat4) -> SceneDesc {
 /// Run the χ² test of light 0 of `scene` seen from `p`.
 fn test_light(scene: &Scene, p: Vec3, level: f64, seed: u64) -> (bool, String) {
     let light = &scene.lights[0];
-    let r = Receiver { p };
+    let r = Receiver::at(p);
     let cfg = Chi2Config {
         res: 24,
         sample_count: 300_000,
@@ -83,7 +83,7 @@ fn test_light(scene: &Scene, p: Vec3, level: f64, seed: u64) -> (bool, String) {
                 return light.pdf_li(scene, &r, wi, None);
             }
             match scene.intersect(&Ray::new(p, wi), f32::INFINITY) {
-                Some(si) if scene.shape_light[si.shape as usize] == Some(0) => {
+                Some(si) if scene.shape_light(&si) == Some(0) => {
                     light.pdf_li(scene, &r, wi, Some(&si))
                 }
                 _ => 0.0,

@@ -29,7 +29,7 @@ pub fn li(
         return r;
     };
     let mut result = Vec3::ZERO;
-    if let Some(l) = scene.shape_light[si.shape as usize] {
+    if let Some(l) = scene.shape_light(&si) {
         result += scene.lights[l as usize].le(scene, &si);
     }
     let Some((bsdf, frame)) = scene.bsdf_at(&si) else {
@@ -77,7 +77,7 @@ pub fn li(
         // Emission found and the density with which emitter sampling (selection included)
         // would have produced the same direction.
         let (le, light_pdf) = match scene.intersect(&ray, f32::INFINITY) {
-            Some(hit) => match scene.shape_light[hit.shape as usize] {
+            Some(hit) => match scene.shape_light(&hit) {
                 Some(l) => {
                     let light = &scene.lights[l as usize];
                     let le = light.le(scene, &hit);

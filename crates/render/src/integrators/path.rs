@@ -330,7 +330,7 @@ fn trace(
         };
         st.t_max = f32::INFINITY;
 
-        if let Some(li) = scene.shape_light[si.shape as usize]
+        if let Some(li) = scene.shape_light(&si)
             && !(st.depth == 0 && cfg.hide_emitters)
         {
             let light = &scene.lights[li as usize];

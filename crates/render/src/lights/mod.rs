@@ -4,12 +4,17 @@
 //!   points to) unless two-sided. Spheres seen from outside are sampled uniformly in the cone
 //!   they subtend (solid angle); meshes by area (triangle chosen in proportion to its area,
 //!   then a uniform point), disks by area; area densities are converted to solid angle.
+//!   Under light selection by power or BVH ([`select`], [`bvh`]) an emitting mesh becomes one
+//!   `Area` light per triangle (`prim`), so that each triangle is chosen on its own.
 //! - `Point` (intensity / d²), `Spot` (Mitsuba's linear falloff between `beam_width` and
 //!   `cutoff_angle`), `Directional` (irradiance along `direction`): delta lights.
 //! - `Constant` environment (sampled uniformly over the sphere) and `EnvMap`: an
 //!   equirectangular image, bilinearly interpolated, importance-sampled with a piecewise-
 //!   constant 2D distribution of its pixel luminance weighted by sin θ. Local directions map to
 //!   uv = (atan2(x, −z) / 2π, acos(y) / π), y up, as in Mitsuba.
+
+pub mod bvh;
+pub mod select;
 
 use std::sync::Arc;
 
@@ -50,11 +55,24 @@ pub enum ShadowTarget {
 #[derive(Clone, Copy, Debug)]
 pub struct Receiver {
     pub p: Vec3,
+    /// Shading normal at `p` (either orientation), or zero for a point without one; used
+    /// only to guide light selection (the light BVH).
+    pub n: Vec3,
+}
+
+impl Receiver {
+    /// A receiver without a normal.
+    pub fn at(p: Vec3) -> Receiver {
+        Receiver { p, n: Vec3::ZERO }
+    }
 }
 
 impl From<&SurfaceInteraction> for Receiver {
     fn from(si: &SurfaceInteraction) -> Self {
-        Receiver { p: si.p }
+        Receiver {
+            p: si.p,
+            n: si.shading.n,
+        }
     }
 }
 
@@ -66,6 +84,10 @@ pub enum Light {
         two_sided: bool,
         /// Triangle selection by area (meshes only).
         triangles: Option<Arc<Distribution1D>>,
+        /// For a light that is one triangle of a mesh (light selection by power or by the
+        /// light BVH splits emitting meshes): that triangle; `triangles` is then `None`.
+        prim: Option<u32>,
+        /// Area of the emitting surface (of the one triangle when `prim` is set).
         area: f32,
     },
     Point {
@@ -358,6 +380,7 @@ impl Light {
                 radiance,
                 two_sided,
                 triangles,
+                prim,
                 area,
             } => {
                 let info = &scene.shapes[*shape as usize];
@@ -372,9 +395,18 @@ impl Light {
                         uvs,
                         indices,
                     } => {
-                        let dist = triangles.as_ref()?;
-                        let (tri, _, ux) = dist.sample_discrete(u.x);
-                        let [i0, i1, i2] = indices[tri].map(|i| i as usize);
+                        if area.is_nan() || *area <= 0.0 {
+                            return None;
+                        }
+                        let (tri, ux) = match (prim, triangles) {
+                            (Some(t), _) => (*t as usize, u.x),
+                            (None, Some(dist)) => {
+                                let (tri, _, ux) = dist.sample_discrete(u.x);
+                                (tri, ux)
+                            }
+                            (None, None) => return None,
+                        };
+                        let [i0, i1, i2] = indices.get(tri)?.map(|i| i as usize);
                         let b = warp::square_to_uniform_triangle(Vec2::new(ux, u.y));
                         let b0 = 1.0 - b.x - b.y;
                         let (p0, p1, p2) = (positions[i0], positions[i1], positions[i2]);
