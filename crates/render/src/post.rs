@@ -69,7 +69,7 @@ fn blur(img: &[Vec3], w: usize, h: usize, sigma: f32) -> Vec<Vec3> {
 /// Add a bloom to `img` in place.
 pub fn bloom(img: &mut Image, b: &Bloom) {
     let (w, h) = (img.width as usize, img.height as usize);
-    if w == 0 || h == 0 || !(b.strength > 0.0) {
+    if w == 0 || h == 0 || b.strength.is_nan() || b.strength <= 0.0 {
         return;
     }
     let bright: Vec<Vec3> = img

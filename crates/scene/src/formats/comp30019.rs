@@ -790,7 +790,7 @@ mod tests {
     }
 
     fn err(text: &str) -> String {
-        scene(text).err().expect("expected an error").to_string()
+        scene(text).expect_err("expected an error").to_string()
     }
 
     #[test]
