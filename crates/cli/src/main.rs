@@ -52,14 +52,15 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
-    /// Compare renders with a reference (relMSE, mean ratio, block t-test of
-    /// ../shared/references/README.md). Exit code 1 when the t-test fails.
     /// Render a COMP30019 (University of Melbourne) scene with the original program's flags.
+    /// Default camera: at the origin looking along +z, y up, 60° horizontal field of view.
     Comp30019(comp30019::Args),
     /// Render a CS184 (UC Berkeley) COLLADA scene with the original program's flags.
     Cs184(cs184::Args),
     /// Trace a few paths through one pixel and write their segments (PLY edges or JSON).
     DebugPaths(debug_paths::Args),
+    /// Compare renders with a reference (relMSE, mean ratio, block t-test of
+    /// ../shared/references/README.md). Exit code 1 when the t-test fails.
     Compare {
         /// The reference: NAME, NAME.exr (NAME.stderr.exr must exist beside it).
         reference: PathBuf,
