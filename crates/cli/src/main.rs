@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use clap::{Parser, Subcommand};
 use render::build::{BuildOptions, build};
-use render::image_io::write_image;
+use render::image_io::{write_image, write_image_tonemapped};
 use render::integrators::Integrator;
 use render::render::{RenderOptions, render};
 use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
@@ -102,6 +102,9 @@ struct RenderArgs {
     /// Which sensor of the scene to render (0-based).
     #[arg(long, default_value_t = 0)]
     sensor: usize,
+    /// Render only the camera with this name (CENG795 camera `id`).
+    #[arg(long, value_name = "NAME")]
+    camera: Option<String>,
     /// Also write the per-pixel standard error of the image (from per-sample second moments).
     #[arg(long, value_name = "FILE")]
     stderr: Option<PathBuf>,
@@ -233,15 +236,57 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         )));
     };
     print_warnings(&desc);
-    let job = RenderJob {
-        outputs: if args.output.is_empty() {
-            default_outputs(&args.scene)
-        } else {
-            args.output.clone()
-        },
+    // CENG795: without -o, every camera (or --camera NAME) renders to its own ImageName,
+    // relative to the scene's folder.
+    let named: Vec<usize> = match &args.camera {
+        Some(name) => {
+            let i = desc
+                .sensors
+                .iter()
+                .position(|s| s.name.as_deref() == Some(name.as_str()))
+                .ok_or_else(|| {
+                    Failure::input(format!(
+                        "{}: no camera named '{name}'",
+                        args.scene.display()
+                    ))
+                })?;
+            vec![i]
+        }
+        None => (0..desc.sensors.len())
+            .filter(|&i| desc.sensors[i].film.output.is_some())
+            .collect(),
+    };
+    if args.output.is_empty() && desc.sensors.iter().any(|s| s.film.output.is_some()) {
+        let dir = args.scene.parent().unwrap_or(Path::new("."));
+        for i in named {
+            let out = desc.sensors[i].film.output.clone();
+            let outputs = match out {
+                Some(o) => vec![dir.join(o)],
+                None => default_outputs(&args.scene),
+            };
+            let job = render_job(&args, outputs, i);
+            render_scene(&desc, &job)?;
+        }
+        return Ok(());
+    }
+    let sensor = match &args.camera {
+        Some(_) => named[0],
+        None => args.sensor,
+    };
+    let outputs = if args.output.is_empty() {
+        default_outputs(&args.scene)
+    } else {
+        args.output.clone()
+    };
+    render_scene(&desc, &render_job(&args, outputs, sensor))
+}
+
+fn render_job(args: &RenderArgs, outputs: Vec<PathBuf>, sensor: usize) -> RenderJob {
+    RenderJob {
+        outputs,
         stderr: args.stderr.clone(),
         build: BuildOptions {
-            sensor: args.sensor,
+            sensor,
             spp: args.spp,
             resolution: args.res,
             seed: args.seed,
@@ -250,8 +295,7 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         time: args.time,
         threads: args.threads,
         quiet: args.quiet,
-    };
-    render_scene(&desc, &job)
+    }
 }
 
 /// Everything `render_scene` needs besides the scene: the shared back end of `render` and
@@ -318,7 +362,7 @@ pub(crate) fn render_scene(desc: &SceneDesc, job: &RenderJob) -> Result<(), Fail
 
     let image = outcome.film.develop();
     for o in &job.outputs {
-        write_image(o, &image).map_err(Failure::other)?;
+        write_image_tonemapped(o, &image, scene.film.tonemap.as_ref()).map_err(Failure::other)?;
         if !job.quiet {
             eprintln!("wrote {}", o.display());
         }

@@ -644,8 +644,10 @@ impl Builder {
                         ior,
                     }
                 }
-                // The homework's default shading: Lambert + (unnormalised) Blinn-Phong.
-                None if ks != Vec3::ZERO => Material::PhongFamily {
+                // The homework's default shading, Lambert + Blinn-Phong in the course's
+                // convention f = kd + ks cosᵖα / cos θi (no 1/π, so point-lit renders match
+                // the course's images), also when ks = 0 so that a scene stays consistent.
+                None => Material::PhongFamily {
                     model: PhongModel::OriginalBlinnPhong,
                     normalized: false,
                     kd_fresnel: false,
@@ -653,9 +655,6 @@ impl Builder {
                     diffuse: ColorParam::Const(kd),
                     specular: ks,
                     ior,
-                },
-                None => Material::Diffuse {
-                    reflectance: ColorParam::Const(kd),
                 },
             },
             "mirror" => {
