@@ -429,7 +429,7 @@ impl Builder {
         }
         for n in scene.children("VertexData") {
             let v = self.ctx.floats(n)?;
-            if v.len() % 3 != 0 {
+            if !v.len().is_multiple_of(3) {
                 return Err(self
                     .ctx
                     .err(n, "vertex data is not a multiple of 3 numbers"));
@@ -852,7 +852,7 @@ impl Builder {
 
     /// Build a compact mesh from 1-based vertex ids into `VertexData`.
     fn mesh_from_ids(&self, n: &Node, ids: &[u32], smooth: bool) -> Result<TriMesh> {
-        if ids.len() % 3 != 0 {
+        if !ids.len().is_multiple_of(3) {
             return Err(self.ctx.err(n, "face indices are not a multiple of 3"));
         }
         let mut remap: HashMap<u32, u32> = HashMap::new();
