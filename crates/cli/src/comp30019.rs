@@ -250,6 +250,7 @@ pub(crate) fn plan(args: &Args) -> Result<Plan, Failure> {
             resolution: Some(resolution),
             seed: None,
             integrator: Some(integrator),
+            ..BuildOptions::default()
         },
         threads: if args.multi_thread { None } else { Some(1) },
     })

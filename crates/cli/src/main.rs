@@ -16,7 +16,7 @@ use std::time::Duration;
 use clap::{Parser, Subcommand};
 use render::build::{BuildOptions, build};
 use render::film::{Film, Image};
-use render::image_io::write_image;
+use render::image_io::{write_image, write_image_tonemapped};
 use render::integrators::Integrator;
 use render::render::{Progress, RenderObserver, RenderOptions, render};
 use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
@@ -107,6 +107,9 @@ struct RenderArgs {
     /// How next-event estimation picks a light: uniform, power or bvh (default: the scene's).
     #[arg(long, value_name = "uniform|power|bvh", value_parser = parse_light_sampler)]
     light_sampler: Option<scene::LightSelection>,
+    /// Render only the camera with this name (CENG795 camera `id`).
+    #[arg(long, value_name = "NAME")]
+    camera: Option<String>,
     /// Also write the per-pixel standard error of the image (from per-sample second moments).
     #[arg(long, value_name = "FILE")]
     stderr: Option<PathBuf>,
@@ -247,15 +250,57 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         )));
     };
     print_warnings(&desc);
-    let job = RenderJob {
-        outputs: if args.output.is_empty() {
-            default_outputs(&args.scene)
-        } else {
-            args.output.clone()
-        },
+    // CENG795: without -o, every camera (or --camera NAME) renders to its own ImageName,
+    // relative to the scene's folder.
+    let named: Vec<usize> = match &args.camera {
+        Some(name) => {
+            let i = desc
+                .sensors
+                .iter()
+                .position(|s| s.name.as_deref() == Some(name.as_str()))
+                .ok_or_else(|| {
+                    Failure::input(format!(
+                        "{}: no camera named '{name}'",
+                        args.scene.display()
+                    ))
+                })?;
+            vec![i]
+        }
+        None => (0..desc.sensors.len())
+            .filter(|&i| desc.sensors[i].film.output.is_some())
+            .collect(),
+    };
+    if args.output.is_empty() && desc.sensors.iter().any(|s| s.film.output.is_some()) {
+        let dir = args.scene.parent().unwrap_or(Path::new("."));
+        for i in named {
+            let out = desc.sensors[i].film.output.clone();
+            let outputs = match out {
+                Some(o) => vec![dir.join(o)],
+                None => default_outputs(&args.scene),
+            };
+            let job = render_job(&args, outputs, i);
+            render_scene(&desc, &job)?;
+        }
+        return Ok(());
+    }
+    let sensor = match &args.camera {
+        Some(_) => named[0],
+        None => args.sensor,
+    };
+    let outputs = if args.output.is_empty() {
+        default_outputs(&args.scene)
+    } else {
+        args.output.clone()
+    };
+    render_scene(&desc, &render_job(&args, outputs, sensor))
+}
+
+fn render_job(args: &RenderArgs, outputs: Vec<PathBuf>, sensor: usize) -> RenderJob {
+    RenderJob {
+        outputs,
         stderr: args.stderr.clone(),
         build: BuildOptions {
-            sensor: args.sensor,
+            sensor,
             spp: args.spp,
             resolution: args.res,
             seed: args.seed,
@@ -265,8 +310,7 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         time: args.time,
         threads: args.threads,
         quiet: args.quiet,
-    };
-    render_scene(&desc, &job)
+    }
 }
 
 /// Everything `render_scene` needs besides the scene: the shared back end of `render` and
@@ -388,7 +432,7 @@ pub(crate) fn render_scene_with(
         f(&mut image);
     }
     for o in &job.outputs {
-        write_image(o, &image).map_err(Failure::other)?;
+        write_image_tonemapped(o, &image, scene.film.tonemap.as_ref()).map_err(Failure::other)?;
         if !job.quiet {
             eprintln!("wrote {}", o.display());
         }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use scene::{
-    ColorParam, FloatParam, IntegratorDesc, LightSelection, Loc, Material, MaterialId, SamplerDesc,
+    ColorParam, FloatParam, IntegratorDesc, LightSelection, Loc, MaterialId, SamplerDesc,
     SceneDesc, Shape, TriMesh,
 };
 
@@ -469,14 +469,6 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         .collect();
 
     let mut warnings = Vec::new();
-    for m in &desc.materials {
-        if let Material::PhongFamily { .. } = m.material {
-            warnings.push(format!(
-                "{}: warning: the CENG795 Phong-family BRDFs are not implemented yet; rendering its diffuse part only",
-                m.loc
-            ));
-        }
-    }
 
     let mut film = sensor.film.clone();
     if let Some((w, h)) = opts.resolution {

@@ -158,6 +158,25 @@ pub fn read_image_alpha(path: &Path, decode: Decode) -> Result<(Image, Vec<f32>)
     }
 }
 
+/// Like [`write_image`], but 8-bit outputs (PNG) go through `tonemap` when one is given;
+/// linear outputs (EXR, PFM, HDR) are written unchanged.
+pub fn write_image_tonemapped(
+    path: &Path,
+    img: &Image,
+    tonemap: Option<&scene::Tonemap>,
+) -> Result<(), ImageError> {
+    match tonemap {
+        Some(tm) if extension(path) == "png" && !img.pixels.is_empty() => {
+            let display = crate::film::tonemap::apply(img, tm);
+            let quantize = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+            let bytes =
+                encode_png_with(&display, quantize).map_err(|e| ImageError::encode(path, e))?;
+            write_atomically(path, &bytes)
+        }
+        _ => write_image(path, img),
+    }
+}
+
 /// Writes `img` in the format given by the file extension (`.exr`, `.png`, `.pfm`, `.hdr`),
 /// atomically (see the module documentation).
 pub fn write_image(path: &Path, img: &Image) -> Result<(), ImageError> {
@@ -413,11 +432,15 @@ fn encode_pfm(img: &Image) -> Vec<u8> {
 // PNG, Radiance HDR and the other formats of the `image` crate
 
 fn encode_png(img: &Image) -> image::ImageResult<Vec<u8>> {
+    encode_png_with(img, linear_to_srgb8)
+}
+
+fn encode_png_with(img: &Image, quantize: fn(f32) -> u8) -> image::ImageResult<Vec<u8>> {
     use image::ImageEncoder;
     let data: Vec<u8> = img
         .pixels
         .iter()
-        .flat_map(|p| [p.x, p.y, p.z].map(linear_to_srgb8))
+        .flat_map(|p| [p.x, p.y, p.z].map(quantize))
         .collect();
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out).write_image(

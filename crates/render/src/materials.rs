@@ -12,8 +12,8 @@ use scene::{ColorParam, FloatParam, Material, MicrofacetDistribution};
 
 use crate::bsdf::Microfacet;
 use crate::bsdf::{
-    Bsdf, Conductor, Dielectric, Diffuse, MicrofacetType, NoriMicrofacet, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
+    Bsdf, Conductor, Dielectric, Diffuse, MicrofacetType, NoriMicrofacet, PhongFamily, Plastic,
+    RoughConductor, RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
 };
 use crate::build::Scene;
 use crate::math::{Frame, Vec2, Vec3};
@@ -203,10 +203,23 @@ impl RtMaterial {
                 ext_ior,
                 kd,
             } => Bsdf::NoriMicrofacet(NoriMicrofacet::new(alpha(*a), *int_ior, *ext_ior, *kd)),
-            Material::PhongFamily { diffuse, .. } => {
-                // The Phong family arrives with the CENG795 work; until then its diffuse part.
-                Bsdf::Diffuse(Diffuse::new(p.color(diffuse, uv)))
-            }
+            Material::PhongFamily {
+                model,
+                normalized,
+                kd_fresnel,
+                exponent,
+                diffuse,
+                specular,
+                ior,
+            } => Bsdf::PhongFamily(PhongFamily::new(
+                *model,
+                *normalized,
+                *kd_fresnel,
+                *exponent,
+                p.color(diffuse, uv),
+                *specular,
+                *ior,
+            )),
             Material::Null | Material::TwoSided { .. } => return None,
         };
         Some(bsdf)

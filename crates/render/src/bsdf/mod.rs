@@ -22,6 +22,7 @@ mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
 mod nori_microfacet;
+mod phong;
 mod plastic;
 mod rough_conductor;
 mod rough_dielectric;
@@ -33,6 +34,7 @@ pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use nori_microfacet::NoriMicrofacet;
+pub use phong::PhongFamily;
 pub use plastic::Plastic;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
@@ -108,6 +110,7 @@ pub enum Bsdf {
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
     NoriMicrofacet(NoriMicrofacet),
+    PhongFamily(PhongFamily),
 }
 
 macro_rules! dispatch {
@@ -122,6 +125,7 @@ macro_rules! dispatch {
             Bsdf::Plastic($b) => $e,
             Bsdf::RoughPlastic($b) => $e,
             Bsdf::NoriMicrofacet($b) => $e,
+            Bsdf::PhongFamily($b) => $e,
         }
     };
 }
@@ -188,7 +192,8 @@ impl_from!(
     RoughDielectric,
     Plastic,
     RoughPlastic,
-    NoriMicrofacet
+    NoriMicrofacet,
+    PhongFamily
 );
 
 /// Mirror `w` about the normal (+z): the specular reflection direction in the local frame.

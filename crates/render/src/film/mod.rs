@@ -12,6 +12,7 @@
 pub mod accum;
 pub mod filter;
 pub mod image;
+pub mod tonemap;
 
 pub use accum::{Film, FilmTile, PixelSums};
 pub use filter::Filter;
