@@ -22,8 +22,9 @@
 //! maps), `map_d`, `disp`, `Ka`, `map_Ka` are reported as ignored.
 //!
 //! # Scene defaults (the course application's, which the file does not store)
-//! A perspective camera looking down −z at the bounding box's centre, far enough back that a
-//! 45° field of view frames the box's front face; 512 × 512 film with a Gaussian filter; Sobol
+//! A perspective camera looking down −z at the bounding box's centre (just inside the box when
+//! its +z face is a wall, as in the course's closed Cornell boxes, else outside it: see
+//! [`default_camera`]); 512 × 512 film with a Gaussian filter; Sobol
 //! sampling, 64 spp; a path tracer with Russian roulette after 5 segments with termination
 //! probability 0.2. A scene without emitters gets the course's square area light (see
 //! [`default_square_light`]) with a warning.
@@ -329,23 +330,43 @@ pub fn default_square_light(lo: Vec3, hi: Vec3, loc: Loc) -> Option<ShapeDesc> {
     Some(s)
 }
 
-/// The default camera: looking down −z at the box's centre, 45° vertical field of view,
-/// framing the front face.
-pub fn default_camera(lo: Vec3, hi: Vec3) -> Camera {
-    let fov = 45.0f32;
+/// The default camera: looking down −z at the box's centre, framing the box's back face
+/// with a 45°-or-wider field of view. `closed_front`: the box's +z face is a wall (a room such
+/// as the course's Cornell boxes), so the camera goes just inside it; otherwise it stands
+/// outside, far enough back for a 45° field of view to frame the front face.
+pub fn default_camera(lo: Vec3, hi: Vec3, closed_front: bool) -> Camera {
     let c = 0.5 * (lo + hi);
     let half = 0.5 * (hi - lo);
-    let d = half.z + half.x.max(half.y).max(1e-3) / (0.5 * fov.to_radians()).tan();
+    let r = half.x.max(half.y).max(1e-3);
+    let (d, fov) = if closed_front {
+        let d = 0.95 * half.z;
+        (
+            d,
+            (2.0 * (r / (d + half.z).max(1e-3)).atan().to_degrees()).max(1.0),
+        )
+    } else {
+        (half.z + r / 22.5f32.to_radians().tan(), 45.0)
+    };
     let origin = c + Vec3::new(0.0, 0.0, d);
+    let scale = d.max(r);
     Camera {
         projection: Projection::Perspective {
             fov,
             fov_axis: FovAxis::Smaller,
         },
         to_world: look_at(origin, c, Vec3::Y).unwrap_or(Mat4::IDENTITY),
-        near_clip: 1e-3 * d.max(1e-3),
-        far_clip: 1e4 * d.max(1.0),
+        near_clip: 1e-4 * scale,
+        far_clip: 1e4 * scale,
     }
+}
+
+/// Some triangle lies in the bounding box's +z face.
+fn front_face_closed(mesh: &TriMesh, hi: Vec3, lo: Vec3) -> bool {
+    let eps = 1e-4 * (hi - lo).length();
+    mesh.indices.iter().any(|t| {
+        t.iter()
+            .all(|&v| mesh.positions[v as usize].z >= hi.z - eps)
+    })
 }
 
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
@@ -456,7 +477,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
     }
 
     desc.sensors.push(Sensor {
-        camera: default_camera(lo, hi),
+        camera: default_camera(lo, hi, front_face_closed(mesh, hi, lo)),
         film: crate::Film {
             width: 512,
             height: 512,
