@@ -34,7 +34,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to EXR and/or PNG.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Print what was loaded from a scene file: counts, bounds, camera, warnings.
     Info {
         scene: PathBuf,
@@ -542,7 +542,7 @@ fn cmd_compare(reference: &Path, test: &[PathBuf], stderr: Option<&Path>) -> Res
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => cmd_render(args),
+        Command::Render(args) => cmd_render(*args),
         Command::Info { scene, define } => {
             load_scene(&scene, &define).and_then(|doc| info::print(&scene, &doc))
         }
