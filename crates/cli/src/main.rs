@@ -35,7 +35,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to EXR and/or PNG.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Print what was loaded from a scene file: counts, bounds, camera, warnings.
     Info {
         scene: PathBuf,
@@ -116,6 +116,145 @@ struct RenderArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
+    #[command(flatten)]
+    view: ViewArgs,
+}
+
+/// Camera and light overrides (the CS-E5520 application's controls), applied to the scene
+/// before rendering.
+#[derive(clap::Args, Debug, Default)]
+pub(crate) struct ViewArgs {
+    /// Camera position.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    look_from: Option<scene::Vec3>,
+    /// Point the camera looks at.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    look_at: Option<scene::Vec3>,
+    /// Camera up vector.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    up: Option<scene::Vec3>,
+    /// Field of view in degrees (along the scene camera's fov axis).
+    #[arg(long, value_name = "DEGREES")]
+    fov: Option<f32>,
+    /// Add a one-sided square area light 'pos;normal;size;emission' (emission: one value or
+    /// r,g,b), e.g. '0,0.98,0;0,-1,0;0.5;10'. Replaces an OBJ scene's default light.
+    #[arg(long, value_name = "POS;NORMAL;SIZE;EMISSION", value_parser = parse_area_light)]
+    area_light: Vec<AreaLightArg>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct AreaLightArg {
+    pos: scene::Vec3,
+    normal: scene::Vec3,
+    size: f32,
+    emission: scene::Vec3,
+}
+
+fn parse_floats(s: &str) -> Result<Vec<f32>, String> {
+    s.split(',')
+        .map(|t| {
+            t.trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("'{t}' is not a finite number"))
+        })
+        .collect()
+}
+
+fn parse_vec3(s: &str) -> Result<scene::Vec3, String> {
+    match parse_floats(s)?.as_slice() {
+        [x, y, z] => Ok(scene::Vec3::new(*x, *y, *z)),
+        _ => Err(format!("expected X,Y,Z, found '{s}'")),
+    }
+}
+
+fn parse_area_light(s: &str) -> Result<AreaLightArg, String> {
+    let parts: Vec<&str> = s.split(';').collect();
+    let [pos, normal, size, emission] = parts.as_slice() else {
+        return Err(format!("expected 'pos;normal;size;emission', found '{s}'"));
+    };
+    let size = match parse_floats(size)?.as_slice() {
+        [v] if *v > 0.0 => *v,
+        _ => {
+            return Err(format!(
+                "the light size must be one positive number, found '{size}'"
+            ));
+        }
+    };
+    let emission = match parse_floats(emission)?.as_slice() {
+        [v] if *v >= 0.0 => scene::Vec3::splat(*v),
+        [r, g, b] if r.min(*g).min(*b) >= 0.0 => scene::Vec3::new(*r, *g, *b),
+        _ => {
+            return Err(format!(
+                "the emission must be E or R,G,B ≥ 0, found '{emission}'"
+            ));
+        }
+    };
+    let normal = parse_vec3(normal)?;
+    if normal.length_squared() == 0.0 {
+        return Err("the light normal must not be zero".into());
+    }
+    Ok(AreaLightArg {
+        pos: parse_vec3(pos)?,
+        normal,
+        size,
+        emission,
+    })
+}
+
+impl ViewArgs {
+    /// Apply the overrides to sensor `sensor` of `desc` and add the lights.
+    pub(crate) fn apply(&self, desc: &mut SceneDesc, sensor: usize) -> Result<(), Failure> {
+        use scene::formats::objmtl;
+        if !self.area_light.is_empty() {
+            desc.shapes
+                .retain(|s| s.name.as_deref() != Some(objmtl::DEFAULT_LIGHT_NAME));
+            for l in &self.area_light {
+                let loc = scene::Loc::file(Path::new("--area-light"));
+                let shape = objmtl::square_light(l.pos, l.normal, l.size, l.emission, loc)
+                    .ok_or_else(|| Failure::input("--area-light: degenerate light"))?;
+                desc.shapes.push(shape);
+            }
+        }
+        if self.look_from.is_none()
+            && self.look_at.is_none()
+            && self.up.is_none()
+            && self.fov.is_none()
+        {
+            return Ok(());
+        }
+        let Some(s) = desc.sensors.get_mut(sensor) else {
+            return Err(Failure::input(format!("the scene has no sensor {sensor}")));
+        };
+        if self.look_from.is_some() || self.look_at.is_some() || self.up.is_some() {
+            let m = s.camera.to_world;
+            let origin = m.w_axis.truncate();
+            let from = self.look_from.unwrap_or(origin);
+            let at = self.look_at.unwrap_or(from + m.z_axis.truncate());
+            let up = self.up.unwrap_or(m.y_axis.truncate());
+            s.camera.to_world = objmtl::look_at(from, at, up).ok_or_else(|| {
+                Failure::input("--look-from/--look-at/--up: degenerate view (zero direction or up parallel to it)")
+            })?;
+        }
+        if let Some(f) = self.fov {
+            if !(f > 0.0 && f < 180.0) {
+                return Err(Failure::input(format!(
+                    "--fov must be in (0, 180) degrees, found {f}"
+                )));
+            }
+            match &mut s.camera.projection {
+                scene::Projection::Perspective { fov, .. }
+                | scene::Projection::ThinLens { fov, .. } => *fov = f,
+                scene::Projection::Orthographic => {
+                    return Err(Failure::input(
+                        "--fov does not apply to an orthographic camera",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 fn parse_define(s: &str) -> Result<(String, String), String> {
@@ -243,13 +382,14 @@ pub(crate) fn check_outputs(outputs: &[PathBuf]) -> Result<(), Failure> {
 
 fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
     let doc = load_scene(&args.scene, &args.define)?;
-    let Document::Scene(desc) = doc else {
+    let Document::Scene(mut desc) = doc else {
         return Err(Failure::input(format!(
             "{}: this is a test file; run it with `penumbra test`",
             args.scene.display()
         )));
     };
     print_warnings(&desc);
+    args.view.apply(&mut desc, args.sensor)?;
     // CENG795: without -o, every camera (or --camera NAME) renders to its own ImageName,
     // relative to the scene's folder.
     let named: Vec<usize> = match &args.camera {
@@ -516,7 +656,7 @@ fn cmd_compare(reference: &Path, test: &[PathBuf], stderr: Option<&Path>) -> Res
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => cmd_render(args),
+        Command::Render(args) => cmd_render(*args),
         Command::Info { scene, define } => {
             load_scene(&scene, &define).and_then(|doc| info::print(&scene, &doc))
         }
