@@ -234,6 +234,19 @@ fn alpha(a: f32) -> f32 {
 impl Scene {
     /// The BSDF at `si` and the shading frame it lives in (flipped for the back side of a
     /// two-sided material). `None`: the surface does not scatter (null material).
+    /// The Beer–Lambert absorption coefficient inside the material at `si` (a smooth
+    /// dielectric with `absorption`), evaluated when a path enters it.
+    pub fn interior_absorption(&self, si: &SurfaceInteraction) -> Option<Vec3> {
+        let id = self.shapes[si.shape as usize].material?;
+        match &self.materials[id.0 as usize].material {
+            Material::Dielectric {
+                absorption: Some(sigma),
+                ..
+            } if *sigma != Vec3::ZERO => Some(*sigma),
+            _ => None,
+        }
+    }
+
     /// The ambient reflectance of the material at `si` (`None` without a material).
     pub fn ambient_reflectance(&self, si: &SurfaceInteraction) -> Option<Vec3> {
         let id = self.shapes[si.shape as usize].material?;

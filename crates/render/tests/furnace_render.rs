@@ -16,6 +16,10 @@ use scene::{
 };
 
 fn furnace(material: Material) -> (f64, f64) {
+    furnace_with_fov(material, 30.0)
+}
+
+fn furnace_with_fov(material: Material, fov: f32) -> (f64, f64) {
     let mut desc = SceneDesc {
         integrator: IntegratorDesc::Path(scene::PathDesc::default()),
         ..Default::default()
@@ -47,7 +51,7 @@ fn furnace(material: Material) -> (f64, f64) {
     desc.sensors.push(Sensor {
         camera: Camera {
             projection: Projection::Perspective {
-                fov: 30.0,
+                fov,
                 fov_axis: FovAxis::X,
             },
             to_world: scene::formats::mitsuba::look_at(
@@ -162,5 +166,29 @@ fn thin_dielectric() {
             specular_reflectance: ColorParam::constant(1.0),
             specular_transmittance: ColorParam::constant(1.0),
         },
+    );
+}
+
+/// Beer–Lambert absorption inside a smooth dielectric: an index-matched (η = 1, no Fresnel
+/// reflection) sphere of radius 1 with σ = 0.5, seen through its centre by a 1° camera, so
+/// every ray crosses 2·√(1 − b²) ≥ 1.9988 of it: the image is exp(−2σ) = e⁻¹ within 0.1 %.
+#[test]
+fn beer_lambert_absorption_in_a_dielectric() {
+    let sigma = 0.5;
+    let (mean, _) = furnace_with_fov(
+        Material::Dielectric {
+            int_ior: 1.0,
+            ext_ior: 1.0,
+            specular_reflectance: ColorParam::constant(1.0),
+            specular_transmittance: ColorParam::constant(1.0),
+            absorption: Some(Vec3::splat(sigma)),
+        },
+        1.0,
+    );
+    let expected = (-2.0 * sigma as f64).exp();
+    println!("beer: mean {mean:.6}, expected {expected:.6}");
+    assert!(
+        (mean / expected - 1.0).abs() < 1e-3,
+        "mean {mean}, expected {expected}"
     );
 }

@@ -230,6 +230,8 @@ struct PathState {
     first: Option<Scatter>,
     /// Splitting still to be done at the next vertex.
     split: bool,
+    /// Beer–Lambert absorption coefficient of the dielectric the path is inside, if any.
+    absorption: Option<Vec3>,
 }
 
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConfig) -> Vec3 {
@@ -258,6 +260,7 @@ pub fn li_recorded(
         prev: None,
         first: None,
         split: cfg.splitting > 1,
+        absorption: None,
     };
     trace(scene, sampler, cfg, rec, state, &mut result);
     result
@@ -329,6 +332,9 @@ fn trace(
             return;
         };
         st.t_max = f32::INFINITY;
+        if let Some(sigma) = st.absorption {
+            st.throughput *= (-sigma * (si.t * st.ray.d.length())).exp();
+        }
 
         if let Some(li) = scene.shape_light(&si)
             && !(st.depth == 0 && cfg.hide_emitters)
@@ -363,6 +369,7 @@ fn trace(
         };
         let wo = frame.to_local(si.wo);
         let receiver = Receiver::from(&si);
+        let absorption = scene.interior_absorption(&si);
 
         if !cfg.continue_diffuse
             && scene.ambient != Vec3::ZERO
@@ -424,12 +431,12 @@ fn trace(
             let n = cfg.splitting;
             st.throughput /= n as f32;
             for _ in 1..n {
-                if let Some(next) = scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
+                if let Some(next) = scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st, absorption) {
                     trace(scene, sampler, cfg, rec, next, result);
                 }
             }
         }
-        match scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
+        match scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st, absorption) {
             Some(next) => st = next,
             None => return,
         }
@@ -523,6 +530,7 @@ fn scatter(
     frame: &Frame,
     wo: Vec3,
     st: &PathState,
+    interior_absorption: Option<Vec3>,
 ) -> Option<PathState> {
     let u1 = sampler.next_1d();
     let u2 = sampler.next_2d();
@@ -552,6 +560,14 @@ fn scatter(
     let mut next = *st;
     next.throughput *= bs.weight;
     next.eta *= bs.eta;
+    if bs.transmission {
+        // Entering through the front (the side the normal points to) or leaving.
+        next.absorption = if wo.z > 0.0 {
+            interior_absorption
+        } else {
+            None
+        };
+    }
     next.ray = si.spawn_ray(frame.to_world(bs.wi));
     next.prev = Some(Previous {
         receiver: Receiver::from(si),
