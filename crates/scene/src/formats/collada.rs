@@ -67,6 +67,7 @@ pub fn load_str(text: &str, path: &Path) -> Result<SceneDesc> {
         materials: HashMap::new(),
         geometries: HashMap::new(),
         up: Mat4::IDENTITY,
+        view_dirs: Vec::new(),
     };
     cx.run()?;
     Ok(cx.desc)
@@ -96,6 +97,8 @@ struct Ctx<'a, 'input> {
     geometries: HashMap<String, Geometry>,
     /// COLLADA world → our world (up-axis conversion).
     up: Mat4,
+    /// CS184's `c_dir` of every sensor (see [`place_cs184`]).
+    view_dirs: Vec<Vec3>,
 }
 
 fn is(n: &Node, tag: &str) -> bool {
@@ -146,10 +149,12 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 format!("'{url}': only local references ('#id') are supported"),
             )
         })?;
-        self.ids
-            .get(id)
-            .copied()
-            .ok_or_else(|| self.err(n, format!("dangling reference '{url}': no element has id '{id}'")))
+        self.ids.get(id).copied().ok_or_else(|| {
+            self.err(
+                n,
+                format!("dangling reference '{url}': no element has id '{id}'"),
+            )
+        })
     }
 
     fn floats(&self, n: Node) -> Result<Vec<f32>> {
@@ -169,10 +174,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let v = self.floats(n)?;
         match v.as_slice() {
             [x] => Ok(*x),
-            _ => Err(self.err(
-                n,
-                format!("<{}> expects one number", n.tag_name().name()),
-            )),
+            _ => Err(self.err(n, format!("<{}> expects one number", n.tag_name().name()))),
         }
     }
 
@@ -209,7 +211,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
         if root.tag_name().name() != "COLLADA" {
             return Err(self.err(
                 root,
-                format!("expected a <COLLADA> root element, found <{}>", root.tag_name().name()),
+                format!(
+                    "expected a <COLLADA> root element, found <{}>",
+                    root.tag_name().name()
+                ),
             ));
         }
         for n in root.descendants().filter(|n| n.is_element()) {
@@ -230,14 +235,28 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 .ok_or_else(|| self.err(root, "no <visual_scene> in the file"))?,
         };
         if !is(&scene, "visual_scene") {
-            return Err(self.err(scene, "<instance_visual_scene> must refer to a <visual_scene>"));
+            return Err(self.err(
+                scene,
+                "<instance_visual_scene> must refer to a <visual_scene>",
+            ));
         }
         let up = self.up;
         for n in children(scene, "node") {
             self.node(n, up, 0)?;
         }
+        let bbox = scene_bounds(&self.desc);
+        if let Some((lo, hi)) = bbox {
+            for (s, d) in self.desc.sensors.iter_mut().zip(&self.view_dirs) {
+                if let Some(m) = place_cs184(lo, hi, *d) {
+                    s.camera.to_world = m;
+                }
+            }
+        }
         if self.desc.sensors.is_empty() {
-            self.warn(scene, "no camera in the scene: using one at the origin looking along -Z");
+            self.warn(
+                scene,
+                "no camera in the scene: using one at the origin looking along -Z",
+            );
             let cam = self.default_camera(scene);
             self.desc.sensors.push(cam);
         }
@@ -246,7 +265,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
 
     fn up_axis(&mut self, root: Node) -> Result<Mat4> {
         let Some(ax) = child(root, "asset").and_then(|a| child(a, "up_axis")) else {
-            self.warn(root, "no <asset><up_axis>: assuming Y_UP (the COLLADA default)");
+            self.warn(
+                root,
+                "no <asset><up_axis>: assuming Y_UP (the COLLADA default)",
+            );
             return Ok(Mat4::IDENTITY);
         };
         match ax.text().unwrap_or("").trim() {
@@ -279,7 +301,9 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 "matrix" => {
                     let v = self.floats(c)?;
                     if v.len() != 16 {
-                        return Err(self.err(c, format!("<matrix> expects 16 numbers, found {}", v.len())));
+                        return Err(
+                            self.err(c, format!("<matrix> expects 16 numbers, found {}", v.len()))
+                        );
                     }
                     // Row-major in the file; glam is column-major.
                     Mat4::from_cols_slice(&v).transpose()
@@ -314,7 +338,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     }
                 }
                 "lookat" | "skew" => {
-                    self.warn(c, format!("<{}> is not supported and is ignored", c.tag_name().name()));
+                    self.warn(
+                        c,
+                        format!("<{}> is not supported and is ignored", c.tag_name().name()),
+                    );
                     Mat4::IDENTITY
                 }
                 _ => continue,
@@ -346,7 +373,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     self.desc.sensors.push(s);
                 }
                 "instance_node" | "instance_controller" => {
-                    self.warn(c, format!("<{}> is not supported and is ignored", c.tag_name().name()));
+                    self.warn(
+                        c,
+                        format!("<{}> is not supported and is ignored", c.tag_name().name()),
+                    );
                 }
                 _ => {}
             }
@@ -383,7 +413,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 bound.insert(sym, mat);
             }
         }
-        let name = node.attribute("name").or(node.attribute("id")).map(str::to_string);
+        let name = node
+            .attribute("name")
+            .or(node.attribute("id"))
+            .map(str::to_string);
         let loc = self.loc(inst);
         let first = bound.values().next().copied();
         let shape_for = |shape: Shape, mat: Option<Mat>| ShapeDesc {
@@ -401,7 +434,13 @@ impl<'a, 'input> Ctx<'a, 'input> {
         };
         match geom {
             Geometry::Sphere(r) => {
-                let s = shape_for(Shape::Sphere { center: Vec3::ZERO, radius: r }, first);
+                let s = shape_for(
+                    Shape::Sphere {
+                        center: Vec3::ZERO,
+                        radius: r,
+                    },
+                    first,
+                );
                 self.desc.shapes.push(s);
             }
             Geometry::Meshes(meshes) => {
@@ -421,7 +460,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     self.desc.shapes.push(s);
                 }
                 for s in missing {
-                    self.warn(inst, format!("material symbol '{s}' is not bound: using the default diffuse"));
+                    self.warn(
+                        inst,
+                        format!("material symbol '{s}' is not bound: using the default diffuse"),
+                    );
                 }
             }
         }
@@ -432,7 +474,8 @@ impl<'a, 'input> Ctx<'a, 'input> {
         if let Some(t) = cgl(g)
             && let Some(s) = child(t, "sphere")
         {
-            let r = child(s, "radius").ok_or_else(|| self.err(s, "CGL <sphere> needs a <radius>"))?;
+            let r =
+                child(s, "radius").ok_or_else(|| self.err(s, "CGL <sphere> needs a <radius>"))?;
             let r = self.float(r)?;
             if r <= 0.0 {
                 return Err(self.err(s, format!("sphere radius must be positive, found {r}")));
@@ -475,7 +518,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
             if c != data.len() {
                 return Err(self.err(
                     arr,
-                    format!("<float_array> count='{c}' but it holds {} numbers", data.len()),
+                    format!(
+                        "<float_array> count='{c}' but it holds {} numbers",
+                        data.len()
+                    ),
                 ));
             }
         }
@@ -549,9 +595,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     }
                 }
                 "NORMAL" | "TEXCOORD" => {
-                    if sem == "TEXCOORD"
-                        && inp.attribute("set").is_some_and(|s| s != "0")
-                    {
+                    if sem == "TEXCOORD" && inp.attribute("set").is_some_and(|s| s != "0") {
                         continue;
                     }
                     let (d, st) = self.source(src)?;
@@ -576,7 +620,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
             {
                 return Err(LoadError::new(
                     inputs[i].4.clone(),
-                    format!("this source has stride {} but {min} components are needed", inputs[i].3),
+                    format!(
+                        "this source has stride {} but {min} components are needed",
+                        inputs[i].3
+                    ),
                 ));
             }
         }
@@ -594,7 +641,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 if p.len() % (3 * stride) != 0 {
                     return Err(self.err(
                         prim,
-                        format!("<p> holds {} indices, not a multiple of 3 × {stride}", p.len()),
+                        format!(
+                            "<p> holds {} indices, not a multiple of 3 × {stride}",
+                            p.len()
+                        ),
                     ));
                 }
                 vcount = vec![3; p.len() / (3 * stride)];
@@ -623,13 +673,19 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 for pn in children(prim, "p") {
                     let q = self.uints(pn)?;
                     if q.len() % stride != 0 {
-                        return Err(self.err(pn, format!("<p> holds {} indices, not a multiple of {stride}", q.len())));
+                        return Err(self.err(
+                            pn,
+                            format!("<p> holds {} indices, not a multiple of {stride}", q.len()),
+                        ));
                     }
                     vcount.push((q.len() / stride) as u32);
                     p.extend(q);
                 }
                 if child(prim, "ph").is_some() {
-                    self.warn(prim, "<ph> (polygons with holes) is not supported; holes ignored");
+                    self.warn(
+                        prim,
+                        "<ph> (polygons with holes) is not supported; holes ignored",
+                    );
                 }
             }
         }
@@ -638,7 +694,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
         {
             return Err(self.err(
                 prim,
-                format!("count='{c}' but the primitive holds {} polygons", vcount.len()),
+                format!(
+                    "count='{c}' but the primitive holds {} polygons",
+                    vcount.len()
+                ),
             ));
         }
 
@@ -665,13 +724,18 @@ impl<'a, 'input> Ctx<'a, 'input> {
             let pi = get(Some(pos), 3)?.expect("position input exists");
             let ni = get(nrm, 3)?;
             let ti = get(uv, 2)?;
-            let key = (pi.0, ni.map_or(u32::MAX, |x| x.0), ti.map_or(u32::MAX, |x| x.0));
+            let key = (
+                pi.0,
+                ni.map_or(u32::MAX, |x| x.0),
+                ti.map_or(u32::MAX, |x| x.0),
+            );
             if let Some(&v) = map.get(&key) {
                 return Ok(v);
             }
             let v = mesh.positions.len() as u32;
             let d = &inputs[pos].2;
-            mesh.positions.push(Vec3::new(d[pi.1], d[pi.1 + 1], d[pi.1 + 2]));
+            mesh.positions
+                .push(Vec3::new(d[pi.1], d[pi.1 + 1], d[pi.1 + 2]));
             if let (Some(s), Some((_, st))) = (nrm, ni) {
                 let d = &inputs[s].2;
                 mesh.normals.push(Vec3::new(d[st], d[st + 1], d[st + 2]));
@@ -701,7 +765,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
             k += c;
         }
         if degenerate > 0 {
-            self.warn(prim, format!("{degenerate} polygon(s) with fewer than 3 vertices skipped"));
+            self.warn(
+                prim,
+                format!("{degenerate} polygon(s) with fewer than 3 vertices skipped"),
+            );
         }
         // Normals with zero length would poison shading: drop them all (geometric normals).
         if mesh.normals.iter().any(|n| n.length_squared() == 0.0) {
@@ -733,7 +800,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let mid = self.desc.add_material(MaterialDesc {
             material,
             ambient: Rgb::ZERO,
-            name: m.attribute("name").or(m.attribute("id")).map(str::to_string),
+            name: m
+                .attribute("name")
+                .or(m.attribute("id"))
+                .map(str::to_string),
             loc,
         });
         let r = Mat { id: mid, emission };
@@ -766,7 +836,12 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 return Ok(match k.tag_name().name() {
                     "emission" => {
                         let r = self.cgl_rgb(k, "radiance", Rgb::ONE)?;
-                        (Material::Diffuse { reflectance: ColorParam::constant(0.0) }, Some(r))
+                        (
+                            Material::Diffuse {
+                                reflectance: ColorParam::constant(0.0),
+                            },
+                            Some(r),
+                        )
                     }
                     "mirror" => (
                         Material::Mirror {
@@ -793,7 +868,11 @@ impl<'a, 'input> Ctx<'a, 'input> {
                                 int_ior: ior,
                                 ext_ior: 1.0,
                                 specular_reflectance: c(refl),
-                                specular_transmittance: c(self.cgl_rgb(k, "transmittance", Rgb::ONE)?),
+                                specular_transmittance: c(self.cgl_rgb(
+                                    k,
+                                    "transmittance",
+                                    Rgb::ONE,
+                                )?),
                                 absorption: None,
                             },
                             None,
@@ -802,7 +881,9 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     "microfacet" => {
                         let alpha = self.cgl_float(k, "alpha", 0.5)?;
                         if alpha <= 0.0 {
-                            return Err(self.err(k, format!("alpha must be positive, found {alpha}")));
+                            return Err(
+                                self.err(k, format!("alpha must be positive, found {alpha}"))
+                            );
                         }
                         (
                             Material::RoughConductor {
@@ -828,8 +909,13 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let shader = child(e, "profile_COMMON")
             .and_then(|p| child(p, "technique"))
             .and_then(|t| {
-                t.children()
-                    .find(|c| c.is_element() && matches!(c.tag_name().name(), "phong" | "lambert" | "blinn" | "constant"))
+                t.children().find(|c| {
+                    c.is_element()
+                        && matches!(
+                            c.tag_name().name(),
+                            "phong" | "lambert" | "blinn" | "constant"
+                        )
+                })
             });
         let mut kd = Rgb::splat(0.5);
         if let Some(s) = shader
@@ -947,15 +1033,17 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let Some(p) = persp else {
             return Err(self.err(c, "only <perspective> cameras are supported"));
         };
-        let get = |tag: &str| -> Result<Option<f32>> {
-            child(p, tag).map(|n| self.float(n)).transpose()
-        };
+        let get =
+            |tag: &str| -> Result<Option<f32>> { child(p, tag).map(|n| self.float(n)).transpose() };
         let (xfov, yfov, aspect) = (get("xfov")?, get("yfov")?, get("aspect_ratio")?);
         let t = |deg: f32| (deg.to_radians() * 0.5).tan();
         let at = |deg: f32| 2.0 * deg.atan().to_degrees();
         for v in [xfov, yfov].into_iter().flatten() {
             if !(v > 0.0 && v < 180.0) {
-                return Err(self.err(p, format!("field of view must be in (0, 180) degrees, found {v}")));
+                return Err(self.err(
+                    p,
+                    format!("field of view must be in (0, 180) degrees, found {v}"),
+                ));
             }
         }
         if let Some(a) = aspect
@@ -986,7 +1074,15 @@ impl<'a, 'input> Ctx<'a, 'input> {
             return Err(self.err(node, "camera node with a degenerate transform"));
         }
         let up = fwd.cross(left);
-        let to_world = Mat4::from_cols(left.extend(0.0), up.extend(0.0), fwd.extend(0.0), origin.extend(1.0));
+        let to_world = Mat4::from_cols(
+            left.extend(0.0),
+            up.extend(0.0),
+            fwd.extend(0.0),
+            origin.extend(1.0),
+        );
+        // CS184: c_dir = unit(transform * (0, 0, -1, 1)) (w = 1: the translation counts).
+        self.view_dirs
+            .push(m.transform_point3(-Vec3::Z).normalize_or(-fwd));
         let width = DEFAULT_WIDTH;
         let height = ((width as f32 / aspect).round() as u32).clamp(1, 1 << 16);
         Ok(Sensor {
@@ -1009,7 +1105,10 @@ impl<'a, 'input> Ctx<'a, 'input> {
             },
             sampler: SamplerDesc::default(),
             integrator: None,
-            name: node.attribute("name").or(c.attribute("name")).map(str::to_string),
+            name: node
+                .attribute("name")
+                .or(c.attribute("name"))
+                .map(str::to_string),
             loc: self.loc(node),
         })
     }
@@ -1026,7 +1125,12 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     fov: 45.0,
                     fov_axis: FovAxis::Y,
                 },
-                to_world: Mat4::from_cols(left.extend(0.0), up.extend(0.0), fwd.extend(0.0), origin.extend(1.0)),
+                to_world: Mat4::from_cols(
+                    left.extend(0.0),
+                    up.extend(0.0),
+                    fwd.extend(0.0),
+                    origin.extend(1.0),
+                ),
                 near_clip: 0.01,
                 far_clip: 1e4,
             },
@@ -1044,6 +1148,62 @@ impl<'a, 'input> Ctx<'a, 'input> {
             loc: self.loc(at),
         }
     }
+}
+
+/// World-space bounds of the scene's shapes, leaving out area-light squares (CS184's
+/// `Scene::get_bbox` covers objects, not lights).
+pub fn scene_bounds(desc: &SceneDesc) -> Option<(Vec3, Vec3)> {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for s in &desc.shapes {
+        match &s.shape {
+            Shape::Mesh(m) => {
+                for p in &m.positions {
+                    let q = s.to_world.transform_point3(*p);
+                    lo = lo.min(q);
+                    hi = hi.max(q);
+                }
+            }
+            Shape::Sphere { center, radius } => {
+                let c = s.to_world.transform_point3(*center);
+                // Bound of the transformed sphere: radius times each row's length.
+                let m = Mat3::from_mat4(s.to_world);
+                let ext =
+                    Vec3::new(m.row(0).length(), m.row(1).length(), m.row(2).length()) * *radius;
+                lo = lo.min(c - ext);
+                hi = hi.max(c + ext);
+            }
+            _ => {}
+        }
+    }
+    (lo.cmple(hi).all() && lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
+/// The CS184 pathtracer ignores where the COLLADA camera is: `Application::load` aims it at
+/// the centre of the scene's bounding box from `1.5 × |extent|` away, along `c_dir` (which
+/// is `transform × (0, 0, −1, 1)` normalised, so the camera node's translation tilts it),
+/// with world +Y up (−Y when `c_dir` points below the horizon... only at the poles). Returns
+/// our camera-to-world (looking along +z, +x to the left).
+pub fn place_cs184(lo: Vec3, hi: Vec3, c_dir: Vec3) -> Option<Mat4> {
+    let target = (lo + hi) * 0.5;
+    let r = (hi - lo).length() * 0.5 * 1.5 * 2.0;
+    let to_cam = c_dir.normalize_or_zero();
+    if to_cam == Vec3::ZERO || r <= 0.0 {
+        return None;
+    }
+    let up = Vec3::Y;
+    let right = up.cross(to_cam).normalize_or_zero();
+    if right == Vec3::ZERO {
+        return None;
+    }
+    let screen_up = to_cam.cross(right);
+    let pos = target + to_cam * r;
+    Some(Mat4::from_cols(
+        (-right).extend(0.0),
+        screen_up.extend(0.0),
+        (-to_cam).extend(0.0),
+        pos.extend(1.0),
+    ))
 }
 
 /// The CS184 pathtracer's integrator for `-m max_depth -l light_samples`, `-H`
