@@ -1225,3 +1225,260 @@ pub fn cs184_path(max_bounces: u32, light_samples: u32, hemisphere: bool) -> Pat
         ..PathDesc::default()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A Z-up document with one camera, one quad (polylist with normals and UVs), a
+    /// triangle list, a CGL sphere and an area light.
+    const SMALL: &str = r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><up_axis>Z_UP</up_axis></asset>
+  <library_lights>
+    <light id="L"><technique_common><point><color>1 1 1</color></point></technique_common>
+      <extra><technique profile="CGL"><area><color>2 3 4</color></area></technique></extra></light>
+  </library_lights>
+  <library_cameras>
+    <camera id="C"><optics><technique_common><perspective>
+      <xfov>60</xfov><aspect_ratio>2</aspect_ratio><znear>0.1</znear><zfar>100</zfar>
+    </perspective></technique_common></optics></camera>
+  </library_cameras>
+  <library_effects>
+    <effect id="red-fx"><profile_COMMON><technique sid="common"><phong>
+      <diffuse><color>0.8 0.1 0.1 1</color></diffuse></phong></technique></profile_COMMON></effect>
+    <effect id="ag-fx"><profile_COMMON/><extra><technique profile="CGL">
+      <microfacet><alpha>0.2</alpha><eta>0.1 0.2 0.3</eta><k>4 3 2</k></microfacet>
+    </technique></extra></effect>
+    <effect id="glow-fx"><extra><technique profile="CGL"><emission><radiance>5 5 5</radiance></emission></technique></extra></effect>
+  </library_effects>
+  <library_materials>
+    <material id="red"><instance_effect url="#red-fx"/></material>
+    <material id="ag"><instance_effect url="#ag-fx"/></material>
+    <material id="glow"><instance_effect url="#glow-fx"/></material>
+  </library_materials>
+  <library_geometries>
+    <geometry id="quad"><mesh>
+      <source id="q-pos"><float_array id="q-pos-a" count="12">0 0 0 1 0 0 1 1 0 0 1 0</float_array>
+        <technique_common><accessor source="#q-pos-a" count="4" stride="3"/></technique_common></source>
+      <source id="q-n"><float_array id="q-n-a" count="3">0 0 1</float_array>
+        <technique_common><accessor source="#q-n-a" count="1" stride="3"/></technique_common></source>
+      <source id="q-uv"><float_array id="q-uv-a" count="8">0 0 1 0 1 1 0 1</float_array>
+        <technique_common><accessor source="#q-uv-a" count="4" stride="2"/></technique_common></source>
+      <vertices id="q-v"><input semantic="POSITION" source="#q-pos"/></vertices>
+      <polylist material="mat" count="1">
+        <input semantic="VERTEX" source="#q-v" offset="0"/>
+        <input semantic="NORMAL" source="#q-n" offset="1"/>
+        <input semantic="TEXCOORD" source="#q-uv" offset="2" set="0"/>
+        <vcount>4</vcount>
+        <p>0 0 0 1 0 1 2 0 2 3 0 3</p>
+      </polylist>
+      <triangles material="mat2" count="1">
+        <input semantic="VERTEX" source="#q-v" offset="0"/>
+        <p>0 1 2</p>
+      </triangles>
+    </mesh></geometry>
+    <geometry id="ball"><extra><technique profile="CGL"><sphere><radius>0.5</radius></sphere></technique></extra></geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="S">
+      <node id="cam"><matrix>1 0 0 0  0 0 -1 -5  0 1 0 1  0 0 0 1</matrix><instance_camera url="#C"/></node>
+      <node id="group"><translate>0 0 1</translate><rotate>0 0 1 90</rotate>
+        <node id="q"><scale>2 2 2</scale>
+          <instance_geometry url="#quad"><bind_material><technique_common>
+            <instance_material symbol="mat" target="#red"/>
+            <instance_material symbol="mat2" target="#glow"/>
+          </technique_common></bind_material></instance_geometry>
+        </node>
+      </node>
+      <node id="b"><translate>1 2 3</translate>
+        <instance_geometry url="#ball"><bind_material><technique_common>
+          <instance_material symbol="m" target="#ag"/></technique_common></bind_material></instance_geometry>
+      </node>
+      <node id="light"><matrix>2 0 0 0  0 4 0 0  0 0 1 3  0 0 0 1</matrix><instance_light url="#L"/></node>
+    </visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#S"/></scene>
+</COLLADA>
+"##;
+
+    fn load(text: &str) -> Result<SceneDesc> {
+        load_str(text, Path::new("test.dae"))
+    }
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).abs().max_element() < 1e-5
+    }
+
+    #[test]
+    fn small_scene_geometry_and_materials() {
+        let d = load(SMALL).unwrap();
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        // quad (2 triangles), triangle, sphere, area light.
+        assert_eq!(d.shapes.len(), 4);
+        let Shape::Mesh(q) = &d.shapes[0].shape else {
+            panic!()
+        };
+        assert_eq!(q.indices.len(), 2);
+        assert_eq!(q.positions.len(), 4);
+        assert_eq!(q.normals.len(), 4);
+        assert_eq!(q.uvs[2], Vec2::new(1.0, 1.0));
+        // Z_UP conversion of the node chain: translate(0,0,1) rotate(z,90) scale(2):
+        // local (1,0,0) → (0,2,1) in Z-up → (−0, 1, 2) in our Y-up world.
+        let p = d.shapes[0].to_world.transform_point3(Vec3::X);
+        assert!(close(p, Vec3::new(0.0, 1.0, 2.0)), "{p}");
+        match &d.material(d.shapes[0].material.unwrap()).material {
+            Material::Diffuse {
+                reflectance: ColorParam::Const(c),
+            } => assert!(close(*c, Vec3::new(0.8, 0.1, 0.1))),
+            m => panic!("{m:?}"),
+        }
+        // The triangle with the emission material is an area emitter.
+        let e = d.shapes[1].emission.as_ref().unwrap();
+        assert_eq!(e.radiance, ColorParam::Const(Vec3::splat(5.0)));
+        assert!(!e.two_sided);
+        let Shape::Sphere { radius, .. } = d.shapes[2].shape else {
+            panic!()
+        };
+        assert_eq!(radius, 0.5);
+        // (1,2,3) Z-up → (−1, 3, 2).
+        let c = d.shapes[2].to_world.transform_point3(Vec3::ZERO);
+        assert!(close(c, Vec3::new(-1.0, 3.0, 2.0)));
+        match &d.material(d.shapes[2].material.unwrap()).material {
+            Material::RoughConductor {
+                distribution: MicrofacetDistribution::Beckmann,
+                alpha_u: FloatParam::Const(a),
+                eta,
+                k,
+                ..
+            } => {
+                assert_eq!(*a, 0.2);
+                assert_eq!(*eta, Vec3::new(0.1, 0.2, 0.3));
+                assert_eq!(*k, Vec3::new(4.0, 3.0, 2.0));
+            }
+            m => panic!("{m:?}"),
+        }
+    }
+
+    #[test]
+    fn area_light_is_a_downward_square_of_the_node_size() {
+        let d = load(SMALL).unwrap();
+        let s = &d.shapes[3];
+        assert!(matches!(s.shape, Shape::Rectangle));
+        let e = s.emission.as_ref().unwrap();
+        assert_eq!(e.radiance, ColorParam::Const(Vec3::new(2.0, 3.0, 4.0)));
+        assert!(!e.two_sided);
+        // The rectangle's normal (+z local) must face the node's −Z, i.e. Z-up down → −Y.
+        let n = s.to_world.transform_vector3(Vec3::Z).normalize();
+        assert!(close(n, -Vec3::Y), "{n}");
+        // Corners (±1, ±1) map to a 2 × 4 (Z-up x × y) square centred at height 3.
+        let a = s.to_world.transform_point3(Vec3::new(1.0, 1.0, 0.0));
+        let b = s.to_world.transform_point3(Vec3::new(-1.0, -1.0, 0.0));
+        assert!(close((a - b).abs(), Vec3::new(2.0, 0.0, 4.0)), "{a} {b}");
+        assert!(close((a + b) * 0.5, Vec3::new(0.0, 3.0, 0.0)));
+    }
+
+    #[test]
+    fn camera_fov_orientation_and_cs184_placement() {
+        let d = load(SMALL).unwrap();
+        let s = &d.sensors[0];
+        assert_eq!((s.film.width, s.film.height), (800, 400));
+        let Projection::Perspective { fov, fov_axis } = s.camera.projection else {
+            panic!()
+        };
+        assert_eq!(fov_axis, FovAxis::Y);
+        let expect = 2.0 * ((30f32).to_radians().tan() / 2.0).atan().to_degrees();
+        assert!((fov - expect).abs() < 1e-3);
+        // The Z-up camera sits at (0, −5, 1) looking along +Y (Z-up): in our world at
+        // (0, 1, −5) looking along +Z, so image left (our +x) is +X. CS184 keeps only
+        // c_dir = unit(M (0, 0, −1, 1)) = unit(0, −4, 1) (Z-up) = unit(0, 1, −4) (ours) and
+        // places the camera at centre + 1.5 |extent| c_dir, looking back at the centre.
+        let m = s.camera.to_world;
+        let to_cam = Vec3::new(0.0, 1.0, -4.0).normalize();
+        assert!(close(m.transform_vector3(Vec3::Z), -to_cam));
+        assert!(close(m.transform_vector3(Vec3::X), Vec3::X));
+        assert!(m.transform_vector3(Vec3::Y).y > 0.9);
+        let (lo, hi) = scene_bounds(&d).unwrap();
+        let c = (lo + hi) * 0.5;
+        let pos = m.transform_point3(Vec3::ZERO);
+        assert!(
+            close(pos, c + to_cam * (hi - lo).length() * 1.5),
+            "{pos} {c}"
+        );
+    }
+
+    #[test]
+    fn missing_up_axis_defaults_to_y_up_with_a_warning() {
+        let text = SMALL.replace("<asset><up_axis>Z_UP</up_axis></asset>", "");
+        let d = load(&text).unwrap();
+        assert!(d.warnings.iter().any(|w| w.message.contains("up_axis")));
+        let c = d.shapes[2].to_world.transform_point3(Vec3::ZERO);
+        assert!(close(c, Vec3::new(1.0, 2.0, 3.0)));
+    }
+
+    /// Replace `from` by `to` in SMALL and expect an error mentioning `needle` at `line`.
+    fn expect_err(from: &str, to: &str, needle: &str) -> LoadError {
+        assert!(SMALL.contains(from), "test bug: {from}");
+        let e = load(&SMALL.replacen(from, to, 1)).unwrap_err();
+        assert!(e.message.contains(needle), "{e}");
+        assert!(e.loc.line > 0, "{e}");
+        e
+    }
+
+    #[test]
+    fn malformed_documents_are_located_errors() {
+        let e = expect_err("url=\"#quad\"", "url=\"#nothing\"", "dangling");
+        let line = SMALL
+            .lines()
+            .position(|l| l.contains("url=\"#quad\""))
+            .unwrap()
+            + 1;
+        assert_eq!(e.loc.line as usize, line);
+        expect_err("count=\"12\">0 0 0", "count=\"13\">0 0 0", "holds 12");
+        expect_err(
+            "count=\"4\" stride=\"3\"",
+            "count=\"5\" stride=\"3\"",
+            "needs 15",
+        );
+        expect_err("<vcount>4</vcount>", "<vcount>5</vcount>", "vcount");
+        expect_err("<p>0 1 2</p>", "<p>0 1 9</p>", "out of range");
+        expect_err("<p>0 1 2</p>", "<p>0 1</p>", "multiple of 3");
+        expect_err("<radius>0.5</radius>", "<radius>-1</radius>", "positive");
+        expect_err(
+            "<radius>0.5</radius>",
+            "<radius>abc</radius>",
+            "not a finite number",
+        );
+        expect_err("Z_UP", "W_UP", "up_axis");
+        expect_err("<xfov>60</xfov>", "<xfov>200</xfov>", "field of view");
+        expect_err("<matrix>2 0 0 0", "<matrix>2 0 0", "16 numbers");
+        expect_err(
+            "<area><color>2 3 4</color></area>",
+            "<laser/>",
+            "unknown light type",
+        );
+        expect_err(
+            "<microfacet><alpha>0.2</alpha><eta>0.1 0.2 0.3</eta><k>4 3 2</k></microfacet>",
+            "<velvet/>",
+            "unknown CGL material",
+        );
+        expect_err("</COLLADA>", "", "malformed XML");
+        expect_err("id=\"q-n\"", "id=\"q-pos\"", "duplicate id");
+        expect_err(
+            "polylist material=\"mat\" count=\"1\"",
+            "polylist material=\"mat\" count=\"2\"",
+            "count='2'",
+        );
+        let e = load("<scene/>").unwrap_err();
+        assert!(e.message.contains("COLLADA"));
+    }
+
+    #[test]
+    fn no_panic_on_truncations() {
+        // Every prefix cut at a line boundary either loads or fails cleanly.
+        let lines: Vec<&str> = SMALL.lines().collect();
+        for n in 0..lines.len() {
+            let _ = load(&lines[..n].join("\n"));
+        }
+    }
+}
