@@ -97,7 +97,11 @@ fn collada_example_matches_its_mitsuba_twin() {
         }
     }
     let bad = batches(&moved, &integ, 16, 16, 300);
-    assert!(!compare(&reference, &TestImages::Batches(bad)).unwrap().passed);
+    assert!(
+        !compare(&reference, &TestImages::Batches(bad))
+            .unwrap()
+            .passed
+    );
 }
 
 #[test]
@@ -172,22 +176,47 @@ fn command_line_flags() {
         "cs184", "-t", "1", "-s", "4", "-l", "2", "-m", "3", "-r", "24", "16", "-a", "4", "0.2",
         "-p", "4", "2", "8", "8", "-b", "0.05", "-d", "4", "-q", "-f", o, scene,
     ]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     assert!(out.is_file());
     assert!(dir.join("img_rate.png").is_file());
-    let h = penumbra(&["cs184", "-H", "-s", "2", "-r", "16", "12", "-q", "-f", o, scene]);
+    let h = penumbra(&[
+        "cs184", "-H", "-s", "2", "-r", "16", "12", "-q", "-f", o, scene,
+    ]);
     assert!(h.status.success(), "{}", String::from_utf8_lossy(&h.stderr));
     // Bad input: exit code 2 and a message, never a panic.
     for bad in [
-        &["cs184", "-p", "20", "0", "8", "8", "-r", "24", "16", "-f", o, scene][..],
+        &[
+            "cs184", "-p", "20", "0", "8", "8", "-r", "24", "16", "-f", o, scene,
+        ][..],
         &["cs184", "-a", "1", "0.1", "-f", o, scene][..],
         &["cs184", "-s", "0", "-f", o, scene][..],
         &["cs184", "-c", "/nonexistent/camera.txt", "-f", o, scene][..],
     ] {
         let r = penumbra(bad);
-        assert_eq!(r.status.code(), Some(2), "{bad:?}: {}", String::from_utf8_lossy(&r.stderr));
+        assert_eq!(
+            r.status.code(),
+            Some(2),
+            "{bad:?}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
     }
-    let r = penumbra(&["render", "--adaptive", "0.2,4", "--spp", "8", "--res", "16x12", "-q", "-o", o, scene]);
+    let r = penumbra(&[
+        "render",
+        "--adaptive",
+        "0.2,4",
+        "--spp",
+        "8",
+        "--res",
+        "16x12",
+        "-q",
+        "-o",
+        o,
+        scene,
+    ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert!(dir.join("img_rate.png").is_file());
     let _ = std::fs::remove_dir_all(&dir);
