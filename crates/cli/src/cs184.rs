@@ -215,7 +215,7 @@ pub(crate) fn apply(
     if let Some(d) = args.focal_distance {
         focus = d;
     }
-    if !(lens_r >= 0.0 && lens_r.is_finite()) || !(focus > 0.0 && focus.is_finite()) {
+    if !(lens_r >= 0.0 && lens_r.is_finite() && focus > 0.0 && focus.is_finite()) {
         return Err(Failure::input(format!(
             "the lens radius must be ≥ 0 and the focal distance > 0, found {lens_r} and {focus}"
         )));

@@ -153,7 +153,7 @@ pub fn render_adaptive(
                             s2 += v * v;
                         }
                         n += 1;
-                        if n % batch == 0 && settings.converged(n, s1, s2) {
+                        if n.is_multiple_of(batch) && settings.converged(n, s1, s2) {
                             break;
                         }
                     }

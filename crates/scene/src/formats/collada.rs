@@ -638,7 +638,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 if let Some(pn) = child(prim, "p") {
                     p = self.uints(pn)?;
                 }
-                if p.len() % (3 * stride) != 0 {
+                if !p.len().is_multiple_of(3 * stride) {
                     return Err(self.err(
                         prim,
                         format!(
@@ -672,7 +672,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 // <polygons>: one <p> per polygon
                 for pn in children(prim, "p") {
                     let q = self.uints(pn)?;
-                    if q.len() % stride != 0 {
+                    if !q.len().is_multiple_of(stride) {
                         return Err(self.err(
                             pn,
                             format!("<p> holds {} indices, not a multiple of {stride}", q.len()),
