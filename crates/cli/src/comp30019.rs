@@ -299,6 +299,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         time: None,
         threads: plan.threads,
         quiet: args.quiet,
+        adaptive: None,
     };
     if !args.layers {
         return render_scene_with(

@@ -14,6 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use clap::{Parser, Subcommand};
+use render::adaptive::{AdaptiveSettings, render_adaptive};
 use render::build::{BuildOptions, build};
 use render::film::{Film, Image};
 use render::image_io::{write_image, write_image_tonemapped};
@@ -113,6 +114,11 @@ struct RenderArgs {
     /// Also write the per-pixel standard error of the image (from per-sample second moments).
     #[arg(long, value_name = "FILE")]
     stderr: Option<PathBuf>,
+    /// CS184 adaptive sampling: a pixel stops when the 95 % confidence half-width of its
+    /// illuminance is ≤ TOL × its mean, checked every BATCH samples (default 32); --spp is
+    /// the cap. Also writes the samples-per-pixel heat map OUTPUT_rate.png.
+    #[arg(long, value_name = "TOL[,BATCH]", value_parser = parse_adaptive)]
+    adaptive: Option<AdaptiveSettings>,
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
@@ -289,6 +295,23 @@ fn parse_res(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+fn parse_adaptive(s: &str) -> Result<AdaptiveSettings, String> {
+    let (tol, batch) = s.split_once(',').unwrap_or((s, "32"));
+    let tolerance: f32 = tol
+        .trim()
+        .parse()
+        .ok()
+        .filter(|t: &f32| *t > 0.0 && t.is_finite())
+        .ok_or_else(|| format!("--adaptive expects a positive tolerance, found '{tol}'"))?;
+    let batch: u32 = batch
+        .trim()
+        .parse()
+        .ok()
+        .filter(|b| *b >= 2)
+        .ok_or_else(|| format!("--adaptive expects a batch size ≥ 2, found '{batch}'"))?;
+    Ok(AdaptiveSettings { batch, tolerance })
+}
+
 fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
     let (name, arg) = s.split_once(':').unwrap_or((s, ""));
     Ok(match name {
@@ -450,6 +473,7 @@ fn render_job(args: &RenderArgs, outputs: Vec<PathBuf>, sensor: usize) -> Render
         time: args.time,
         threads: args.threads,
         quiet: args.quiet,
+        adaptive: args.adaptive,
     }
 }
 
@@ -464,6 +488,8 @@ pub(crate) struct RenderJob {
     pub time: Option<f64>,
     pub threads: Option<usize>,
     pub quiet: bool,
+    /// CS184 adaptive sampling (the spp is the cap); writes `<first output>_rate.png`.
+    pub adaptive: Option<AdaptiveSettings>,
 }
 
 /// What the course-compatible commands add to [`render_scene`].
@@ -555,15 +581,47 @@ pub(crate) fn render_scene_with(
         .build()
         .map_err(Failure::other)?;
     let reporter = progress::Reporter::new(job.quiet);
-    let outcome = if extras.progressive {
-        let observer = Progressive {
-            inner: &reporter,
-            outputs: &job.outputs,
-            develop: extras.develop,
-        };
-        pool.install(|| render(&scene, &integrator, &ropts, &observer))
-    } else {
-        pool.install(|| render(&scene, &integrator, &ropts, &reporter))
+    let outcome = match &job.adaptive {
+        None if extras.progressive => {
+            let observer = Progressive {
+                inner: &reporter,
+                outputs: &job.outputs,
+                develop: extras.develop,
+            };
+            pool.install(|| render(&scene, &integrator, &ropts, &observer))
+        }
+        None => pool.install(|| render(&scene, &integrator, &ropts, &reporter)),
+        Some(settings) => {
+            if job.time.is_some() {
+                return Err(Failure::input(
+                    "--time and adaptive sampling do not combine",
+                ));
+            }
+            let a =
+                pool.install(|| render_adaptive(&scene, &integrator, &ropts, settings, &reporter));
+            if !job.quiet {
+                eprintln!(
+                    "adaptive sampling: {:.1} samples per pixel on average (cap {})",
+                    a.mean_spp(),
+                    a.max_spp
+                );
+            }
+            if let Some(first) = job.outputs.first() {
+                let stem = first.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
+                let rate = first.with_file_name(format!("{stem}_rate.png"));
+                write_image(&rate, &a.rate_image()).map_err(Failure::other)?;
+                if !job.quiet {
+                    eprintln!("wrote {}", rate.display());
+                }
+            }
+            render::render::RenderOutcome {
+                spp: a.max_spp,
+                passes: 1,
+                elapsed: a.elapsed,
+                cancelled: a.cancelled,
+                film: a.film,
+            }
+        }
     };
     reporter.finish(&outcome);
 

@@ -4,6 +4,7 @@
 //! camera, film settings), `render` runs an integrator over tiles and passes into a film.
 
 pub mod accel;
+pub mod adaptive;
 pub mod bsdf;
 pub mod build;
 pub mod camera;

@@ -431,7 +431,9 @@ fn trace(
             let n = cfg.splitting;
             st.throughput /= n as f32;
             for _ in 1..n {
-                if let Some(next) = scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st, absorption) {
+                if let Some(next) =
+                    scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st, absorption)
+                {
                     trace(scene, sampler, cfg, rec, next, result);
                 }
             }

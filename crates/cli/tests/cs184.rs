@@ -1,0 +1,223 @@
+//! CS184 compatibility: the COLLADA example against its Mitsuba twin, hemisphere against light
+//! sampling, adaptive against uniform sampling (block t-tests of `render::compare` at the
+//! documented 1 % family-wise level, fixed seeds), and the `penumbra cs184` command line.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use render::adaptive::{AdaptiveSettings, render_adaptive};
+use render::build::{BuildOptions, build};
+use render::compare::{Reference, TestImages, compare};
+use render::film::Image;
+use render::integrators::Integrator;
+use render::render::{RenderOptions, Silent, render};
+use scene::formats::collada::cs184_path;
+use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
+
+const RES: (u32, u32) = (32, 24);
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn load(rel: &str) -> SceneDesc {
+    let Document::Scene(d) = scene::load(&root().join(rel), &LoadOptions::default()).unwrap()
+    else {
+        panic!("not a scene")
+    };
+    *d
+}
+
+fn integrator(hemisphere: bool) -> IntegratorDesc {
+    IntegratorDesc::Path(cs184_path(2, 1, hemisphere))
+}
+
+fn render_one(desc: &SceneDesc, integ: &IntegratorDesc, spp: u32, seed: u64) -> Image {
+    let scene = build(
+        desc,
+        &BuildOptions {
+            spp: Some(spp),
+            seed: Some(seed),
+            resolution: Some(RES),
+            integrator: Some(integ.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
+    let opts = RenderOptions {
+        spp,
+        ..Default::default()
+    };
+    let out = render(&scene, &integrator, &opts, &Silent);
+    assert_eq!(out.film.nonfinite_count(), 0);
+    out.film.develop()
+}
+
+/// Mean and standard error of the mean of K independent batches.
+fn reference(batches: &[Image]) -> Reference {
+    let k = batches.len() as f32;
+    let (w, h) = (batches[0].width, batches[0].height);
+    let mut mean = Image::new(w, h);
+    let mut stderr = Image::new(w, h);
+    for i in 0..mean.pixels.len() {
+        let m = batches.iter().map(|b| b.pixels[i]).sum::<glam::Vec3>() / k;
+        let var = batches
+            .iter()
+            .map(|b| (b.pixels[i] - m) * (b.pixels[i] - m))
+            .sum::<glam::Vec3>()
+            / (k - 1.0);
+        mean.pixels[i] = m;
+        stderr.pixels[i] = (var / k).map(f32::sqrt);
+    }
+    Reference { mean, stderr }
+}
+
+fn batches(desc: &SceneDesc, integ: &IntegratorDesc, k: u64, spp: u32, seed0: u64) -> Vec<Image> {
+    (0..k)
+        .map(|s| render_one(desc, integ, spp, seed0 + s))
+        .collect()
+}
+
+#[test]
+fn collada_example_matches_its_mitsuba_twin() {
+    let dae = load("scenes/cs184/floor_sphere.dae");
+    let xml = load("scenes/cs184/floor_sphere.xml");
+    let integ = integrator(false);
+    let reference = reference(&batches(&xml, &integ, 16, 16, 100));
+    let test = batches(&dae, &integ, 16, 16, 200);
+    let r = compare(&reference, &TestImages::Batches(test)).unwrap();
+    println!("twin: {r}");
+    assert!(r.passed, "{r}");
+    // A real difference would be seen: moving the light is rejected.
+    let mut moved = dae.clone();
+    for s in &mut moved.shapes {
+        if s.emission.is_some() {
+            s.to_world = glam::Mat4::from_translation(glam::Vec3::new(0.4, 0.0, 0.0)) * s.to_world;
+        }
+    }
+    let bad = batches(&moved, &integ, 16, 16, 300);
+    assert!(
+        !compare(&reference, &TestImages::Batches(bad))
+            .unwrap()
+            .passed
+    );
+}
+
+#[test]
+fn hemisphere_and_light_sampling_converge_to_the_same_image() {
+    let dae = load("scenes/cs184/floor_sphere.dae");
+    let reference = reference(&batches(&dae, &integrator(false), 16, 16, 400));
+    let test = batches(&dae, &integrator(true), 16, 64, 500);
+    let r = compare(&reference, &TestImages::Batches(test)).unwrap();
+    println!("hemisphere: {r}");
+    assert!(r.passed, "{r}");
+}
+
+#[test]
+fn adaptive_sampling_reaches_the_same_mean() {
+    let dae = load("scenes/cs184/floor_sphere.dae");
+    let integ = integrator(false);
+    let reference = reference(&batches(&dae, &integ, 16, 32, 600));
+    let settings = AdaptiveSettings {
+        batch: 8,
+        tolerance: 0.1,
+    };
+    let mut total = 0u64;
+    let test: Vec<Image> = (0..16)
+        .map(|s| {
+            let scene = build(
+                &dae,
+                &BuildOptions {
+                    spp: Some(64),
+                    seed: Some(700 + s),
+                    resolution: Some(RES),
+                    integrator: Some(integ.clone()),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let integrator = Integrator::from_desc(&scene.integrator).unwrap();
+            let opts = RenderOptions {
+                spp: 64,
+                ..Default::default()
+            };
+            let out = render_adaptive(&scene, &integrator, &opts, &settings, &Silent);
+            assert!(out.samples.iter().all(|&n| (1..=64).contains(&n)));
+            total += out.total_samples;
+            out.film.develop()
+        })
+        .collect();
+    let mean_spp = total as f64 / (16.0 * (RES.0 * RES.1) as f64);
+    println!("adaptive: {mean_spp:.1} spp on average (cap 64)");
+    // Background pixels (black) stop after one batch: fewer samples than the cap.
+    assert!(mean_spp < 64.0);
+    let r = compare(&reference, &TestImages::Batches(test)).unwrap();
+    println!("adaptive: {r}");
+    assert!(r.passed, "{r}");
+}
+
+fn penumbra(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn command_line_flags() {
+    let dir = std::env::temp_dir().join(format!("penumbra-cs184-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = root().join("scenes/cs184/floor_sphere.dae");
+    let scene = scene.to_str().unwrap();
+    let out = dir.join("img.png");
+    let o = out.to_str().unwrap();
+    let run = penumbra(&[
+        "cs184", "-t", "1", "-s", "4", "-l", "2", "-m", "3", "-r", "24", "16", "-a", "4", "0.2",
+        "-p", "4", "2", "8", "8", "-b", "0.05", "-d", "4", "-q", "-f", o, scene,
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(out.is_file());
+    assert!(dir.join("img_rate.png").is_file());
+    let h = penumbra(&[
+        "cs184", "-H", "-s", "2", "-r", "16", "12", "-q", "-f", o, scene,
+    ]);
+    assert!(h.status.success(), "{}", String::from_utf8_lossy(&h.stderr));
+    // Bad input: exit code 2 and a message, never a panic.
+    for bad in [
+        &[
+            "cs184", "-p", "20", "0", "8", "8", "-r", "24", "16", "-f", o, scene,
+        ][..],
+        &["cs184", "-a", "1", "0.1", "-f", o, scene][..],
+        &["cs184", "-s", "0", "-f", o, scene][..],
+        &["cs184", "-c", "/nonexistent/camera.txt", "-f", o, scene][..],
+    ] {
+        let r = penumbra(bad);
+        assert_eq!(
+            r.status.code(),
+            Some(2),
+            "{bad:?}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    }
+    let r = penumbra(&[
+        "render",
+        "--adaptive",
+        "0.2,4",
+        "--spp",
+        "8",
+        "--res",
+        "16x12",
+        "-q",
+        "-o",
+        o,
+        scene,
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(dir.join("img_rate.png").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}

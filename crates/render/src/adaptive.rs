@@ -1,0 +1,235 @@
+//! Adaptive sampling as the CS184 pathtracer defines it (Berkeley CS184 hw3 part 5).
+//!
+//! Every pixel keeps the running sums s₁ = Σ xₖ and s₂ = Σ xₖ² of its samples' illuminance
+//! x = 0.2126 R + 0.7152 G + 0.0722 B. After every `batch` samples it computes the mean
+//! μ = s₁/n, the sample variance σ² = (s₂ − s₁²/n)/(n − 1) and the 95 % half-width
+//! I = 1.96 σ/√n, and stops when I ≤ `tolerance` · μ (or at `max_spp`). A pixel whose samples
+//! are all zero (μ = σ = 0) therefore stops after its first batch.
+//!
+//! Pixels are independent, so one pass over the tiles renders the whole image: every tile
+//! runs its pixels to convergence on a rayon worker. Sample `k` of a pixel is the same sample
+//! as in the uniform driver (`Sampler::start_pixel_sample(pixel, k)`), so the image is
+//! deterministic for any thread count. The film's filter splats samples as usual; with the
+//! default box filter (radius ½) a pixel's value is the mean of its own samples.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use crate::build::Scene;
+use crate::film::image::Image;
+use crate::film::{Film, Filter};
+use crate::integrators::Integrator;
+use crate::math::{UVec2, Vec3};
+use crate::render::{Progress, RenderObserver, RenderOptions};
+use crate::sampling::Sampler;
+
+/// Confidence-interval factor: 95 % two-sided for a normal mean.
+pub const Z_95: f64 = 1.96;
+
+/// The stopping rule.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveSettings {
+    /// Samples between convergence checks (CS184 `samplesPerBatch`, `-a batch ...`).
+    pub batch: u32,
+    /// Relative half-width of the 95 % confidence interval (CS184 `maxTolerance`).
+    pub tolerance: f32,
+}
+
+impl Default for AdaptiveSettings {
+    /// CS184's defaults: batches of 32, tolerance 0.05.
+    fn default() -> Self {
+        AdaptiveSettings {
+            batch: 32,
+            tolerance: 0.05,
+        }
+    }
+}
+
+impl AdaptiveSettings {
+    /// Whether a pixel with `n` samples of illuminance sums `s1`, `s2` has converged.
+    pub fn converged(&self, n: u32, s1: f64, s2: f64) -> bool {
+        if n < 2 {
+            return false;
+        }
+        let nf = n as f64;
+        let mean = s1 / nf;
+        let var = ((s2 - s1 * s1 / nf) / (nf - 1.0)).max(0.0);
+        Z_95 * (var / nf).sqrt() <= self.tolerance as f64 * mean
+    }
+}
+
+/// CS184's illuminance (Rec.709 luminance weights).
+pub fn illuminance(l: Vec3) -> f64 {
+    (0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z) as f64
+}
+
+pub struct AdaptiveOutcome {
+    pub film: Film,
+    /// Samples taken per pixel of the film's pixel bounds (row-major).
+    pub samples: Vec<u32>,
+    /// Width and height of `samples`.
+    pub size: UVec2,
+    /// The cap on samples per pixel.
+    pub max_spp: u32,
+    pub total_samples: u64,
+    pub elapsed: Duration,
+    pub cancelled: bool,
+}
+
+impl AdaptiveOutcome {
+    /// Mean samples per pixel.
+    pub fn mean_spp(&self) -> f64 {
+        self.total_samples as f64 / self.samples.len().max(1) as f64
+    }
+
+    /// The sample-rate heat map: n / max_spp mapped blue (few) → green → red (many), as the
+    /// CS184 `*_rate.png`.
+    pub fn rate_image(&self) -> Image {
+        let pixels = self
+            .samples
+            .iter()
+            .map(|&n| heat(n as f32 / self.max_spp.max(1) as f32))
+            .collect();
+        Image::from_pixels(self.size.x, self.size.y, pixels).expect("size matches")
+    }
+}
+
+/// Blue → cyan → green → yellow → red for t in [0, 1] (linear RGB).
+fn heat(t: f32) -> Vec3 {
+    let t = t.clamp(0.0, 1.0) * 4.0;
+    let c = |x: f32| x.clamp(0.0, 1.0);
+    Vec3::new(c(t - 2.0), c(t.min(4.0 - t)), c(2.0 - t))
+}
+
+/// Render with per-pixel adaptive sampling, at most `opts.spp` samples per pixel.
+/// `opts.time_budget` and `opts.pass_duration` are ignored (one pass); `opts.cancel` stops
+/// before the next tile starts (unfinished tiles stay empty).
+pub fn render_adaptive(
+    scene: &Scene,
+    integrator: &Integrator,
+    opts: &RenderOptions,
+    settings: &AdaptiveSettings,
+    observer: &dyn RenderObserver,
+) -> AdaptiveOutcome {
+    let start = Instant::now();
+    let filter = Filter::new(&scene.film.filter);
+    let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop, filter);
+    let max_spp = opts.spp.max(1);
+    let batch = settings.batch.max(1);
+    let template = Sampler::new(scene.sampler.kind, max_spp, scene.sampler.seed);
+    let tile_list = film.tile_bounds(opts.tile_size.max(1));
+    let (pmin, pmax) = film.pixel_bounds();
+    let size = pmax - pmin;
+    let samples_total = size.x as u64 * size.y as u64 * max_spp as u64;
+    let done = AtomicU64::new(0);
+
+    let finished: Vec<_> = tile_list
+        .par_iter()
+        .map(|&(lo, hi)| {
+            if opts.cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            let mut tile = film.tile(lo, hi);
+            let mut sampler = template.clone();
+            let mut counts = Vec::with_capacity(((hi.x - lo.x) * (hi.y - lo.y)) as usize);
+            let mut taken = 0u64;
+            for y in lo.y..hi.y {
+                for x in lo.x..hi.x {
+                    let pixel = UVec2::new(x, y);
+                    let (mut s1, mut s2) = (0.0f64, 0.0f64);
+                    let mut n = 0u32;
+                    while n < max_spp {
+                        sampler.start_pixel_sample(pixel, n);
+                        let p_film = pixel.as_vec2() + sampler.next_2d();
+                        let u_lens = sampler.next_2d();
+                        let cray = scene.camera.generate_ray(p_film, u_lens);
+                        let l = integrator.li(scene, &cray, &mut sampler);
+                        tile.add_sample(p_film, l);
+                        let v = illuminance(l);
+                        if v.is_finite() {
+                            s1 += v;
+                            s2 += v * v;
+                        }
+                        n += 1;
+                        if n.is_multiple_of(batch) && settings.converged(n, s1, s2) {
+                            break;
+                        }
+                    }
+                    counts.push(n);
+                    taken += n as u64;
+                }
+            }
+            let d = done.fetch_add(taken, Ordering::Relaxed) + taken;
+            observer.progress(&Progress {
+                samples_done: d,
+                samples_total,
+                elapsed: start.elapsed(),
+                spp_done: 0,
+            });
+            Some((tile, counts, (lo, hi)))
+        })
+        .collect();
+
+    let mut samples = vec![0u32; size.x as usize * size.y as usize];
+    let mut cancelled = false;
+    let mut total = 0u64;
+    for t in finished {
+        let Some((tile, counts, (lo, hi))) = t else {
+            cancelled = true;
+            continue;
+        };
+        film.merge(tile);
+        let w = (hi.x - lo.x) as usize;
+        for (i, &n) in counts.iter().enumerate() {
+            let (x, y) = (
+                lo.x - pmin.x + (i % w) as u32,
+                lo.y - pmin.y + (i / w) as u32,
+            );
+            samples[y as usize * size.x as usize + x as usize] = n;
+            total += n as u64;
+        }
+    }
+    observer.pass_done(&film, max_spp);
+    AdaptiveOutcome {
+        film,
+        samples,
+        size,
+        max_spp,
+        total_samples: total,
+        elapsed: start.elapsed(),
+        cancelled,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stopping_rule() {
+        let s = AdaptiveSettings {
+            batch: 4,
+            tolerance: 0.05,
+        };
+        // Constant samples: zero variance, converged as soon as n ≥ 2.
+        assert!(s.converged(4, 4.0, 4.0));
+        assert!(!s.converged(1, 1.0, 1.0));
+        // All-zero pixel: 0 ≤ 0 converges.
+        assert!(s.converged(4, 0.0, 0.0));
+        // Samples 0 and 2 alternating: mean 1, σ ≈ 1; needs n ≥ (1.96/0.05)² ≈ 1537.
+        let sums = |n: u32| (n as f64, 2.0 * n as f64);
+        let (a, b) = sums(1000);
+        assert!(!s.converged(1000, a, b));
+        let (a, b) = sums(1600);
+        assert!(s.converged(1600, a, b));
+    }
+
+    #[test]
+    fn heat_map_ends() {
+        assert_eq!(heat(0.0), Vec3::new(0.0, 0.0, 1.0));
+        assert_eq!(heat(1.0), Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(heat(0.5), Vec3::new(0.0, 1.0, 0.0));
+    }
+}
