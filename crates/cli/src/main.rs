@@ -263,7 +263,7 @@ impl ViewArgs {
     }
 }
 
-fn parse_define(s: &str) -> Result<(String, String), String> {
+pub(crate) fn parse_define(s: &str) -> Result<(String, String), String> {
     let (k, v) = s
         .split_once('=')
         .ok_or_else(|| format!("expected NAME=VALUE, found '{s}'"))?;

@@ -62,7 +62,10 @@ const SPP: u32 = 16;
 fn scene_desc() -> SceneDesc {
     let dir = std::env::temp_dir().join(format!("penumbra-path-variants-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("box.xml");
+    // One file per call: the tests run in parallel and must not read a half-written file.
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let file = dir.join(format!("box-{n}.xml"));
     std::fs::write(&file, SCENE).unwrap();
     let Document::Scene(desc) = scene::load(&file, &LoadOptions::default()).unwrap() else {
         panic!("not a scene")

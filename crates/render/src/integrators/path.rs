@@ -173,6 +173,8 @@ pub struct RecordedVertex {
 #[derive(Clone, Copy, Debug)]
 pub struct RecordedScatter {
     pub scatter: Scatter,
+    /// The sampled direction (world space, unit length).
+    pub wi: Vec3,
     /// Solid-angle density (or discrete probability for delta lobes).
     pub pdf: f32,
     /// Throughput after the bounce (and after Russian roulette reweighting).
@@ -607,6 +609,7 @@ fn scatter(
     }
     rec.scatter(&RecordedScatter {
         scatter,
+        wi: next.ray.d,
         pdf: bs.pdf,
         throughput: next.throughput,
     });
