@@ -93,7 +93,7 @@ impl RtMaterial {
 
 impl RtMaterial {
     /// The BSDF of this material with its parameters evaluated at `uv` (`None` for `null`
-    /// and for an unresolved `twosided`).
+    /// and for an unresolved `twosided` or `normalmap`).
     pub fn bsdf<P: Params>(&self, p: &P, uv: Vec2) -> Option<Bsdf> {
         let bsdf = match &self.material {
             Material::Diffuse { reflectance } => {
@@ -220,7 +220,7 @@ impl RtMaterial {
                 *specular,
                 *ior,
             )),
-            Material::Null | Material::TwoSided { .. } => return None,
+            Material::Null | Material::TwoSided { .. } | Material::NormalMap { .. } => return None,
         };
         Some(bsdf)
     }
@@ -277,6 +277,15 @@ impl Scene {
                     } else {
                         id = *front;
                     }
+                }
+                Material::NormalMap { nested, texture } => {
+                    let c = self.textures[texture.0 as usize].eval(si.uv);
+                    let local = (c * 2.0 - Vec3::ONE).normalize_or_zero();
+                    if local.z > 0.0 {
+                        let n = frame.to_world(local).normalize();
+                        frame = Frame::from_normal_tangent(n, frame.s);
+                    }
+                    id = *nested;
                 }
                 _ => {
                     mat = Some(m);

@@ -270,6 +270,13 @@ pub enum Material {
         /// Refraction index used by the Torrance–Sparrow Fresnel term.
         ior: f32,
     },
+    /// Tangent-space normal map around `nested` (Mitsuba `normalmap`): the texture's RGB in
+    /// [0,1] encodes the shading normal 2·c − 1 in the frame (dp/du, n × dp/du, n). The texture
+    /// must be read raw (no sRGB decoding).
+    NormalMap {
+        nested: MaterialId,
+        texture: TextureId,
+    },
     /// Invisible interface (Mitsuba `null`).
     Null,
 }
@@ -295,6 +302,7 @@ impl Material {
             Material::Plastic { .. } => "plastic",
             Material::RoughPlastic { .. } => "roughplastic",
             Material::TwoSided { .. } => "twosided",
+            Material::NormalMap { .. } => "normalmap",
             Material::Mirror { .. } => "mirror",
             Material::NoriMicrofacet { .. } => "microfacet",
             Material::PhongFamily { .. } => "phong-family",

@@ -18,8 +18,9 @@
 //! 8-bit textures are linearised with power 2.2 as the course does; OBJ's `v` axis points up
 //! the image, so bitmaps get the uv transform (u, 1 − v). `Ke` becomes two-sided area
 //! emission of that radiance on the material's triangles. A missing texture file gives one
-//! warning and the constant colour instead. `map_bump`/`bump`/`norm` (tangent-space normal
-//! maps), `map_d`, `disp`, `Ka`, `map_Ka` are reported as ignored.
+//! warning and the constant colour instead. `map_bump`/`bump`/`norm` are tangent-space normal
+//! maps (read raw, wrapping the material in `Material::NormalMap`); `map_d`, `disp`, `Ka`,
+//! `map_Ka` are reported as ignored.
 //!
 //! # Scene defaults (the course application's, which the file does not store)
 //! A perspective camera looking down −z at the bounding box's centre (just inside the box when
@@ -602,9 +603,6 @@ fn map_material(
             ),
         })
     };
-    if m.map_bump.is_some() {
-        ignored("the normal map (map_bump)", desc);
-    }
     if m.map_d.is_some() {
         ignored("the alpha map (map_d)", desc);
     }
@@ -631,12 +629,26 @@ fn map_material(
             reflectance: param(m.kd.min(Rgb::ONE), &m.map_kd, desc),
         }
     };
-    let id = desc.add_material(MaterialDesc {
+    let mut id = desc.add_material(MaterialDesc {
         material,
         ambient: Rgb::ZERO,
         name: Some(m.name.clone()),
         loc: m.loc.clone(),
     });
+    // `map_bump`/`bump`/`norm`: a tangent-space normal map (read raw) around the material.
+    if let Some(p) = &m.map_bump
+        && let Some(texture) = texture(p, &m.loc, desc, cache, true)
+    {
+        id = desc.add_material(MaterialDesc {
+            material: Material::NormalMap {
+                nested: id,
+                texture,
+            },
+            ambient: Rgb::ZERO,
+            name: Some(m.name.clone()),
+            loc: m.loc.clone(),
+        });
+    }
     (id, m.ke)
 }
 

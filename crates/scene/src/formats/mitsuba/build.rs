@@ -571,6 +571,26 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     }
                 }
             }
+            "normalmap" => {
+                let nested = self.nested_bsdfs(pl)?;
+                let [nested] = nested[..] else {
+                    return Err(err(
+                        pl.loc(),
+                        format!("normalmap needs one nested bsdf, found {}", nested.len()),
+                    ));
+                };
+                let Some(c) = pl
+                    .named_child("normalmap")
+                    .filter(|c| c.elem.tag == "texture")
+                else {
+                    return Err(err(
+                        pl.loc(),
+                        "normalmap needs a <texture name=\"normalmap\"> (a raw bitmap)",
+                    ));
+                };
+                let texture = self.texture(c)?;
+                Material::NormalMap { nested, texture }
+            }
             "null" => Material::Null,
             // Nori
             "mirror" => Material::Mirror {
@@ -583,7 +603,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 kd: self.rgb(pl, "kd", Vec3::splat(0.5), false)?,
             },
             // Wrappers whose effect we do not model: keep the nested material.
-            "mask" | "bumpmap" | "normalmap" => {
+            "mask" | "bumpmap" => {
                 let nested = self.nested_bsdfs(pl)?;
                 let Some(&inner) = nested.first() else {
                     return Err(err(pl.loc(), format!("{} needs a nested bsdf", pl.ty)));
