@@ -54,23 +54,8 @@ fn render_one(desc: &SceneDesc, integ: &IntegratorDesc, spp: u32, seed: u64) -> 
     out.film.develop()
 }
 
-/// Mean and standard error of the mean of K independent batches.
 fn reference(batches: &[Image]) -> Reference {
-    let k = batches.len() as f32;
-    let (w, h) = (batches[0].width, batches[0].height);
-    let mut mean = Image::new(w, h);
-    let mut stderr = Image::new(w, h);
-    for i in 0..mean.pixels.len() {
-        let m = batches.iter().map(|b| b.pixels[i]).sum::<glam::Vec3>() / k;
-        let var = batches
-            .iter()
-            .map(|b| (b.pixels[i] - m) * (b.pixels[i] - m))
-            .sum::<glam::Vec3>()
-            / (k - 1.0);
-        mean.pixels[i] = m;
-        stderr.pixels[i] = (var / k).map(f32::sqrt);
-    }
-    Reference { mean, stderr }
+    Reference::from_batches(batches).unwrap()
 }
 
 fn batches(desc: &SceneDesc, integ: &IntegratorDesc, k: u64, spp: u32, seed0: u64) -> Vec<Image> {

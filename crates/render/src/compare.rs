@@ -101,6 +101,34 @@ pub struct Reference {
 }
 
 impl Reference {
+    /// The mean of K ≥ 2 independent batch images of equal spp and the standard error of
+    /// that mean (spread of the batch means / √K), as the shared references were made.
+    pub fn from_batches(batches: &[Image]) -> Result<Reference, CompareError> {
+        if batches.len() < 2 {
+            return Err(CompareError::TooFewBatches(batches.len()));
+        }
+        let (w, h) = (batches[0].width, batches[0].height);
+        for (i, b) in batches.iter().enumerate() {
+            check_image(b, &format!("batch {i}"), w, h)?;
+        }
+        let k = batches.len() as f64;
+        let mut mean = Image::new(w, h);
+        let mut stderr = Image::new(w, h);
+        for i in 0..mean.pixels.len() {
+            for c in 0..3 {
+                let m = batches.iter().map(|b| b.pixels[i][c] as f64).sum::<f64>() / k;
+                let var = batches
+                    .iter()
+                    .map(|b| (b.pixels[i][c] as f64 - m).powi(2))
+                    .sum::<f64>()
+                    / (k - 1.0);
+                mean.pixels[i][c] = m as f32;
+                stderr.pixels[i][c] = (var / k).sqrt() as f32;
+            }
+        }
+        Ok(Reference { mean, stderr })
+    }
+
     /// Checks that both images have the same consistent size and only finite values.
     pub fn validate(&self) -> Result<(), CompareError> {
         check_image(
@@ -487,6 +515,19 @@ fn check_image(img: &Image, what: &str, width: u32, height: u32) -> Result<(), C
 mod tests {
     use super::*;
     use crate::math::Vec3;
+
+    #[test]
+    fn reference_from_batches_is_mean_and_stderr_of_the_mean() {
+        // Batch values 1, 2, 6: mean 3, sample variance 7, stderr √(7/3).
+        let batches: Vec<Image> = [1.0, 2.0, 6.0].map(|v| constant(8, 8, v)).into();
+        let r = Reference::from_batches(&batches).unwrap();
+        assert!((r.mean.pixels[0].x - 3.0).abs() < 1e-6);
+        assert!((r.stderr.pixels[63].z - (7.0f32 / 3.0).sqrt()).abs() < 1e-6);
+        assert!(matches!(
+            Reference::from_batches(&batches[..1]),
+            Err(CompareError::TooFewBatches(1))
+        ));
+    }
 
     fn constant(w: u32, h: u32, v: f32) -> Image {
         let mut img = Image::new(w, h);

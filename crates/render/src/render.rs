@@ -182,3 +182,22 @@ pub fn render(
         cancelled,
     }
 }
+
+/// Build `desc` with `opts` and render it to the end with no observer: the convenience of
+/// tests and tools that need one image (the spp is the scene's after `opts.spp`).
+pub fn render_desc(
+    desc: &scene::SceneDesc,
+    opts: &crate::build::BuildOptions,
+) -> Result<RenderOutcome, String> {
+    let scene = crate::build::build(desc, opts).map_err(|e| e.to_string())?;
+    let integrator = Integrator::from_desc(&scene.integrator).map_err(|e| e.to_string())?;
+    Ok(render(
+        &scene,
+        &integrator,
+        &RenderOptions {
+            spp: scene.sampler.spp,
+            ..Default::default()
+        },
+        &Silent,
+    ))
+}

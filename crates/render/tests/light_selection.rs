@@ -19,9 +19,8 @@ use render::build::{BuildOptions, Scene, build};
 use render::compare::{CompareOptions, Reference, TestImages, compare_with};
 use render::film::Image;
 use render::geometry::Ray;
-use render::integrators::Integrator;
 use render::lights::Receiver;
-use render::render::{RenderOptions, Silent, render};
+use render::render::render_desc;
 use render::stats::{Pcg32, sidak};
 use scene::{Document, LightSelection, LoadOptions, SceneDesc};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -151,49 +150,24 @@ const BATCHES: u64 = 16;
 fn batches(desc: &SceneDesc, sel: LightSelection, spp: u32) -> Vec<Image> {
     (0..BATCHES)
         .map(|seed| {
-            let scene = build(
+            let out = render_desc(
                 desc,
                 &BuildOptions {
+                    spp: Some(spp),
                     seed: Some(1000 * sel as u64 + seed),
                     light_selection: Some(sel),
                     ..Default::default()
                 },
             )
             .expect("scene builds");
-            let integrator = Integrator::from_desc(&scene.integrator).unwrap();
-            let out = render(
-                &scene,
-                &integrator,
-                &RenderOptions {
-                    spp,
-                    ..Default::default()
-                },
-                &Silent,
-            );
             assert_eq!(out.film.nonfinite_count(), 0, "NaN/Inf samples");
             out.film.develop()
         })
         .collect()
 }
 
-/// Mean and standard error of the mean of independent batches.
 fn reference(images: &[Image]) -> Reference {
-    let (w, h) = (images[0].width, images[0].height);
-    let k = images.len() as f32;
-    let mut mean = Image::new(w, h);
-    let mut stderr = Image::new(w, h);
-    for (i, m) in mean.pixels.iter_mut().enumerate() {
-        *m = images.iter().map(|b| b.pixels[i]).sum::<Vec3>() / k;
-    }
-    for (i, s) in stderr.pixels.iter_mut().enumerate() {
-        let var = images
-            .iter()
-            .map(|b| (b.pixels[i] - mean.pixels[i]).powf(2.0))
-            .sum::<Vec3>()
-            / (k - 1.0);
-        *s = (var / k).powf(0.5);
-    }
-    Reference { mean, stderr }
+    Reference::from_batches(images).unwrap()
 }
 
 #[test]

@@ -6,12 +6,11 @@
 //! - the map is applied: under an overhead directional light the same plane's shading varies
 //!   with the perturbed normals (cos θ′), while the plane without the map is uniform.
 
-use render::build::{BuildOptions, build};
+use render::build::BuildOptions;
 use render::film::Image;
 use render::image_io::write_image;
-use render::integrators::Integrator;
 use render::math::Vec3;
-use render::render::{RenderOptions, Silent, render};
+use render::render::render_desc;
 use scene::{Document, LoadOptions};
 
 fn dir() -> std::path::PathBuf {
@@ -77,7 +76,7 @@ fn mapped_bsdf() -> String {
 }
 
 fn run(desc: &scene::SceneDesc, spp: u32) -> (Image, Image) {
-    let scene = build(
+    let out = render_desc(
         desc,
         &BuildOptions {
             spp: Some(spp),
@@ -86,16 +85,6 @@ fn run(desc: &scene::SceneDesc, spp: u32) -> (Image, Image) {
         },
     )
     .unwrap();
-    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
-    let out = render(
-        &scene,
-        &integrator,
-        &RenderOptions {
-            spp,
-            ..Default::default()
-        },
-        &Silent,
-    );
     assert_eq!(out.film.nonfinite_count(), 0);
     (out.film.develop(), out.film.develop_stderr())
 }

@@ -11,11 +11,10 @@
 //! sphere and a glass sphere (delta chains for splitting and caustics for brute force), and a
 //! fixed depth of 6 segments so that "no Russian roulette" terminates.
 
-use render::build::{BuildOptions, build};
+use render::build::BuildOptions;
 use render::compare::{Reference, TestImages, compare};
 use render::film::Image;
-use render::integrators::Integrator;
-use render::render::{RenderOptions, Silent, render};
+use render::render::render_desc;
 use scene::{
     DirectionSampling, Document, IntegratorDesc, LoadOptions, MisHeuristic, PathDesc,
     RussianRoulette, SceneDesc,
@@ -74,54 +73,26 @@ fn scene_desc() -> SceneDesc {
 }
 
 fn batches(desc: &SceneDesc, path: &PathDesc, seeds: std::ops::Range<u64>) -> Vec<Image> {
-    let integrator_desc = IntegratorDesc::Path(path.clone());
     seeds
         .map(|seed| {
-            let scene = build(
+            let out = render_desc(
                 desc,
                 &BuildOptions {
                     spp: Some(SPP),
                     seed: Some(seed),
-                    integrator: Some(integrator_desc.clone()),
+                    integrator: Some(IntegratorDesc::Path(path.clone())),
                     ..Default::default()
                 },
             )
             .unwrap();
-            let integrator = Integrator::from_desc(&scene.integrator).unwrap();
-            let out = render(
-                &scene,
-                &integrator,
-                &RenderOptions {
-                    spp: SPP,
-                    ..Default::default()
-                },
-                &Silent,
-            );
             assert_eq!(out.film.nonfinite_count(), 0);
             out.film.develop()
         })
         .collect()
 }
 
-/// Mean and standard error of the mean of independent batch images.
 fn reference_of(images: &[Image]) -> Reference {
-    let n = images.len() as f64;
-    let (w, h) = (images[0].width, images[0].height);
-    let mut mean = Image::new(w, h);
-    let mut stderr = Image::new(w, h);
-    for i in 0..mean.pixels.len() {
-        for c in 0..3 {
-            let m = images.iter().map(|im| im.pixels[i][c] as f64).sum::<f64>() / n;
-            let var = images
-                .iter()
-                .map(|im| (im.pixels[i][c] as f64 - m).powi(2))
-                .sum::<f64>()
-                / (n - 1.0);
-            mean.pixels[i][c] = m as f32;
-            stderr.pixels[i][c] = (var / n).sqrt() as f32;
-        }
-    }
-    Reference { mean, stderr }
+    Reference::from_batches(images).unwrap()
 }
 
 fn base() -> PathDesc {
