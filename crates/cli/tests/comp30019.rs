@@ -10,7 +10,7 @@ use render::compare::{Reference, TestImages, compare};
 use render::film::Image;
 use render::integrators::Integrator;
 use render::layers::render_layers;
-use render::render::{RenderOptions, Silent, render};
+use render::render::render_desc;
 use scene::{Document, IntegratorDesc, LoadOptions, PathDesc, SceneDesc};
 
 fn penumbra() -> Command {
@@ -219,28 +219,14 @@ const W: u32 = 24;
 fn batches(desc: &SceneDesc, k: u64, spp: u32) -> Vec<Image> {
     (0..k)
         .map(|seed| {
-            let scene = build(
-                desc,
-                &BuildOptions {
-                    spp: Some(spp),
-                    seed: Some(1000 + seed),
-                    resolution: Some((W, W)),
-                    integrator: Some(IntegratorDesc::Path(PathDesc::default())),
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-            let integrator = Integrator::from_desc(&scene.integrator).unwrap();
-            let out = render(
-                &scene,
-                &integrator,
-                &RenderOptions {
-                    spp,
-                    ..Default::default()
-                },
-                &Silent,
-            );
-            out.film.develop()
+            let opts = BuildOptions {
+                spp: Some(spp),
+                seed: Some(1000 + seed),
+                resolution: Some((W, W)),
+                integrator: Some(IntegratorDesc::Path(PathDesc::default())),
+                ..Default::default()
+            };
+            render_desc(desc, &opts).unwrap().film.develop()
         })
         .collect()
 }
@@ -254,25 +240,7 @@ fn txt_and_mitsuba_xml_agree() {
     let txt = load(&ours("equivalence.txt"));
     let xml = load(&ours("equivalence.xml"));
     let refs = batches(&xml, 16, 16);
-    let n = refs.len() as f32;
-    let mut mean = Image::new(W, W);
-    let mut var = Image::new(W, W);
-    for img in &refs {
-        for (m, p) in mean.pixels.iter_mut().zip(&img.pixels) {
-            *m += *p / n;
-        }
-    }
-    for img in &refs {
-        for ((v, p), m) in var.pixels.iter_mut().zip(&img.pixels).zip(&mean.pixels) {
-            *v += (*p - *m) * (*p - *m) / (n - 1.0);
-        }
-    }
-    let stderr = Image {
-        width: W,
-        height: W,
-        pixels: var.pixels.iter().map(|v| (*v / n).sqrt()).collect(),
-    };
-    let reference = Reference { mean, stderr };
+    let reference = Reference::from_batches(&refs).unwrap();
     let test = batches(&txt, 8, 16);
     let result = compare(&reference, &TestImages::Batches(test)).unwrap();
     println!("equivalence: {result}");

@@ -371,7 +371,6 @@ fn trace(
         };
         let wo = frame.to_local(si.wo);
         let receiver = Receiver::from(&si);
-        let absorption = scene.interior_absorption(&si);
 
         if !cfg.continue_diffuse
             && scene.ambient != Vec3::ZERO
@@ -433,14 +432,12 @@ fn trace(
             let n = cfg.splitting;
             st.throughput /= n as f32;
             for _ in 1..n {
-                if let Some(next) =
-                    scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st, absorption)
-                {
+                if let Some(next) = scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
                     trace(scene, sampler, cfg, rec, next, result);
                 }
             }
         }
-        match scatter(sampler, cfg, rec, &si, &bsdf, &frame, wo, &st, absorption) {
+        match scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
             Some(next) => st = next,
             None => return,
         }
@@ -526,6 +523,7 @@ fn uniform_direction(bsdf: &Bsdf, wo: Vec3, u: Option<Vec2>) -> (Vec3, f32) {
 /// the recorder; `None` when the path ends here.
 #[allow(clippy::too_many_arguments)]
 fn scatter(
+    scene: &Scene,
     sampler: &mut Sampler,
     cfg: &PathConfig,
     rec: &mut impl PathRecorder,
@@ -534,7 +532,6 @@ fn scatter(
     frame: &Frame,
     wo: Vec3,
     st: &PathState,
-    interior_absorption: Option<Vec3>,
 ) -> Option<PathState> {
     let u1 = sampler.next_1d();
     let u2 = sampler.next_2d();
@@ -567,7 +564,7 @@ fn scatter(
     if bs.transmission {
         // Entering through the front (the side the normal points to) or leaving.
         next.absorption = if wo.z > 0.0 {
-            interior_absorption
+            scene.interior_absorption(si)
         } else {
             None
         };
