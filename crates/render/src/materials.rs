@@ -211,15 +211,19 @@ impl RtMaterial {
                 diffuse,
                 specular,
                 ior,
-            } => Bsdf::PhongFamily(PhongFamily::new(
-                *model,
-                *normalized,
-                *kd_fresnel,
-                *exponent,
-                p.color(diffuse, uv),
-                *specular,
-                *ior,
-            )),
+                absorption,
+            } => Bsdf::PhongFamily(
+                PhongFamily::new(
+                    *model,
+                    *normalized,
+                    *kd_fresnel,
+                    *exponent,
+                    p.color(diffuse, uv),
+                    *specular,
+                    *ior,
+                )
+                .with_absorption(*ior, *absorption),
+            ),
             Material::Null | Material::TwoSided { .. } | Material::NormalMap { .. } => return None,
         };
         Some(bsdf)

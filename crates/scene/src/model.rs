@@ -269,6 +269,9 @@ pub enum Material {
         specular: Rgb,
         /// Refraction index used by the Torrance–Sparrow Fresnel term.
         ior: f32,
+        /// `AbsorptionIndex` k: when positive, the Torrance–Sparrow Fresnel term is that of a
+        /// conductor with complex index `ior + i k` instead of Schlick's dielectric one.
+        absorption: f32,
     },
     /// Tangent-space normal map around `nested` (Mitsuba `normalmap`): the texture's RGB in
     /// [0,1] encodes the shading normal 2·c − 1 in the frame (dp/du, n × dp/du, n). The texture

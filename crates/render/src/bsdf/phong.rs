@@ -14,7 +14,9 @@
 //!
 //! Torrance–Sparrow uses the normalised Blinn distribution D = (p+2)/(2π) cosᵖθh, the
 //! Cook–Torrance shadowing G = min(1, 2 cos θh cos θo / (wo·h), 2 cos θh cos θi / (wo·h)) and
-//! Schlick's Fresnel F(wo·h) with F₀ = ((n−1)/(n+1))² from the refraction index.
+//! Fresnel F(wo·h): Schlick's with F₀ = ((n−1)/(n+1))² from the refraction index n, or, when
+//! the material gives an absorption index k > 0, the exact unpolarised reflectance of a
+//! conductor of complex index n + ik (the course's metals: gold is n = 0.37, k = 2.82).
 //! The unnormalised models keep the course's convention (no 1/π on kd), so their Whitted
 //! renders match the course's reference images; they are not energy conserving.
 //! Original Phong/Blinn–Phong are not reciprocal (they divide by cos θi), as in the course.
@@ -24,6 +26,7 @@
 //! direction of wo; the Blinn lobes draw h with density (p+1)/(2π) cosᵖθh and reflect wo
 //! about it (density / (4 wo·h)). `pdf` is the mixture density, and samples carry eval/pdf.
 
+use super::fresnel::fresnel_conductor_1;
 use super::reflect_z_about;
 use super::{BsdfModel, BsdfSample, TransportMode, mean, mixture_reflection_sample, reflect_z};
 use crate::math::{Frame, INV_PI, Vec2, Vec3};
@@ -40,6 +43,8 @@ pub struct PhongFamily {
     pub ks: Vec3,
     /// Schlick's F₀ from the refraction index.
     pub f0: f32,
+    /// Complex index (n, k) of a conductor: exact conductor Fresnel instead of Schlick's.
+    pub conductor: Option<(f32, f32)>,
     /// Probability of sampling the specular lobe.
     spec_prob: f32,
 }
@@ -64,6 +69,7 @@ impl PhongFamily {
             kd: kd.max(Vec3::ZERO),
             ks: ks.max(Vec3::ZERO),
             f0: if r.is_finite() { r * r } else { 0.0 },
+            conductor: None,
             spec_prob: 0.0,
         };
         // Albedo estimates at normal incidence: unnormalised kd integrates to π·kd.
@@ -81,6 +87,15 @@ impl PhongFamily {
         b
     }
 
+    /// With `k > 0`, Torrance–Sparrow uses the Fresnel reflectance of a conductor of complex
+    /// index `eta + i k`; otherwise nothing changes.
+    pub fn with_absorption(mut self, eta: f32, k: f32) -> PhongFamily {
+        if k > 0.0 && eta.is_finite() && k.is_finite() {
+            self.conductor = Some((eta.max(0.0), k));
+        }
+        self
+    }
+
     fn diffuse_over_pi(&self) -> bool {
         self.normalized || self.model == PhongModel::TorranceSparrow
     }
@@ -92,7 +107,10 @@ impl PhongFamily {
         )
     }
 
-    fn schlick(&self, c: f32) -> f32 {
+    fn fresnel(&self, c: f32) -> f32 {
+        if let Some((eta, k)) = self.conductor {
+            return fresnel_conductor_1(c.clamp(0.0, 1.0), eta, k);
+        }
         let m = (1.0 - c).clamp(0.0, 1.0);
         self.f0 + (1.0 - self.f0) * m * m * m * m * m
     }
@@ -156,7 +174,7 @@ impl BsdfModel for PhongFamily {
                 let g = (2.0 * h.z * cos_o / woh)
                     .min(2.0 * h.z * cos_i / woh)
                     .min(1.0);
-                let f = self.schlick(woh);
+                let f = self.fresnel(woh);
                 let kd = if self.kd_fresnel {
                     self.kd * (1.0 - f)
                 } else {
@@ -249,6 +267,38 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Gold (n = 0.37, k = 2.82) reflects F = ((n−1)² + k²)/((n+1)² + k²) ≈ 0.849 at normal
+    /// incidence, where Schlick's dielectric F₀ from n alone would give 0.211.
+    #[test]
+    fn torrance_sparrow_conductor_fresnel() {
+        let ts = |k| {
+            PhongFamily::new(
+                PhongModel::TorranceSparrow,
+                false,
+                false,
+                50.0,
+                Vec3::ZERO,
+                Vec3::ONE,
+                0.37,
+            )
+            .with_absorption(0.37, k)
+        };
+        let f = |b: PhongFamily| b.eval(Vec3::Z, Vec3::Z, TransportMode::Radiance).x;
+        let (n, k) = (0.37f32, 2.82f32);
+        let exact = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+        let schlick = ((n - 1.0) / (n + 1.0)).powi(2);
+        // D, G and the cosines are common: the ratio is that of the Fresnel terms.
+        let ratio = f(ts(k)) / f(ts(0.0));
+        assert!(
+            (ratio - exact / schlick).abs() < 1e-3 * exact / schlick,
+            "{ratio}"
+        );
+        assert!((exact - 0.849).abs() < 1e-3);
+        // At grazing incidence a conductor reflects (almost) everything, never more.
+        let grazing = ts(k).fresnel(0.01);
+        assert!(grazing <= 1.0 && grazing > 0.95, "{grazing}");
     }
 
     #[test]

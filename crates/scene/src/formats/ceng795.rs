@@ -628,12 +628,6 @@ impl Builder {
                     let &(model, normalized, kd_fresnel, exponent) = brdfs
                         .get(&bid)
                         .ok_or_else(|| self.ctx.err(bn, format!("BRDF {bid} is not defined")))?;
-                    if model == PhongModel::TorranceSparrow && k != 0.0 {
-                        self.unsupported(
-                            "AbsorptionIndex of Torrance-Sparrow BRDFs (dielectric Fresnel \
-                             from RefractionIndex used)",
-                        );
-                    }
                     Material::PhongFamily {
                         model,
                         normalized,
@@ -642,6 +636,7 @@ impl Builder {
                         diffuse: ColorParam::Const(kd),
                         specular: ks,
                         ior,
+                        absorption: k.max(0.0),
                     }
                 }
                 // The homework's default shading, Lambert + Blinn-Phong in the course's
@@ -655,6 +650,7 @@ impl Builder {
                     diffuse: ColorParam::Const(kd),
                     specular: ks,
                     ior,
+                    absorption: 0.0,
                 },
             },
             "mirror" => {
