@@ -404,7 +404,15 @@ pub(crate) fn check_outputs(outputs: &[PathBuf]) -> Result<(), Failure> {
 }
 
 fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
+    let start = std::time::Instant::now();
     let doc = load_scene(&args.scene, &args.define)?;
+    if !args.quiet {
+        eprintln!(
+            "parsed {} in {:.3} s",
+            args.scene.display(),
+            start.elapsed().as_secs_f64()
+        );
+    }
     let Document::Scene(mut desc) = doc else {
         return Err(Failure::input(format!(
             "{}: this is a test file; run it with `penumbra test`",
@@ -549,7 +557,14 @@ pub(crate) fn render_scene_with(
         )));
     }
 
+    let start = std::time::Instant::now();
     let scene = build(desc, &job.build).map_err(Failure::input)?;
+    if !job.quiet {
+        eprintln!(
+            "built the scene (BVH, lights) in {:.3} s",
+            start.elapsed().as_secs_f64()
+        );
+    }
     for w in &scene.warnings {
         eprintln!("{w}");
     }
