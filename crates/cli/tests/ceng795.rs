@@ -97,12 +97,13 @@ fn every_shared_scene_renders_tiny() {
                 );
                 rendered += 1;
             }
-            // The shared data lacks a few PLY files; anything else is a failure.
+            // The shared data lacks one PLY file (hw1/akif_uslu/trex_smooth_ply/mesh_3.ply);
+            // anything else is a failure.
             Err(e) => assert!(e.contains("cannot load PLY file"), "{}: {e}", f.display()),
         }
     }
     eprintln!("{rendered} of {} CENG795 scenes rendered", files.len());
-    assert!(rendered + 3 >= files.len());
+    assert!(rendered + 1 >= files.len());
     std::fs::remove_dir_all(&tmp).ok();
 }
 

@@ -147,5 +147,18 @@ fn errors_name_the_path_or_line() {
     .unwrap();
     let e = load(&x).unwrap_err().to_string();
     assert!(e.contains("bad.xml:6"), "{e}");
+    // A missing PLY file (as hw1/akif_uslu/trex_smooth.json's mesh_3.ply in the shared data):
+    // the error names the object's JSON path and the file.
+    let p = dir.join("ply.json");
+    std::fs::write(
+        &p,
+        r#"{"Scene":{"Materials":{"Material":{"_id":"1"}},
+        "Cameras":{"Camera":{"Position":"0 0 1","Gaze":"0 0 -1","Up":"0 1 0","NearPlane":"-1 1 -1 1","ImageResolution":"4 4"}},
+        "Objects":{"Mesh":[{"Material":"1","Faces":{"_plyFile":"meshes/absent.ply"}}]}}}"#,
+    )
+    .unwrap();
+    let e = load(&p).unwrap_err().to_string();
+    assert!(e.contains("Scene.Objects.Mesh[0].Faces._plyFile"), "{e}");
+    assert!(e.contains("meshes/absent.ply"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
