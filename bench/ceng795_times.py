@@ -17,9 +17,10 @@ by the release binary, one process per camera (`render --sensor I -o OUT.exr`), 
 - load: the 1-minute load average when the camera started (os.getloadavg).
 
 A camera is first rendered at 1 spp (a probe). If the full render would take longer than
-`--budget` seconds it is rendered at a reduced sample count that fits the budget and the
-render, wall and CPU times are extrapolated linearly in spp through the two runs
-(t(s) = a + b·s); the table says so ("extrapolated from N spp").
+`--budget` seconds it is rendered at a reduced sample count N that fits the budget; the
+render time is then extrapolated in proportion to spp, the process wall time by adding the
+missing render time, the CPU time in the same proportion as the render time; the table says
+so ("extrapolated from N spp").
 """
 from __future__ import annotations
 
@@ -126,13 +127,14 @@ def main() -> None:
                 r = render(scene, sensor, n, out, a.threads)
                 render_t, wall, cpu = r["render"], r["wall"], r["cpu"]
                 if n < spp:
-                    # Linear in spp through the probe (1 spp) and this run (n spp).
-                    def extra(key):
-                        slope = (r[key] - probe[key]) / (n - 1)
-                        return r[key] + slope * (spp - n)
-
-                    render_t, wall, cpu = extra("render"), extra("wall"), extra("cpu")
-                    note = f"extrapolated from {n} spp ({r['render']:.1f} s)"
+                    # Render time in proportion to spp; the process pays the extra render
+                    # time on top of what it measured, its CPU time in the same proportion
+                    # (parsing and building take milliseconds).
+                    render_t = r["render"] * spp / n
+                    wall = r["wall"] + render_t - r["render"]
+                    cpu = r["cpu"] * render_t / max(r["render"], 1e-9)
+                    note = (f"extrapolated from {n} spp (render {r['render']:.1f} s, "
+                            f"CPU {r['cpu']:.1f} s)")
             rows.append(
                 f"| {name} | {sensor} | {w}x{h} | {spp} | {r['parse']:.3f} | {r['build']:.3f} | "
                 f"{render_t:.2f} | {wall:.2f} | {cpu:.2f} | {load:.2f} | {note} |"

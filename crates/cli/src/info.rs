@@ -126,6 +126,10 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
             s.sampler.spp,
             s.film.filter,
         );
+        // A sensor's own integrator (CENG795 cameras) replaces the scene's.
+        if let Some(integrator) = &s.integrator {
+            println!("{indent}  integrator: {integrator:?}");
+        }
     }
     println!("{indent}integrator: {:?}", desc.integrator);
     for w in &desc.warnings {
