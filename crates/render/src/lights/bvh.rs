@@ -136,8 +136,6 @@ impl LightBounds {
 /// [`LightBounds`] with what `importance` needs precomputed.
 #[derive(Clone, Copy, Debug)]
 struct NodeBounds {
-    lo: Vec3,
-    hi: Vec3,
     centre: Vec3,
     w: Vec3,
     phi: f32,
@@ -154,8 +152,6 @@ impl NodeBounds {
     fn new(b: &LightBounds) -> NodeBounds {
         let half_diag = 0.5 * (b.hi - b.lo).length();
         NodeBounds {
-            lo: b.lo,
-            hi: b.hi,
             centre: b.centroid(),
             w: b.w,
             phi: b.phi,
@@ -173,24 +169,25 @@ impl NodeBounds {
         let d = r.p - self.centre;
         let dist2 = d.length_squared();
         let d2 = dist2.max(self.half_diag);
-        let wi = if dist2 > 0.0 {
-            d * dist2.sqrt().recip()
+        let inv_dist = if dist2 > 0.0 {
+            dist2.sqrt().recip()
         } else {
-            Vec3::ZERO
+            0.0
         };
+        let wi = d * inv_dist;
         let mut cos_w = self.w.dot(wi);
         if self.two_sided {
             cos_w = cos_w.abs();
         }
         let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-        // The cone of directions from p that the box subtends (its bounding sphere).
-        let inside = r.p.cmpge(self.lo).all() && r.p.cmple(self.hi).all();
-        let cos_b = if inside || dist2 < self.radius2 {
-            -1.0
+        // The cone of directions from p that the box subtends (its bounding sphere; every
+        // direction when p is inside that sphere, which holds for p inside the box).
+        let (cos_b, sin_b) = if dist2 < self.radius2 {
+            (-1.0, 0.0)
         } else {
-            safe_sqrt(1.0 - self.radius2 / dist2)
+            let sin_b = (self.half_diag * inv_dist).min(1.0);
+            (safe_sqrt(1.0 - sin_b * sin_b), sin_b)
         };
-        let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
         let cos_x = cos_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
         let sin_x = sin_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
         let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
@@ -474,16 +471,24 @@ fn sah_split(items: &mut [(u32, LightBounds)]) -> Option<usize> {
                 None => *b,
             });
         }
+        // Bounds of buckets 0..=k (`below[k]`) and k+1.. (`above[k]`), by one sweep each way.
+        let join = |acc: Option<LightBounds>, b: &Option<LightBounds>| match (acc, b) {
+            (Some(a), Some(b)) => Some(a.union(b)),
+            (a, b) => a.or(*b),
+        };
+        let mut acc = None;
+        let below = buckets.map(|b| {
+            acc = join(acc, &b);
+            acc
+        });
+        let mut above = [None; BUCKETS];
+        let mut acc = None;
+        for (a, b) in above.iter_mut().zip(&buckets[1..]).rev() {
+            acc = join(acc, b);
+            *a = acc;
+        }
         for split in 0..BUCKETS - 1 {
-            let side = |range: std::ops::Range<usize>| {
-                buckets[range]
-                    .iter()
-                    .flatten()
-                    .fold(None::<LightBounds>, |acc, b| {
-                        Some(acc.map_or(*b, |a| a.union(b)))
-                    })
-            };
-            let (Some(b0), Some(b1)) = (side(0..split + 1), side(split + 1..BUCKETS)) else {
+            let (Some(b0), Some(b1)) = (below[split], above[split]) else {
                 continue;
             };
             let c = cost(&b0, &all, dim) + cost(&b1, &all, dim);
