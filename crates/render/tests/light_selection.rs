@@ -85,7 +85,7 @@ fn pmf_matches_sampling() {
         assert_eq!(n, 460, "one light per emitting triangle");
         if let render::lights::select::LightSampler::Bvh(bvh) = &scene.light_sampler {
             println!(
-                "light BVH: {} nodes, deepest right turn at depth {}",
+                "light BVH: {} 4-wide nodes, {} levels",
                 bvh.node_count(),
                 bvh.depth()
             );
