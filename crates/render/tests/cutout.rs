@@ -11,7 +11,7 @@
 //! - a fully opaque mask (α = 1) is an ordinary surface and α = 0 an absent one.
 
 use render::build::BuildOptions;
-use render::film::Image;
+use render::compare::image_mean;
 use render::render::render_desc;
 use scene::{Document, LoadOptions};
 
@@ -61,22 +61,7 @@ fn mean_and_se(desc: &scene::SceneDesc, spp: u32) -> (f64, f64) {
     )
     .unwrap();
     assert_eq!(out.film.nonfinite_count(), 0);
-    let (img, se): (Image, Image) = (out.film.develop(), out.film.develop_stderr());
-    let n = img.pixels.len() as f64;
-    let mean = img
-        .pixels
-        .iter()
-        .map(|p| p.element_sum() as f64 / 3.0)
-        .sum::<f64>()
-        / n;
-    let se = (se
-        .pixels
-        .iter()
-        .map(|s| (s.element_sum() as f64 / 3.0).powi(2))
-        .sum::<f64>()
-        / (n * n))
-        .sqrt();
-    (mean, se)
+    image_mean(&out.film.develop(), &out.film.develop_stderr())
 }
 
 fn check(what: &str, (mean, se): (f64, f64), expected: f64) {
