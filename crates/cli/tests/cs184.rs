@@ -179,6 +179,35 @@ fn adaptive_sampling_is_deterministic_across_thread_counts() {
     };
     let (a, na, ta) = run(1);
     let (b, nb, tb) = run(3);
+    // Every pixel stopped exactly where the course's one-pixel loop stops: sample k of the
+    // pixel is sample k of the uniform driver, the rule is checked after every `batch`.
+    let sampler0 = render::sampling::Sampler::new(scene.sampler.kind, 32, scene.sampler.seed);
+    for y in 0..RES.1 {
+        for x in 0..RES.0 {
+            let pixel = render::math::UVec2::new(x, y);
+            let mut sampler = sampler0.clone();
+            let (mut s1, mut s2, mut n) = (0f64, 0f64, 0u32);
+            while n < 32 {
+                sampler.start_pixel_sample(pixel, n);
+                let p_film = pixel.as_vec2() + sampler.next_2d();
+                let u_lens = sampler.next_2d();
+                let v = render::adaptive::illuminance(integ.li(
+                    &scene,
+                    &scene.camera.generate_ray(p_film, u_lens),
+                    &mut sampler,
+                ));
+                if v.is_finite() {
+                    s1 += v;
+                    s2 += v * v;
+                }
+                n += 1;
+                if n.is_multiple_of(4) && settings.converged(n, s1, s2) {
+                    break;
+                }
+            }
+            assert_eq!(na[(y * RES.0 + x) as usize], n, "pixel ({x}, {y})");
+        }
+    }
     // Some pixels stop early and some reach the cap: the stopping rule was exercised.
     assert!(na.iter().any(|&n| n < 32) && na.contains(&32), "{na:?}");
     assert_eq!(na, nb);
