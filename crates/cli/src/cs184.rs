@@ -89,6 +89,9 @@ pub struct Args {
     /// Seed of the sample streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Also write the per-pixel standard error of the image (for `penumbra compare`).
+    #[arg(long, value_name = "FILE")]
+    pub stderr: Option<PathBuf>,
     /// No progress output.
     #[arg(short = 'q', long)]
     pub quiet: bool,
@@ -114,7 +117,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     });
     let job = RenderJob {
         outputs: vec![output],
-        stderr: None,
+        stderr: args.stderr.clone(),
         build: BuildOptions {
             sensor: 0,
             spp: None,
