@@ -252,8 +252,33 @@ fn command_line_flags() {
         "cs184", "-H", "-s", "2", "-r", "16", "12", "-q", "-f", o, scene,
     ]);
     assert!(h.status.success(), "{}", String::from_utf8_lossy(&h.stderr));
+    // -e with a synthesized EXR environment map, and --stderr.
+    let env = dir.join("env.exr");
+    let mut map = Image::new(8, 4);
+    map.set(2, 1, render::math::Vec3::splat(50.0));
+    render::image_io::write_image(&env, &map).unwrap();
+    let se = dir.join("img_se.exr");
+    let e = penumbra(&[
+        "cs184",
+        "-e",
+        env.to_str().unwrap(),
+        "-s",
+        "2",
+        "-r",
+        "16",
+        "12",
+        "-q",
+        "--stderr",
+        se.to_str().unwrap(),
+        "-f",
+        o,
+        scene,
+    ]);
+    assert!(e.status.success(), "{}", String::from_utf8_lossy(&e.stderr));
+    assert!(se.is_file());
     // Bad input: exit code 2 and a message, never a panic.
     for bad in [
+        &["cs184", "-e", "/nonexistent/sky.exr", "-f", o, scene][..],
         &[
             "cs184", "-p", "20", "0", "8", "8", "-r", "24", "16", "-f", o, scene,
         ][..],
