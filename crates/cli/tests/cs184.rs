@@ -311,3 +311,57 @@ fn command_line_flags() {
     assert!(dir.join("img_rate.png").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every `.dae` of `../shared/scenes/cs184` renders through the course's command line with its
+/// own camera: exit 0, a finite image with some light in it (40×30, 2 spp: a smoke test; the
+/// timings at full size are in the issue notes).
+#[test]
+fn every_shared_dae_renders_with_its_own_camera() {
+    let shared = root().join("../shared/scenes/cs184");
+    if !shared.is_dir() {
+        eprintln!(
+            "notice: {} is absent; shared CS184 renders skipped",
+            shared.display()
+        );
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("penumbra-cs184-all-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut files: Vec<PathBuf> = ["sky", "meshedit"]
+        .iter()
+        .filter_map(|sub| std::fs::read_dir(shared.join(sub)).ok())
+        .flat_map(|rd| rd.flatten().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "dae"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 8, "{files:?}");
+    for f in &files {
+        let out = dir.join(format!("{}.exr", f.file_stem().unwrap().to_string_lossy()));
+        let run = penumbra(&[
+            "cs184",
+            "-t",
+            "2",
+            "-s",
+            "2",
+            "-m",
+            "3",
+            "-r",
+            "40",
+            "30",
+            "-q",
+            "-f",
+            out.to_str().unwrap(),
+            f.to_str().unwrap(),
+        ]);
+        assert!(
+            run.status.success(),
+            "{}: {}",
+            f.display(),
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let img = render::image_io::read_image(&out).unwrap();
+        assert!(img.pixels.iter().all(|p| p.is_finite()), "{}", f.display());
+        let mean = img.pixels.iter().map(|p| p.element_sum()).sum::<f32>();
+        assert!(mean > 0.0, "{}: black image", f.display());
+    }
+}
