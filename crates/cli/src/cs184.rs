@@ -10,7 +10,15 @@
 //! - `-a BATCH TOL` adaptive sampling (off unless given): a pixel stops when
 //!   1.96·σ/√n ≤ TOL·μ of its illuminance, checked every BATCH samples; the samples-per-pixel
 //!   heat map is written to `OUT_rate.png` beside the image.
-//! - `-e FILE` an equirectangular environment light (importance sampled).
+//! - `-e FILE` an equirectangular environment light (importance sampled), oriented as the
+//!   course's `EnvironmentLight`: +Y up (top row), the left edge (u = 0) towards −X, u = ¼
+//!   towards +Z (see [`envmap_emitter`]).
+//!
+//! Point lights differ on purpose: the course's `PointLight::sample_L` returns its colour
+//! as incident radiance with no 1/r² falloff; ours is a physical point light of intensity
+//! `colour` (W/sr), so irradiance falls off as 1/r². A surface at distance r is r² times
+//! darker (brighter below 1) than in the course's renderer; the course scenes light with
+//! area lights, which agree.
 //! - `-b R` / `-d D` thin lens: aperture radius and focal distance (scene units).
 //! - `-r W H` output resolution. As in CS184's `Camera::configure`, the field of view grows
 //!   along whichever axis the new aspect ratio makes too narrow.
@@ -51,7 +59,7 @@ pub struct Args {
     /// Maximum ray depth (bounces).
     #[arg(short = 'm', default_value_t = 1)]
     pub max_depth: u32,
-    /// Environment map (equirectangular .exr).
+    /// Environment map (equirectangular .exr), oriented as CS184's: +Y up, left edge −X.
     #[arg(short = 'e')]
     pub envmap: Option<PathBuf>,
     /// Lens radius (thin lens).
@@ -81,6 +89,9 @@ pub struct Args {
     /// Seed of the sample streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Also write the per-pixel standard error of the image (for `penumbra compare`).
+    #[arg(long, value_name = "FILE")]
+    pub stderr: Option<PathBuf>,
     /// No progress output.
     #[arg(short = 'q', long)]
     pub quiet: bool,
@@ -106,7 +117,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     });
     let job = RenderJob {
         outputs: vec![output],
-        stderr: None,
+        stderr: args.stderr.clone(),
         build: BuildOptions {
             sensor: 0,
             spp: None,
@@ -141,12 +152,7 @@ pub(crate) fn apply(
     ));
     if let Some(env) = &args.envmap {
         desc.emitters.push(EmitterDesc {
-            emitter: Emitter::EnvMap {
-                path: env.clone(),
-                scale: 1.0,
-                to_world: Mat4::IDENTITY,
-                mapping: EnvMapping::LatLong,
-            },
+            emitter: envmap_emitter(env),
             loc: Loc::file(env),
         });
     }
@@ -273,6 +279,32 @@ pub(crate) fn apply(
     Ok(adaptive)
 }
 
+/// The `-e` environment light: our lat-long map turned to CS184's orientation.
+///
+/// CS184's `EnvironmentLight` maps a world direction d to θ = acos(d.y) (row: v = θ/π, +Y at
+/// the top) and φ = atan2(−d.z, d.x) + π (column: u = φ/2π), so the left edge u = 0 looks
+/// along −X, u = ¼ along +Z, u = ½ along +X and u = ¾ along −Z. Our (Mitsuba) lat-long map
+/// puts u = 0 at −Z and u = ¼ at +X: the two differ by swapping X and Z (a mirror, which
+/// keeps solid angles, so sampling and pdfs are unchanged). Rows: CS184 puts the centre of
+/// row y at θ = (y + ½)/h · π, we keep Mitsuba's grid (row y at θ = y/(h − 1) · π), at most
+/// half a texel apart.
+pub(crate) fn envmap_emitter(path: &Path) -> Emitter {
+    Emitter::EnvMap {
+        path: path.to_path_buf(),
+        scale: 1.0,
+        to_world: CS184_ENV_TO_WORLD,
+        mapping: EnvMapping::LatLong,
+    }
+}
+
+/// Swap X and Z: our lat-long frame to CS184's world (see [`envmap_emitter`]).
+const CS184_ENV_TO_WORLD: Mat4 = Mat4::from_cols_array(&[
+    0.0, 0.0, 1.0, 0.0, //
+    0.0, 1.0, 0.0, 0.0, //
+    1.0, 0.0, 0.0, 0.0, //
+    0.0, 0.0, 0.0, 1.0,
+]);
+
 /// A camera read from a CS184 camera settings file.
 #[derive(Debug)]
 pub(crate) struct CameraFile {
@@ -350,6 +382,71 @@ pub(crate) fn parse_camera_file(text: &str) -> Result<CameraFile, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The direction CS184's `EnvironmentLight` gives the map point (u, v): θ = vπ,
+    /// φ = 2πu, d = (−cos φ sin θ, cos θ, sin φ sin θ) (its `theta_phi_to_dir`, restated).
+    fn cs184_dir(u: f32, v: f32) -> Vec3 {
+        let (theta, phi) = (v * std::f32::consts::PI, u * std::f32::consts::TAU);
+        Vec3::new(
+            -phi.cos() * theta.sin(),
+            theta.cos(),
+            phi.sin() * theta.sin(),
+        )
+    }
+
+    /// `-e`: a map with one bright texel lights the direction CS184 gives that texel and no
+    /// other. The X↔Z mirror of the direction (where the unturned Mitsuba map puts the
+    /// texel) stays dark, so a lost orientation fails.
+    #[test]
+    fn envmap_orientation_is_the_courses() {
+        use render::film::Image;
+        use render::lights::EnvMap;
+        let Emitter::EnvMap {
+            to_world, mapping, ..
+        } = envmap_emitter(Path::new("sky.exr"))
+        else {
+            panic!("not an environment map")
+        };
+        let (w, h) = (16u32, 8u32);
+        // Texels at the horizon along the axes (u = ¼: +Z, u = ½: +X, u = ¾: −Z) and
+        // off-axis ones above and below it.
+        // (The mirror of column x lands on column 11 − x (mod 16): none of these is next to
+        // its mirror.)
+        for (x, y) in [(3, 3), (7, 4), (11, 3), (4, 1), (12, 5), (9, 6)] {
+            let mut img = Image::new(w, h);
+            img.set(x, y, Vec3::splat(100.0));
+            let env = EnvMap::new(img, 1.0, &to_world, mapping);
+            let (u, v) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+            let d = cs184_dir(u, v);
+            let lit = env.eval(d).x;
+            assert!(lit > 50.0, "texel ({x}, {y}): {lit} along {d}");
+            let mirrored = env.eval(Vec3::new(d.z, d.y, d.x)).x;
+            assert_eq!(
+                mirrored, 0.0,
+                "texel ({x}, {y}) also lights the mirror of {d}"
+            );
+            if !(3..=4).contains(&y) {
+                let below = env.eval(Vec3::new(d.x, -d.y, d.z)).x;
+                assert_eq!(below, 0.0, "texel ({x}, {y}) also lights {d} flipped in y");
+            }
+        }
+        // The axes: the map's left edge looks along −X, the top row is +Y.
+        let mut img = Image::new(w, h);
+        img.set(0, 3, Vec3::splat(1.0));
+        img.set(0, 4, Vec3::splat(1.0));
+        img.set(w - 1, 3, Vec3::splat(1.0));
+        img.set(w - 1, 4, Vec3::splat(1.0));
+        let env = EnvMap::new(img, 1.0, &to_world, mapping);
+        assert!((env.eval(Vec3::NEG_X).x - 1.0).abs() < 1e-5);
+        assert_eq!(env.eval(Vec3::X).x, 0.0);
+        let mut img = Image::new(w, h);
+        for x in 0..w {
+            img.set(x, 0, Vec3::splat(1.0));
+        }
+        let env = EnvMap::new(img, 1.0, &to_world, mapping);
+        assert!((env.eval(Vec3::Y).x - 1.0).abs() < 1e-5);
+        assert_eq!(env.eval(Vec3::NEG_Y).x, 0.0);
+    }
 
     #[test]
     fn camera_file_round_trip() {

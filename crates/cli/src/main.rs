@@ -57,6 +57,9 @@ enum Command {
     /// Default camera: at the origin looking along +z, y up, 60° horizontal field of view.
     Comp30019(comp30019::Args),
     /// Render a CS184 (UC Berkeley) COLLADA scene with the original program's flags.
+    ///
+    /// Difference from the course's renderer: its point lights have no 1/r² falloff; ours are
+    /// physical (intensity `color` W/sr, irradiance ∝ 1/r²). Area lights agree.
     Cs184(cs184::Args),
     /// Trace a few paths through one pixel and write their segments (PLY edges or JSON).
     DebugPaths(debug_paths::Args),
@@ -629,16 +632,21 @@ pub(crate) fn render_scene_with(
                     eprintln!("wrote {}", rate.display());
                 }
             }
-            render::render::RenderOutcome {
+            let outcome = render::render::RenderOutcome {
                 spp: a.max_spp,
                 passes: 1,
                 elapsed: a.elapsed,
                 cancelled: a.cancelled,
                 film: a.film,
-            }
+            };
+            // The true sample count: `spp` is only the cap here.
+            reporter.finish_with(&outcome, a.total_samples);
+            outcome
         }
     };
-    reporter.finish(&outcome);
+    if job.adaptive.is_none() {
+        reporter.finish(&outcome);
+    }
 
     let mut image = outcome.film.develop();
     if let Some(f) = extras.develop {

@@ -46,13 +46,18 @@ impl Reporter {
     }
 
     pub fn finish(&self, o: &RenderOutcome) {
+        let (min, max) = o.film.pixel_bounds();
+        let px = (max - min).as_u64vec2();
+        self.finish_with(o, px.x * px.y * o.spp as u64);
+    }
+
+    /// `finish` for a render that took `samples` pixel samples in all (adaptive sampling,
+    /// where `o.spp` is only the cap).
+    pub fn finish_with(&self, o: &RenderOutcome, samples: u64) {
         if let Some(bar) = &self.bar {
             bar.finish_and_clear();
         }
         if self.bar.is_some() || self.plain {
-            let (min, max) = o.film.pixel_bounds();
-            let px = (max - min).as_u64vec2();
-            let samples = px.x * px.y * o.spp as u64;
             eprintln!(
                 "rendered {} spp in {:.2} s ({} passes, {}){}",
                 o.spp,

@@ -6,11 +6,11 @@
 //! I = 1.96 σ/√n, and stops when I ≤ `tolerance` · μ (or at `max_spp`). A pixel whose samples
 //! are all zero (μ = σ = 0) therefore stops after its first batch.
 //!
-//! Pixels are independent, so one pass over the tiles renders the whole image: every tile
-//! runs its pixels to convergence on a rayon worker. Sample `k` of a pixel is the same sample
-//! as in the uniform driver (`Sampler::start_pixel_sample(pixel, k)`), so the image is
-//! deterministic for any thread count. The film's filter splats samples as usual; with the
-//! default box filter (radius ½) a pixel's value is the mean of its own samples.
+//! The driver runs rounds of `batch` samples over the pixels that have not stopped, tiles in
+//! parallel (see [`render_adaptive`]). Sample `k` of a pixel is the same sample as in the
+//! uniform driver (`Sampler::start_pixel_sample(pixel, k)`), so the image is deterministic
+//! for any thread count. The film's filter splats samples as usual; with the default box
+//! filter (radius ½) a pixel's value is the mean of its own samples.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use crate::build::Scene;
 use crate::film::image::Image;
-use crate::film::{Film, Filter};
+use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec3};
 use crate::render::{Progress, RenderObserver, RenderOptions};
@@ -103,9 +103,25 @@ fn heat(t: f32) -> Vec3 {
     Vec3::new(c(t - 2.0), c(t.min(4.0 - t)), c(2.0 - t))
 }
 
+/// Running sums of one pixel.
+#[derive(Clone, Copy, Default)]
+struct PixelState {
+    s1: f64,
+    s2: f64,
+    n: u32,
+    done: bool,
+}
+
 /// Render with per-pixel adaptive sampling, at most `opts.spp` samples per pixel.
-/// `opts.time_budget` and `opts.pass_duration` are ignored (one pass); `opts.cancel` stops
-/// before the next tile starts (unfinished tiles stay empty).
+///
+/// The render runs in rounds of `batch` samples: in each round every pixel that has not yet
+/// stopped takes its next `batch` samples (tiles in parallel on the current rayon pool) and
+/// then checks the stopping rule, exactly when the one-pixel-at-a-time loop of the course
+/// would (after every `batch` samples). Tiles whose pixels have all stopped drop out of later
+/// rounds; the tiles of a round are merged into the film in a fixed order, so the image is
+/// bit-identical for any thread count. Rounds are short, so no worker idles long behind one
+/// slow tile at the end, and `opts.cancel` stops after the current round with every pixel the
+/// mean of the samples it has. `opts.time_budget` and `opts.pass_duration` are ignored.
 pub fn render_adaptive(
     scene: &Scene,
     integrator: &Integrator,
@@ -124,24 +140,40 @@ pub fn render_adaptive(
     let size = pmax - pmin;
     let samples_total = size.x as u64 * size.y as u64 * max_spp as u64;
     let done = AtomicU64::new(0);
-
-    let finished: Vec<_> = tile_list
-        .par_iter()
+    let mut states: Vec<Vec<PixelState>> = tile_list
+        .iter()
         .map(|&(lo, hi)| {
-            if opts.cancel.load(Ordering::Relaxed) {
-                return None;
-            }
-            let mut tile = film.tile(lo, hi);
-            let mut sampler = template.clone();
-            let mut counts = Vec::with_capacity(((hi.x - lo.x) * (hi.y - lo.y)) as usize);
-            let mut taken = 0u64;
-            for y in lo.y..hi.y {
-                for x in lo.x..hi.x {
-                    let pixel = UVec2::new(x, y);
-                    let (mut s1, mut s2) = (0.0f64, 0.0f64);
-                    let mut n = 0u32;
-                    while n < max_spp {
-                        sampler.start_pixel_sample(pixel, n);
+            let n = (hi - lo).as_u64vec2();
+            vec![PixelState::default(); (n.x * n.y) as usize]
+        })
+        .collect();
+
+    let mut cancelled = false;
+    let mut spp_round = 0u32;
+    while spp_round < max_spp {
+        if opts.cancel.load(Ordering::Relaxed) {
+            cancelled = true;
+            break;
+        }
+        let (s0, s1) = (spp_round, (spp_round + batch).min(max_spp));
+        let finished: Vec<Option<FilmTile>> = tile_list
+            .par_iter()
+            .zip(states.par_iter_mut())
+            .map(|(&(lo, hi), state)| {
+                if state.iter().all(|p| p.done) {
+                    return None;
+                }
+                let mut tile = film.tile(lo, hi);
+                let mut sampler = template.clone();
+                let w = hi.x - lo.x;
+                let mut taken = 0u64;
+                for (i, p) in state.iter_mut().enumerate() {
+                    if p.done {
+                        continue;
+                    }
+                    let pixel = lo + UVec2::new(i as u32 % w, i as u32 / w);
+                    for k in s0..s1 {
+                        sampler.start_pixel_sample(pixel, k);
                         let p_film = pixel.as_vec2() + sampler.next_2d();
                         let u_lens = sampler.next_2d();
                         let cray = scene.camera.generate_ray(p_film, u_lens);
@@ -149,49 +181,50 @@ pub fn render_adaptive(
                         tile.add_sample(p_film, l);
                         let v = illuminance(l);
                         if v.is_finite() {
-                            s1 += v;
-                            s2 += v * v;
-                        }
-                        n += 1;
-                        if n.is_multiple_of(batch) && settings.converged(n, s1, s2) {
-                            break;
+                            p.s1 += v;
+                            p.s2 += v * v;
                         }
                     }
-                    counts.push(n);
-                    taken += n as u64;
+                    p.n = s1;
+                    taken += (s1 - s0) as u64;
+                    p.done = s1 >= max_spp
+                        || (s1.is_multiple_of(batch) && settings.converged(s1, p.s1, p.s2));
                 }
-            }
-            let d = done.fetch_add(taken, Ordering::Relaxed) + taken;
-            observer.progress(&Progress {
-                samples_done: d,
-                samples_total,
-                elapsed: start.elapsed(),
-                spp_done: 0,
-            });
-            Some((tile, counts, (lo, hi)))
-        })
-        .collect();
+                let d = done.fetch_add(taken, Ordering::Relaxed) + taken;
+                observer.progress(&Progress {
+                    samples_done: d,
+                    samples_total,
+                    elapsed: start.elapsed(),
+                    spp_done: s0,
+                });
+                Some(tile)
+            })
+            .collect();
+        let mut any = false;
+        for t in finished.into_iter().flatten() {
+            film.merge(t);
+            any = true;
+        }
+        spp_round = s1;
+        if !any {
+            break;
+        }
+        observer.pass_done(&film, spp_round);
+    }
 
     let mut samples = vec![0u32; size.x as usize * size.y as usize];
-    let mut cancelled = false;
     let mut total = 0u64;
-    for t in finished {
-        let Some((tile, counts, (lo, hi))) = t else {
-            cancelled = true;
-            continue;
-        };
-        film.merge(tile);
+    for (&(lo, hi), state) in tile_list.iter().zip(&states) {
         let w = (hi.x - lo.x) as usize;
-        for (i, &n) in counts.iter().enumerate() {
+        for (i, p) in state.iter().enumerate() {
             let (x, y) = (
                 lo.x - pmin.x + (i % w) as u32,
                 lo.y - pmin.y + (i / w) as u32,
             );
-            samples[y as usize * size.x as usize + x as usize] = n;
-            total += n as u64;
+            samples[y as usize * size.x as usize + x as usize] = p.n;
+            total += p.n as u64;
         }
     }
-    observer.pass_done(&film, max_spp);
     AdaptiveOutcome {
         film,
         samples,

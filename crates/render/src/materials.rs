@@ -224,7 +224,10 @@ impl RtMaterial {
                 )
                 .with_absorption(*ior, *absorption),
             ),
-            Material::Null | Material::TwoSided { .. } | Material::NormalMap { .. } => return None,
+            Material::Null
+            | Material::TwoSided { .. }
+            | Material::NormalMap { .. }
+            | Material::Mask { .. } => return None,
         };
         Some(bsdf)
     }
@@ -291,6 +294,8 @@ impl Scene {
                     }
                     id = *nested;
                 }
+                // The opacity acts in `Scene::intersect` (a cut-out is never hit).
+                Material::Mask { nested, .. } => id = *nested,
                 _ => {
                     mat = Some(m);
                     break;

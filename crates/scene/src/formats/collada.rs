@@ -2,8 +2,9 @@
 //!
 //! What is read (everything else is ignored, with a warning where it could change the image):
 //! - `<asset><up_axis>`: `Y_UP` is our world; `Z_UP` maps (x, y, z) → (−x, z, y) (swap Y and
-//!   Z, negate X: a proper rotation, so handedness is kept); `X_UP` maps (x, y, z) → (−y, x, z).
-//!   A missing `up_axis` means `Y_UP`, the COLLADA schema's default, with a warning.
+//!   Z, negate X: a proper rotation, so handedness is kept); `X_UP` maps (x, y, z) → (y, x, −z)
+//!   (swap X and Y, negate Z), both as the course's parser. As there, an `<asset>` without
+//!   `up_axis` is an error; a document without `<asset>` is `Y_UP` (with a warning).
 //! - `<library_visual_scenes>`: the scene named by `<scene><instance_visual_scene>` (else the
 //!   first), its node tree with `<matrix>` (row-major), `<translate>`, `<rotate>` (axis, degrees),
 //!   `<scale>` composed in document order, and `instance_geometry` / `instance_light` /
@@ -264,12 +265,17 @@ impl<'a, 'input> Ctx<'a, 'input> {
     }
 
     fn up_axis(&mut self, root: Node) -> Result<Mat4> {
-        let Some(ax) = child(root, "asset").and_then(|a| child(a, "up_axis")) else {
-            self.warn(
-                root,
-                "no <asset><up_axis>: assuming Y_UP (the COLLADA default)",
-            );
+        // As the course's parser: an <asset> without <up_axis> is an error, a document
+        // without <asset> is Y_UP (with a warning here).
+        let Some(asset) = child(root, "asset") else {
+            self.warn(root, "no <asset>: assuming Y_UP (the COLLADA default)");
             return Ok(Mat4::IDENTITY);
+        };
+        let Some(ax) = child(asset, "up_axis") else {
+            return Err(self.err(
+                asset,
+                "<asset> has no <up_axis> (expected X_UP, Y_UP or Z_UP)",
+            ));
         };
         match ax.text().unwrap_or("").trim() {
             "Y_UP" => Ok(Mat4::IDENTITY),
@@ -280,11 +286,11 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 Vec4::new(0.0, 1.0, 0.0, 0.0),
                 Vec4::W,
             )),
-            // (x, y, z) -> (-y, x, z)
+            // (x, y, z) -> (y, x, -z), the course's (a proper rotation)
             "X_UP" => Ok(Mat4::from_cols(
                 Vec4::new(0.0, 1.0, 0.0, 0.0),
-                Vec4::new(-1.0, 0.0, 0.0, 0.0),
-                Vec4::Z,
+                Vec4::new(1.0, 0.0, 0.0, 0.0),
+                Vec4::new(0.0, 0.0, -1.0, 0.0),
                 Vec4::W,
             )),
             other => Err(self.err(
@@ -1408,12 +1414,32 @@ mod tests {
     }
 
     #[test]
-    fn missing_up_axis_defaults_to_y_up_with_a_warning() {
+    fn missing_asset_defaults_to_y_up_with_a_warning() {
         let text = SMALL.replace("<asset><up_axis>Z_UP</up_axis></asset>", "");
         let d = load(&text).unwrap();
-        assert!(d.warnings.iter().any(|w| w.message.contains("up_axis")));
+        assert!(d.warnings.iter().any(|w| w.message.contains("Y_UP")));
         let c = d.shapes[2].to_world.transform_point3(Vec3::ZERO);
         assert!(close(c, Vec3::new(1.0, 2.0, 3.0)));
+    }
+
+    #[test]
+    fn asset_without_up_axis_is_an_error_at_its_line() {
+        let e = expect_err("<up_axis>Z_UP</up_axis>", "", "no <up_axis>");
+        let line = SMALL.lines().position(|l| l.contains("<asset>")).unwrap() + 1;
+        assert_eq!(e.loc.line as usize, line, "{e}");
+    }
+
+    #[test]
+    fn x_up_is_the_courses_rotation() {
+        // The course swaps X and Y and negates Z: (1, 2, 3) -> (2, 1, -3).
+        let text = SMALL.replace("Z_UP", "X_UP");
+        let d = load(&text).unwrap();
+        let up = load(&SMALL.replace("Z_UP", "Y_UP")).unwrap();
+        let (a, b) = (
+            d.shapes[2].to_world.transform_point3(Vec3::ZERO),
+            up.shapes[2].to_world.transform_point3(Vec3::ZERO),
+        );
+        assert!(close(a, Vec3::new(b.y, b.x, -b.z)), "{a} {b}");
     }
 
     /// Replace `from` by `to` in SMALL and expect an error mentioning `needle` at `line`.
