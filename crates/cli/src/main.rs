@@ -617,21 +617,7 @@ pub(crate) fn render_scene_with(
             }
             let a =
                 pool.install(|| render_adaptive(&scene, &integrator, &ropts, settings, &reporter));
-            if !job.quiet {
-                eprintln!(
-                    "adaptive sampling: {:.1} samples per pixel on average (cap {})",
-                    a.mean_spp(),
-                    a.max_spp
-                );
-            }
-            if let Some(first) = job.outputs.first() {
-                let stem = first.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
-                let rate = first.with_file_name(format!("{stem}_rate.png"));
-                write_image(&rate, &a.rate_image()).map_err(Failure::other)?;
-                if !job.quiet {
-                    eprintln!("wrote {}", rate.display());
-                }
-            }
+            let (mean_spp, rate_image) = (a.mean_spp(), a.rate_image());
             let outcome = render::render::RenderOutcome {
                 spp: a.max_spp,
                 passes: 1,
@@ -639,8 +625,15 @@ pub(crate) fn render_scene_with(
                 cancelled: a.cancelled,
                 film: a.film,
             };
-            // The true sample count: `spp` is only the cap here.
-            reporter.finish_with(&outcome, a.total_samples);
+            reporter.finish_adaptive(&outcome, a.total_samples, mean_spp);
+            if let Some(first) = job.outputs.first() {
+                let stem = first.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
+                let rate = first.with_file_name(format!("{stem}_rate.png"));
+                write_image(&rate, &rate_image).map_err(Failure::other)?;
+                if !job.quiet {
+                    eprintln!("wrote {}", rate.display());
+                }
+            }
             outcome
         }
     };

@@ -48,21 +48,26 @@ impl Reporter {
     pub fn finish(&self, o: &RenderOutcome) {
         let (min, max) = o.film.pixel_bounds();
         let px = (max - min).as_u64vec2();
-        self.finish_with(o, px.x * px.y * o.spp as u64);
+        let what = format!("{} spp", o.spp);
+        self.finish_line(o, &what, Some(o.passes), px.x * px.y * o.spp as u64);
     }
 
-    /// `finish` for a render that took `samples` pixel samples in all (adaptive sampling,
-    /// where `o.spp` is only the cap).
-    pub fn finish_with(&self, o: &RenderOutcome, samples: u64) {
+    /// `finish` for adaptive sampling, which took `samples` pixel samples in all, `mean_spp`
+    /// per pixel on average (`o.spp` is only the cap).
+    pub fn finish_adaptive(&self, o: &RenderOutcome, samples: u64, mean_spp: f64) {
+        let what = format!("{mean_spp:.1} spp on average (adaptive, cap {})", o.spp);
+        self.finish_line(o, &what, None, samples);
+    }
+
+    fn finish_line(&self, o: &RenderOutcome, what: &str, passes: Option<u32>, samples: u64) {
         if let Some(bar) = &self.bar {
             bar.finish_and_clear();
         }
         if self.bar.is_some() || self.plain {
+            let passes = passes.map_or(String::new(), |n| format!("{n} passes, "));
             eprintln!(
-                "rendered {} spp in {:.2} s ({} passes, {}){}",
-                o.spp,
+                "rendered {what} in {:.2} s ({passes}{}){}",
                 o.elapsed.as_secs_f64(),
-                o.passes,
                 rate(samples, o.elapsed),
                 if o.cancelled { ", interrupted" } else { "" }
             );
