@@ -57,6 +57,13 @@
 //! this crate with `-C target-cpu=native` brought us to ~0.6×). Build: ~2 s on 2 cores, ~1.6×
 //! Embree's high-quality build. Traversal is bound by the latency of node and leaf fetches
 //! (~7 nodes and ~2.5 leaf packets per closest-hit ray).
+//!
+//! Small scenes are bound by arithmetic instead, and the per-ray set-up (reciprocal direction,
+//! shear constants, splats) is a large share of a query. Instructions per ray (callgrind,
+//! Mitsuba's 36-triangle Cornell box / `cbox-specular` with three spheres, path tracing at
+//! 4 spp): closest hit ~800 / ~700 including the `Accel` wrapper, of which ~160 are set-up,
+//! ~85 per 8-wide node (1.5 per ray) and ~135 per triangle-packet edge test (1.4 per ray);
+//! shadow rays ~560 / ~380.
 
 mod bvh;
 pub mod prim;
