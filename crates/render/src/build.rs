@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use scene::{
-    ColorParam, FloatParam, IntegratorDesc, LightSelection, Loc, MaterialId, SamplerDesc,
+    ColorParam, FloatParam, IntegratorDesc, LightSelection, Loc, Material, MaterialId, SamplerDesc,
     SceneDesc, Shape, TriMesh,
 };
 
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit};
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::image_io::{self, Decode};
@@ -50,6 +50,9 @@ pub struct ShapeInfo {
     pub material: Option<MaterialId>,
     pub emission: Option<ColorParam>,
     pub flip_normals: bool,
+    /// Alpha cut-out (the shape's material is a `mask`): the probability that a ray hitting
+    /// the surface stops there. See [`Scene::intersect`].
+    pub opacity: Option<FloatParam>,
 }
 
 /// The lights of one shape.
@@ -89,15 +92,59 @@ pub struct Scene {
     /// Bounds of the bounded geometry.
     pub bounds: (Vec3, Vec3),
     pub triangle_count: usize,
+    /// Whether any shape has an [`ShapeInfo::opacity`] (only then do queries look at it).
+    pub has_cutouts: bool,
 }
 
 impl Scene {
-    /// Closest surface hit along `ray` with 0 < t < `t_max`.
+    /// Closest surface hit along `ray` with 0 < t < `t_max`. Alpha cut-outs are skipped as
+    /// pbrt-v4 does: a hit on a shape with opacity α < 1 counts with probability α, decided by
+    /// a hash of the ray and the primitive (so the decision is the same for every query of the
+    /// same ray), and the search goes on from the far side of a skipped surface.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(ray, t_max)?;
         let shape = &self.shapes[hit.shape as usize];
-        Some(interaction(&shape.geom, &hit, ray, shape.flip_normals))
+        let si = interaction(&shape.geom, &hit, ray, shape.flip_normals);
+        if !self.has_cutouts {
+            return Some(si);
+        }
+        self.skip_cutouts(ray, t_max, hit, si)
+    }
+
+    /// The first hit from `hit` on that is not cut out (see [`Scene::intersect`]).
+    #[cold]
+    fn skip_cutouts(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut hit: Hit,
+        mut si: SurfaceInteraction,
+    ) -> Option<SurfaceInteraction> {
+        let key = ray_hash(ray);
+        let (mut cur, mut t_left) = (*ray, t_max);
+        // Bounded: a ray crosses each primitive at most once (plus spheres' second side).
+        for _ in 0..4096 {
+            let shape = &self.shapes[hit.shape as usize];
+            let Some(opacity) = &shape.opacity else {
+                return Some(si);
+            };
+            let alpha = self.float(opacity, si.uv);
+            let u = hash_to_unit(key ^ ((hit.shape as u64) << 32 | hit.prim as u64));
+            if alpha >= 1.0 || u < alpha {
+                return Some(si);
+            }
+            // Cut out: continue from the far side, in the same direction and parameter units.
+            t_left -= hit.t;
+            cur = si.spawn_ray(cur.d);
+            if t_left <= 0.0 {
+                return None;
+            }
+            hit = self.accel.intersect(&cur, t_left)?;
+            let shape = &self.shapes[hit.shape as usize];
+            si = interaction(&shape.geom, &hit, &cur, shape.flip_normals);
+        }
+        None
     }
 
     /// Choose one light for next-event estimation at receiver `r`: its index, the light and
@@ -128,9 +175,14 @@ impl Scene {
         }
     }
 
+    /// Whether anything is hit with 0 < t < `t_max` (cut-outs skipped as in `intersect`).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.accel.occluded(ray, t_max)
+        if self.has_cutouts {
+            self.intersect(ray, t_max).is_some()
+        } else {
+            self.accel.occluded(ray, t_max)
+        }
     }
 
     #[inline]
@@ -153,6 +205,26 @@ impl Scene {
     pub fn albedo(&self, si: &SurfaceInteraction) -> Vec3 {
         self.bsdf_at(si).map_or(Vec3::ZERO, |(b, _)| b.albedo())
     }
+}
+
+/// A 64-bit hash of a ray's origin and direction (the cut-out decision's randomness).
+fn ray_hash(ray: &Ray) -> u64 {
+    let bits = |v: Vec3| {
+        (v.x.to_bits() as u64) ^ (v.y.to_bits() as u64) << 21 ^ (v.z.to_bits() as u64) << 42
+    };
+    mix64(bits(ray.o) ^ mix64(bits(ray.d)))
+}
+
+/// SplitMix64's finaliser.
+fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// A uniform number in [0, 1) from a 64-bit key.
+fn hash_to_unit(key: u64) -> f32 {
+    (mix64(key) >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
 fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {
@@ -449,6 +521,13 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
             material: s.material,
             emission: s.emission.as_ref().map(|e| e.radiance.clone()),
             flip_normals: s.flip_normals,
+            // Emitters stay whole: light sampling picks points on the entire surface.
+            opacity: s.material.filter(|_| s.emission.is_none()).and_then(|m| {
+                match &desc.materials[m.0 as usize].material {
+                    Material::Mask { opacity, .. } => Some(opacity.clone()),
+                    _ => None,
+                }
+            }),
         });
     }
     let triangle_count = shapes.iter().map(|s| s.geom.triangle_count()).sum();
@@ -469,6 +548,38 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         .collect();
 
     let mut warnings = Vec::new();
+    let has_cutouts = shapes.iter().any(|s| s.opacity.is_some());
+    let is_mask = |id: &MaterialId| {
+        matches!(
+            desc.materials.get(id.0 as usize).map(|m| &m.material),
+            Some(Material::Mask { .. })
+        )
+    };
+    if desc
+        .shapes
+        .iter()
+        .any(|s| s.emission.is_some() && s.material.is_some_and(|m| is_mask(&m)))
+    {
+        warnings.push(format!(
+            "{}: warning: an emitting shape's alpha cut-out is ignored (it emits, and is hit, everywhere)",
+            desc.source.display()
+        ));
+    }
+    for m in &desc.materials {
+        let below = match &m.material {
+            Material::TwoSided { front, back } => {
+                is_mask(front) || back.as_ref().is_some_and(is_mask)
+            }
+            Material::NormalMap { nested, .. } | Material::Mask { nested, .. } => is_mask(nested),
+            _ => false,
+        };
+        if below {
+            warnings.push(format!(
+                "{}: warning: a mask (alpha cut-out) below another material has no effect; put it outermost",
+                m.loc
+            ));
+        }
+    }
 
     let mut film = sensor.film.clone();
     if let Some((w, h)) = opts.resolution {
@@ -527,6 +638,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         infinite_lights,
         bounds,
         triangle_count,
+        has_cutouts,
     };
     scene.light_sampler = LightSampler::new(selection, &scene);
     Ok(scene)

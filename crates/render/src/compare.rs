@@ -262,6 +262,22 @@ pub fn rel_mse(test: &Image, reference: &Image) -> Result<f64, CompareError> {
     Ok(rel_mse_f64(&mean, reference))
 }
 
+/// Mean of `image` over pixels and channels, and its standard error from the film's
+/// standard-error image (`Film::develop_stderr`, scaled so that squares add over pixels).
+/// For analytic checks of a whole image (furnaces, cut-outs).
+pub fn image_mean(image: &Image, stderr: &Image) -> (f64, f64) {
+    let n = image.pixels.len().max(1) as f64;
+    let channel_mean = |p: &crate::math::Vec3| p.element_sum() as f64 / 3.0;
+    let mean = image.pixels.iter().map(channel_mean).sum::<f64>() / n;
+    let var = stderr
+        .pixels
+        .iter()
+        .map(|s| channel_mean(s).powi(2))
+        .sum::<f64>()
+        / (n * n);
+    (mean, var.sqrt())
+}
+
 /// Compares a test render with a reference using the default options.
 pub fn compare(reference: &Reference, test: &TestImages) -> Result<Comparison, CompareError> {
     compare_with(reference, test, &CompareOptions::default())

@@ -220,7 +220,10 @@ impl RtMaterial {
                 *specular,
                 *ior,
             )),
-            Material::Null | Material::TwoSided { .. } | Material::NormalMap { .. } => return None,
+            Material::Null
+            | Material::TwoSided { .. }
+            | Material::NormalMap { .. }
+            | Material::Mask { .. } => return None,
         };
         Some(bsdf)
     }
@@ -287,6 +290,8 @@ impl Scene {
                     }
                     id = *nested;
                 }
+                // The opacity acts in `Scene::intersect` (a cut-out is never hit).
+                Material::Mask { nested, .. } => id = *nested,
                 _ => {
                     mat = Some(m);
                     break;

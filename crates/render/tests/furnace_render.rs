@@ -8,6 +8,7 @@
 
 use glam::{Mat4, Vec3};
 use render::build::{BuildOptions, build};
+use render::compare::image_mean;
 use render::integrators::Integrator;
 use render::render::{RenderOptions, Silent, render};
 use scene::{
@@ -92,22 +93,7 @@ fn furnace_with_fov(material: Material, fov: f32) -> (f64, f64) {
         &Silent,
     );
     assert_eq!(out.film.nonfinite_count(), 0);
-    let img = out.film.develop();
-    let se = out.film.develop_stderr();
-    let n = img.pixels.len() as f64;
-    let mean = img
-        .pixels
-        .iter()
-        .map(|p| p.element_sum() as f64 / 3.0)
-        .sum::<f64>()
-        / n;
-    let var_mean = se
-        .pixels
-        .iter()
-        .map(|s| (s.element_sum() as f64 / 3.0).powi(2))
-        .sum::<f64>()
-        / (n * n);
-    (mean, var_mean.sqrt())
+    image_mean(&out.film.develop(), &out.film.develop_stderr())
 }
 
 fn check(name: &str, m: Material) {

@@ -11,6 +11,11 @@
 //!   same image: 16 independent batches of the uniform render make the reference (mean and
 //!   standard error), and 16 batches of each other strategy pass `render::compare`'s block
 //!   t-test (α = 0.01, Šidák-corrected over block-channels) against it.
+//! - `bvh_beats_power_where_light_is_local`: on the outdoor demo
+//!   (`scenes/many-lights-plaza.xml`, 784 emitting triangles in 196 lanterns) the light BVH's
+//!   per-pixel relative variance, at equal spp (96², 64 spp, direct light), is less than a
+//!   third of power selection's (measured ratio 5.0; no timing involved). Lower resolutions
+//!   show less difference: pixels that partly cover a lantern are noisy under any strategy.
 
 use std::path::PathBuf;
 
@@ -26,7 +31,13 @@ use scene::{Document, LightSelection, LoadOptions, SceneDesc};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 fn demo(defines: &[(&str, &str)]) -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/many-lights.xml");
+    load_scene("many-lights.xml", defines)
+}
+
+fn load_scene(name: &str, defines: &[(&str, &str)]) -> SceneDesc {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name);
     let opts = LoadOptions {
         defines: defines
             .iter()
@@ -85,7 +96,7 @@ fn pmf_matches_sampling() {
         assert_eq!(n, 460, "one light per emitting triangle");
         if let render::lights::select::LightSampler::Bvh(bvh) = &scene.light_sampler {
             println!(
-                "light BVH: {} nodes, deepest right turn at depth {}",
+                "light BVH: {} 4-wide nodes, {} levels",
                 bvh.node_count(),
                 bvh.depth()
             );
@@ -184,4 +195,45 @@ fn strategies_converge_to_the_same_image() {
         println!("{sel:?} vs uniform: {result}");
         assert!(result.passed, "{sel:?} differs from uniform: {result}");
     }
+}
+
+#[test]
+fn bvh_beats_power_where_light_is_local() {
+    let desc = load_scene(
+        "many-lights-plaza.xml",
+        &[("res", "96"), ("max_depth", "2")],
+    );
+    // Mean over pixels of the squared standard error relative to the pixel's value (as relMSE).
+    let rel_variance = |sel: LightSelection| {
+        let out = render_desc(
+            &desc,
+            &BuildOptions {
+                spp: Some(64),
+                seed: Some(11),
+                light_selection: Some(sel),
+                ..Default::default()
+            },
+        )
+        .expect("scene builds");
+        let (img, se) = (out.film.develop(), out.film.develop_stderr());
+        let n = img.pixels.len() as f64;
+        img.pixels
+            .iter()
+            .zip(&se.pixels)
+            .map(|(m, s)| {
+                let (m, s) = (m.element_sum() as f64 / 3.0, s.element_sum() as f64 / 3.0);
+                s * s / (m * m + 0.01)
+            })
+            .sum::<f64>()
+            / n
+    };
+    let (power, bvh) = (
+        rel_variance(LightSelection::Power),
+        rel_variance(LightSelection::Bvh),
+    );
+    println!(
+        "plaza, 64 spp: relative variance power {power:.3e}, bvh {bvh:.3e} (ratio {:.2})",
+        power / bvh
+    );
+    assert!(bvh * 3.0 < power, "power {power}, bvh {bvh}");
 }

@@ -7,6 +7,7 @@
 //!   with the perturbed normals (cos θ′), while the plane without the map is uniform.
 
 use render::build::BuildOptions;
+use render::compare::image_mean;
 use render::film::Image;
 use render::image_io::write_image;
 use render::math::Vec3;
@@ -97,20 +98,7 @@ fn normal_mapped_diffuse_plane_furnace() {
         "furnace.xml",
     );
     let (img, se) = run(&desc, 64);
-    let n = img.pixels.len() as f64;
-    let mean = img
-        .pixels
-        .iter()
-        .map(|p| p.element_sum() as f64 / 3.0)
-        .sum::<f64>()
-        / n;
-    let se = (se
-        .pixels
-        .iter()
-        .map(|s| (s.element_sum() as f64 / 3.0).powi(2))
-        .sum::<f64>()
-        / (n * n))
-        .sqrt();
+    let (mean, se) = image_mean(&img, &se);
     let z = (mean - 0.8) / se.max(1e-9);
     println!("normal-mapped furnace: mean {mean:.5} ± {se:.5} (z = {z:.2})");
     assert!((mean / 0.8 - 1.0).abs() < 0.01, "mean {mean}");

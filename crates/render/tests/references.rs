@@ -18,11 +18,10 @@
 
 use std::path::{Path, PathBuf};
 
-use render::build::{BuildOptions, build};
+use render::build::BuildOptions;
 use render::compare::{TestImages, compare, load_reference, rel_mse};
 use render::film::Image;
-use render::integrators::Integrator;
-use render::render::{RenderOptions, Silent, render};
+use render::render::render_desc;
 use scene::{Document, LoadOptions};
 
 const BATCHES: u64 = 16;
@@ -56,25 +55,12 @@ fn render_batches(scene_file: &Path, defines: &[(&str, &str)], spp: u32) -> Vec<
     };
     (0..BATCHES)
         .map(|seed| {
-            let scene = build(
-                &desc,
-                &BuildOptions {
-                    spp: Some(spp),
-                    seed: Some(seed),
-                    ..Default::default()
-                },
-            )
-            .expect("scene builds");
-            let integrator = Integrator::from_desc(&scene.integrator).unwrap();
-            let out = render(
-                &scene,
-                &integrator,
-                &RenderOptions {
-                    spp,
-                    ..Default::default()
-                },
-                &Silent,
-            );
+            let opts = BuildOptions {
+                spp: Some(spp),
+                seed: Some(seed),
+                ..Default::default()
+            };
+            let out = render_desc(&desc, &opts).expect("scene builds");
             assert_eq!(out.film.nonfinite_count(), 0, "NaN/Inf samples");
             out.film.develop()
         })

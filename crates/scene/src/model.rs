@@ -277,6 +277,14 @@ pub enum Material {
         nested: MaterialId,
         texture: TextureId,
     },
+    /// Alpha cut-out around `nested` (Mitsuba `mask`, OBJ `map_d`/`d`): the surface is there
+    /// with probability `opacity` (read from the texture's first channel, raw) and the ray
+    /// passes through it otherwise. Only meaningful as a shape's own material: below a
+    /// `twosided` or `normalmap` the opacity is ignored (with a warning).
+    Mask {
+        nested: MaterialId,
+        opacity: FloatParam,
+    },
     /// Invisible interface (Mitsuba `null`).
     Null,
 }
@@ -303,6 +311,7 @@ impl Material {
             Material::RoughPlastic { .. } => "roughplastic",
             Material::TwoSided { .. } => "twosided",
             Material::NormalMap { .. } => "normalmap",
+            Material::Mask { .. } => "mask",
             Material::Mirror { .. } => "mirror",
             Material::NoriMicrofacet { .. } => "microfacet",
             Material::PhongFamily { .. } => "phong-family",

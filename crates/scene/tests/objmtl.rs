@@ -121,7 +121,7 @@ fn no_emitter_gets_the_default_light() {
     let s = load(
         &dir,
         QUAD,
-        "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl lamp\nd 0.5\nNi 1.33\n",
+        "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl lamp\nd 0.5\nillum 7\nNi 1.33\n",
     )
     .unwrap();
     assert!(matches!(
@@ -132,6 +132,37 @@ fn no_emitter_gets_the_default_light() {
     assert_eq!(light.name.as_deref(), Some(objmtl::DEFAULT_LIGHT_NAME));
     assert!(light.emission.is_some());
     assert!(s.warnings.iter().any(|w| w.message.contains("no emitter")));
+}
+
+#[test]
+fn dissolve_and_alpha_maps_are_cut_outs() {
+    let dir = tmpdir("alpha");
+    std::fs::write(dir.join("leaf.png"), b"").unwrap(); // existence is all the loader checks
+    let s = load(
+        &dir,
+        QUAD,
+        "newmtl wall\nKd 0.5 0.5 0.5\nd 0.25\nnewmtl lamp\nKd 0.2 0.2 0.2\nmap_d leaf.png\nKe 1 1 1\n",
+    )
+    .unwrap();
+    let outer = |i: usize| &s.material(s.shapes[i].material.unwrap()).material;
+    let Material::Mask { nested, opacity } = outer(0) else {
+        panic!("d < 1 makes a cut-out, got {}", outer(0).kind_name())
+    };
+    assert_eq!(*opacity, scene::FloatParam::Const(0.25));
+    assert!(matches!(
+        s.material(*nested).material,
+        Material::Diffuse { .. }
+    ));
+    let Material::Mask { opacity, .. } = outer(1) else {
+        panic!("map_d makes a cut-out, got {}", outer(1).kind_name())
+    };
+    let scene::FloatParam::Texture(t) = opacity else {
+        panic!("map_d is a texture")
+    };
+    assert!(matches!(
+        &s.textures[t.0 as usize].texture,
+        scene::Texture::Bitmap { raw: true, .. }
+    ));
 }
 
 #[test]

@@ -388,7 +388,7 @@ fn trace(
         if cfg.all_lights {
             if nee {
                 for i in 0..scene.lights.len() as u32 {
-                    let l = sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, sampler);
+                    let l = sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, 1.0, sampler);
                     if l != Vec3::ZERO {
                         *result += st.throughput * l;
                         rec.contribution(
@@ -408,8 +408,8 @@ fn trace(
                 };
                 match picked {
                     Some((i, _, pmf)) => {
-                        let l =
-                            sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, sampler) / pmf;
+                        let l = sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, pmf, sampler)
+                            / pmf;
                         if l != Vec3::ZERO {
                             *result += st.throughput * l;
                             rec.contribution(
@@ -446,6 +446,8 @@ fn trace(
 
 /// Next-event estimation towards light `i` (one sample; `light_samples` are averaged by the
 /// caller through the MIS densities): f·L·w / p, selection probability not included.
+/// `selection` is the probability with which `i` was chosen (1 when all lights are sampled):
+/// the MIS density needs it, and recomputing it would walk the light BVH a second time.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn sample_emitter(
@@ -456,6 +458,7 @@ fn sample_emitter(
     frame: &Frame,
     wo: Vec3,
     i: u32,
+    selection: f32,
     sampler: &mut Sampler,
 ) -> Vec3 {
     let light = &scene.lights[i as usize];
@@ -484,7 +487,7 @@ fn sample_emitter(
         let w = if ls.delta || cfg.combine == Combine::EmitterOnly {
             1.0
         } else {
-            let p_nee = nee_pdf(scene, cfg, &receiver, i, ls.pdf);
+            let p_nee = selection * ls.pdf * cfg.light_samples as f32;
             mis(cfg.combine, p_nee, direction_pdf(cfg, bsdf, wo, wi))
         };
         f * ls.li * (w / ls.pdf)

@@ -5,7 +5,7 @@
 //!
 //! # Material mapping
 //! MTL describes a Blinn–Phong-style material; we map it onto physically based models:
-//! - **transparent** (`illum` 4, 6, 7 or 9, or `d` < 1 / `Tr` > 0): a smooth dielectric of
+//! - **transparent** (`illum` 4, 6, 7 or 9): a smooth dielectric of
 //!   index `Ni` (1.5 when `Ni` is absent or ≤ 1) with transmittance `Tf` (else 1);
 //! - **glossy** (`Ks` non-zero and `Ns` > 0): Mitsuba's rough plastic with a GGX lobe of
 //!   roughness α = √(2 / (Ns + 2)) (the Blinn–Phong exponent ↔ Beckmann/GGX α correspondence
@@ -19,8 +19,9 @@
 //! the image, so bitmaps get the uv transform (u, 1 − v). `Ke` becomes two-sided area
 //! emission of that radiance on the material's triangles. A missing texture file gives one
 //! warning and the constant colour instead. `map_bump`/`bump`/`norm` are tangent-space normal
-//! maps (read raw, wrapping the material in `Material::NormalMap`); `map_d`, `disp`, `Ka`,
-//! `map_Ka` are reported as ignored.
+//! maps (read raw, wrapping the material in `Material::NormalMap`). `map_d` (read raw, first
+//! channel) or `d` < 1 (`Tr` > 0) on a material that is not transparent is an alpha cut-out
+//! (`Material::Mask` outermost). `disp`, `Ka`, `map_Ka` are reported as ignored.
 //!
 //! # Scene defaults (the course application's, which the file does not store)
 //! A perspective camera looking down −z at the bounding box's centre (just inside the box when
@@ -36,10 +37,11 @@ use std::sync::Arc;
 
 use super::obj;
 use crate::{
-    AreaEmission, Camera, ColorParam, Document, FilterDesc, FovAxis, IntegratorDesc, LoadOptions,
-    Loc, Mat3, Mat4, Material, MaterialDesc, MaterialId, MicrofacetDistribution, PathDesc,
-    Projection, Result, Rgb, RussianRoulette, SamplerDesc, SamplerKind, SceneDesc, Sensor, Shape,
-    ShapeDesc, Texture, TextureDesc, TextureFilter, TriMesh, Vec3, Warning, WrapMode,
+    AreaEmission, Camera, ColorParam, Document, FilterDesc, FloatParam, FovAxis, IntegratorDesc,
+    LoadOptions, Loc, Mat3, Mat4, Material, MaterialDesc, MaterialId, MicrofacetDistribution,
+    PathDesc, Projection, Result, Rgb, RussianRoulette, SamplerDesc, SamplerKind, SceneDesc,
+    Sensor, Shape, ShapeDesc, Texture, TextureDesc, TextureFilter, TriMesh, Vec3, Warning,
+    WrapMode,
 };
 
 /// Name given to the square light added to scenes without emitters (so a command-line light
@@ -92,7 +94,7 @@ impl MtlMaterial {
 
     /// Transparent per `illum` or dissolve.
     pub fn is_transparent(&self) -> bool {
-        matches!(self.illum, Some(4 | 6 | 7 | 9)) || self.d < 1.0
+        matches!(self.illum, Some(4 | 6 | 7 | 9))
     }
 
     /// The GGX roughness equivalent to the Blinn–Phong exponent `Ns`.
@@ -594,18 +596,6 @@ fn map_material(
         },
         None => ColorParam::Const(c),
     };
-    let ignored = |what: &str, desc: &mut SceneDesc| {
-        desc.warnings.push(Warning {
-            loc: m.loc.clone(),
-            message: format!(
-                "material '{}': {what} is not supported yet; ignored",
-                m.name
-            ),
-        })
-    };
-    if m.map_d.is_some() {
-        ignored("the alpha map (map_d)", desc);
-    }
     let material = if m.is_transparent() {
         Material::Dielectric {
             int_ior: m.ni.filter(|n| *n > 1.0).unwrap_or(1.5),
@@ -648,6 +638,28 @@ fn map_material(
             name: Some(m.name.clone()),
             loc: m.loc.clone(),
         });
+    }
+    // `map_d` / `d`: alpha cut-out (not for the transparent illum modes, which are glass).
+    if !m.is_transparent() {
+        let map = m
+            .map_d
+            .as_ref()
+            .and_then(|p| texture(p, &m.loc, desc, cache, true));
+        let opacity = match map {
+            Some(t) => Some(FloatParam::Texture(t)),
+            None => (m.d < 1.0).then_some(FloatParam::Const(m.d)),
+        };
+        if let Some(opacity) = opacity {
+            id = desc.add_material(MaterialDesc {
+                material: Material::Mask {
+                    nested: id,
+                    opacity,
+                },
+                ambient: Rgb::ZERO,
+                name: Some(m.name.clone()),
+                loc: m.loc.clone(),
+            });
+        }
     }
     (id, m.ke)
 }

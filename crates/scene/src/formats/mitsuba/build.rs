@@ -591,6 +591,17 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 let texture = self.texture(c)?;
                 Material::NormalMap { nested, texture }
             }
+            "mask" => {
+                let nested = self.nested_bsdfs(pl)?;
+                let [nested] = nested[..] else {
+                    return Err(err(
+                        pl.loc(),
+                        format!("mask needs one nested bsdf, found {}", nested.len()),
+                    ));
+                };
+                let opacity = self.float_param(pl, "opacity", 0.5)?;
+                Material::Mask { nested, opacity }
+            }
             "null" => Material::Null,
             // Nori
             "mirror" => Material::Mirror {
@@ -603,7 +614,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 kd: self.rgb(pl, "kd", Vec3::splat(0.5), false)?,
             },
             // Wrappers whose effect we do not model: keep the nested material.
-            "mask" | "bumpmap" => {
+            "bumpmap" => {
                 let nested = self.nested_bsdfs(pl)?;
                 let Some(&inner) = nested.first() else {
                     return Err(err(pl.loc(), format!("{} needs a nested bsdf", pl.ty)));
