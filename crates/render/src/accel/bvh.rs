@@ -129,15 +129,15 @@ struct TravRay {
 impl TravRay {
     #[inline(always)]
     fn new(ray: &Ray) -> TravRay {
-        let inv = |d: f32| {
-            let r = 1.0 / d;
-            if r.is_finite() {
-                r
-            } else {
-                f32::MAX.copysign(r)
-            }
-        };
-        let i = Vec3::new(inv(ray.d.x), inv(ray.d.y), inv(ray.d.z));
+        // Reciprocal direction in one vector division; an infinite component (zero direction
+        // component) becomes ±MAX with its sign, so slabs never produce 0 · ∞ = NaN.
+        let r = Vec4::ONE / Vec4::new(ray.d.x, ray.d.y, ray.d.z, 1.0);
+        let i = Vec4::select(
+            r.abs().cmplt(Vec4::INFINITY),
+            r,
+            Vec4::splat(f32::MAX).copysign(r),
+        );
+        let neg = i.is_negative_bitmask();
         TravRay {
             o: [
                 Vec4::splat(ray.o.x),
@@ -146,9 +146,9 @@ impl TravRay {
             ],
             inv: [Vec4::splat(i.x), Vec4::splat(i.y), Vec4::splat(i.z)],
             neg: [
-                i.x.is_sign_negative() as usize,
-                i.y.is_sign_negative() as usize,
-                i.z.is_sign_negative() as usize,
+                (neg & 1) as usize,
+                ((neg >> 1) & 1) as usize,
+                ((neg >> 2) & 1) as usize,
             ],
             woop: WoopRay4::new(&WoopRay::new(ray)),
         }
@@ -433,7 +433,9 @@ impl WideBvh {
         }
     }
 
-    #[inline(always)]
+    // Not inlined into the dispatch above: each stack size gets its own frame, so small trees
+    // do not pay for the stack probes of the 1024-entry variant.
+    #[inline(never)]
     fn intersect_n<const N: usize>(&self, ray: &Ray, mut t_max: f32) -> Option<RawHit> {
         if self.root == EMPTY {
             return None;
@@ -463,12 +465,24 @@ impl WideBvh {
                             m &= m - 1;
                         }
                     }
-                    // Sort the entered children by entry distance; keys are the (non-negative)
-                    // distances' bit patterns with the slot index in the three low bits.
                     let mut tb = [0f32; WIDTH];
                     for (h, t) in tn.iter().enumerate() {
                         tb[4 * h..4 * h + 4].copy_from_slice(&t.to_array());
                     }
+                    let s0 = mask.trailing_zeros() as usize;
+                    let rest = mask & (mask - 1);
+                    if rest & (rest - 1) == 0 {
+                        // Two children (the common case): push the farther, enter the nearer.
+                        let s1 = rest.trailing_zeros() as usize;
+                        let (near, far) = if tb[s1] < tb[s0] { (s1, s0) } else { (s0, s1) };
+                        stack_node[sp] = node.child[far];
+                        stack_t[sp] = tb[far];
+                        sp += 1;
+                        cur = node.child[near];
+                        continue;
+                    }
+                    // Sort the entered children by entry distance; keys are the (non-negative)
+                    // distances' bit patterns with the slot index in the three low bits.
                     let mut keys = [u32::MAX; WIDTH];
                     let mut k = 0;
                     let mut m = mask;
@@ -508,14 +522,14 @@ impl WideBvh {
                             }
                         }
                         Packet::Sphere { center, radius } => {
-                            if let Some(t) = intersect_sphere(ray, *center, *radius, t_max) {
+                            if let Some(t) = sphere_packet(ray, *center, *radius, t_max) {
                                 t_max = t;
                                 best = Some(((first + pi) as u32, t, 0.0, 0.0));
                                 best_lane = 0;
                             }
                         }
                         Packet::Disk { to_object } => {
-                            if let Some((t, x, y)) = intersect_disk(ray, to_object, t_max) {
+                            if let Some((t, x, y)) = disk_packet(ray, to_object, t_max) {
                                 t_max = t;
                                 best = Some(((first + pi) as u32, t, x, y));
                                 best_lane = 0;
@@ -549,7 +563,7 @@ impl WideBvh {
         })
     }
 
-    #[inline(always)]
+    #[inline(never)]
     fn occluded_n<const N: usize>(&self, ray: &Ray, t_max: f32) -> bool {
         if self.root == EMPTY {
             return false;
@@ -587,11 +601,9 @@ impl WideBvh {
                     let hit = match p {
                         Packet::Tri4(tri) => tri4_any(&tr.woop, tri, t_max),
                         Packet::Sphere { center, radius } => {
-                            intersect_sphere(ray, *center, *radius, t_max).is_some()
+                            sphere_packet(ray, *center, *radius, t_max).is_some()
                         }
-                        Packet::Disk { to_object } => {
-                            intersect_disk(ray, to_object, t_max).is_some()
-                        }
+                        Packet::Disk { to_object } => disk_packet(ray, to_object, t_max).is_some(),
                     };
                     if hit {
                         return true;
@@ -606,6 +618,19 @@ impl WideBvh {
             cur = stack[sp];
         }
     }
+}
+
+/// The sphere test, kept out of line in the traversal loops: inlined, its per-ray constants
+/// are hoisted into the set-up of every ray, including the many that never reach a sphere.
+#[inline(never)]
+fn sphere_packet(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Option<f32> {
+    intersect_sphere(ray, center, radius, t_max)
+}
+
+/// The disk test, out of line for the same reason as [`sphere_packet`].
+#[inline(never)]
+fn disk_packet(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<(f32, f32, f32)> {
+    intersect_disk(ray, to_object, t_max)
 }
 
 /// A binary tree in obvhs's layout (children of an inner node at `first_index` and

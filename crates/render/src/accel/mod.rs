@@ -57,6 +57,13 @@
 //! this crate with `-C target-cpu=native` brought us to ~0.6×). Build: ~2 s on 2 cores, ~1.6×
 //! Embree's high-quality build. Traversal is bound by the latency of node and leaf fetches
 //! (~7 nodes and ~2.5 leaf packets per closest-hit ray).
+//!
+//! Small scenes are bound by arithmetic instead, and the per-ray set-up (reciprocal direction,
+//! shear constants, splats) is a large share of a query. Instructions per ray (callgrind,
+//! Mitsuba's 36-triangle Cornell box / `cbox-specular` with three spheres, path tracing at
+//! 4 spp): closest hit ~800 / ~700 including the `Accel` wrapper, of which ~160 are set-up,
+//! ~85 per 8-wide node (1.5 per ray) and ~135 per triangle-packet edge test (1.4 per ray);
+//! shadow rays ~560 / ~380.
 
 mod bvh;
 pub mod prim;
@@ -248,8 +255,12 @@ impl Accel {
 }
 
 #[inline]
+#[allow(clippy::eq_op)] // `x - x` is deliberate: it is NaN exactly when `x` is not finite.
 fn ray_ok(ray: &Ray, t_max: f32) -> bool {
-    t_max > 0.0 && ray.o.is_finite() && ray.d.is_finite() && ray.d != Vec3::ZERO
+    // `x - x` is 0 for finite `x` and NaN otherwise: one comparison covers all six
+    // components, without a branch per component.
+    let z = (ray.o - ray.o) + (ray.d - ray.d);
+    t_max > 0.0 && z.x + z.y + z.z == 0.0 && ray.d != Vec3::ZERO
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ pub struct WoopRay {
 }
 
 impl WoopRay {
-    #[inline]
+    #[inline(always)]
     pub fn new(ray: &Ray) -> WoopRay {
         let d = ray.d;
         let a = d.abs();
@@ -44,9 +44,11 @@ impl WoopRay {
         } else {
             ([1, 2, 0][kz], [2, 0, 1][kz])
         };
+        // One vector division: lane-wise IEEE division gives the same values as three scalar ones.
+        let s = Vec4::new(d[kx], d[ky], 1.0, 1.0) / Vec4::splat(dz);
         WoopRay {
             k: [kx, ky, kz],
-            s: Vec3::new(d[kx] / dz, d[ky] / dz, 1.0 / dz),
+            s: Vec3::new(s.x, s.y, s.z),
             o: Vec3::new(o[kx], o[ky], o[kz]),
         }
     }
@@ -310,6 +312,19 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
     let sign = Vec4::select(det.cmplt(Vec4::ZERO), Vec4::NEG_ONE, Vec4::ONE);
     let ts = t_scaled * sign;
     let adet = det * sign;
+    let in_range = ts.cmpgt(Vec4::ZERO) & ts.cmplt(Vec4::splat(t_max) * adet);
+    if in_range.bitmask() & inside == 0 {
+        // Inside the edges but behind the origin or beyond t_max (typically a shadow ray
+        // passing through the emitter it ends at): the error floor below is positive, so it
+        // cannot accept these lanes; skip computing it.
+        return Tri4Eval {
+            mask: 0,
+            v,
+            w: wg,
+            t_scaled,
+            det,
+        };
+    }
     let (szs_a, szs_b, szs_c) = ((w.sz * az).abs(), (w.sz * bz).abs(), (w.sz * cz).abs());
     let max_z = szs_a.max(szs_b).max(szs_c);
     let max_x = ax.abs().max(bx.abs()).max(cx.abs());
@@ -320,7 +335,7 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
     let delta_y = gamma(5) * (max_y + max_z);
     let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     let floor = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e);
-    let ok = ts.cmpgt(floor) & ts.cmplt(Vec4::splat(t_max) * adet) & det.cmpne(Vec4::ZERO);
+    let ok = ts.cmpgt(floor) & in_range & det.cmpne(Vec4::ZERO);
     let mask = ok.bitmask() & inside;
     Tri4Eval {
         mask,

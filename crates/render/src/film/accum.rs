@@ -238,6 +238,15 @@ impl FilmTile {
         }
         let (first, last) = (first.as_uvec2(), last.as_uvec2());
         let stride = (self.max.x - self.min.x) as usize;
+        if first == last {
+            // One pixel (every sample of the default box filter): the same weight as the
+            // loops below compute, without their set-up.
+            let w = g(first.x as f32 + 0.5 - p.x) as f64;
+            let wy = g(first.y as f32 + 0.5 - p.y) as f64;
+            let i = (first.y - self.min.y) as usize * stride + (first.x - self.min.x) as usize;
+            self.pixels[i].add(l, w * wy);
+            return;
+        }
         let mut wx = [0.0f64; TAPS];
         let mut x0 = first.x;
         while x0 <= last.x {

@@ -432,14 +432,14 @@ fn trace(
             let n = cfg.splitting;
             st.throughput /= n as f32;
             for _ in 1..n {
-                if let Some(next) = scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
+                let mut next = st;
+                if scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &mut next) {
                     trace(scene, sampler, cfg, rec, next, result);
                 }
             }
         }
-        match scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &st) {
-            Some(next) => st = next,
-            None => return,
+        if !scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &mut st) {
+            return;
         }
     }
 }
@@ -470,19 +470,18 @@ fn sample_emitter(
     } else {
         1
     };
-    let mut sum = Vec3::ZERO;
-    for _ in 0..n {
+    let mut one = || -> Vec3 {
         let u = sampler.next_2d();
         let Some(ls) = light.sample_li(scene, &receiver, u) else {
-            continue;
+            return Vec3::ZERO;
         };
         if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
-            continue;
+            return Vec3::ZERO;
         }
         let wi = frame.to_local(ls.wi);
         let f = bsdf.eval(wo, wi, TransportMode::Radiance);
         if f == Vec3::ZERO || scene.shadowed(si, &ls.target, ls.wi) {
-            continue;
+            return Vec3::ZERO;
         }
         // Density of this strategy for MIS: all samples of all lights considered.
         let w = if ls.delta || cfg.combine == Combine::EmitterOnly {
@@ -491,8 +490,15 @@ fn sample_emitter(
             let p_nee = selection * ls.pdf * cfg.light_samples as f32;
             mis(cfg.combine, p_nee, direction_pdf(cfg, bsdf, wo, wi))
         };
-        sum += f * ls.li * (w / ls.pdf);
-    }
+        f * ls.li * (w / ls.pdf)
+    };
+    // One sample is the common case (always, unless every light is visited): without the
+    // loop, nothing of the loop body is hoisted ahead of it for nothing.
+    let sum = if n == 1 {
+        one()
+    } else {
+        (0..n).fold(Vec3::ZERO, |sum, _| sum + one())
+    };
     let per_light = if cfg.all_lights { n } else { cfg.light_samples };
     sum / per_light as f32
 }
@@ -522,8 +528,10 @@ fn uniform_direction(bsdf: &Bsdf, wo: Vec3, u: Option<Vec2>) -> (Vec3, f32) {
     }
 }
 
-/// Draw the next direction at `si`, update the state (throughput, Russian roulette) and tell
-/// the recorder; `None` when the path ends here.
+/// Draw the next direction at `si`, advance the state `st` to the next segment (throughput,
+/// Russian roulette) and tell the recorder; `false` when the path ends here (`st` is then
+/// left partly updated and must not be used). In place: the state is large, and returning
+/// a new one cost two copies per bounce.
 #[allow(clippy::too_many_arguments)]
 fn scatter(
     scene: &Scene,
@@ -534,8 +542,8 @@ fn scatter(
     bsdf: &Bsdf,
     frame: &Frame,
     wo: Vec3,
-    st: &PathState,
-) -> Option<PathState> {
+    next: &mut PathState,
+) -> bool {
     let u1 = sampler.next_1d();
     let u2 = sampler.next_2d();
     let sample = if cfg.directions == DirectionSampling::UniformHemisphere && !bsdf.has_delta() {
@@ -555,13 +563,12 @@ fn scatter(
     };
     let Some(bs) = sample else {
         rec.end(PathEnd::Absorbed);
-        return None;
+        return false;
     };
     if !bs.delta && !cfg.continue_diffuse {
         rec.end(PathEnd::Absorbed);
-        return None;
+        return false;
     }
-    let mut next = *st;
     next.throughput *= bs.weight;
     next.eta *= bs.eta;
     if bs.transmission {
@@ -589,7 +596,7 @@ fn scatter(
     let t_max_component = next.throughput.max_element();
     if t_max_component.is_nan() || t_max_component <= 0.0 {
         rec.end(PathEnd::Absorbed);
-        return None;
+        return false;
     }
     let u_rr = sampler.next_1d();
     let q = match cfg.rr {
@@ -603,7 +610,7 @@ fn scatter(
     if q < 1.0 {
         if u_rr >= q {
             rec.end(PathEnd::Roulette);
-            return None;
+            return false;
         }
         next.throughput /= q;
     }
@@ -613,7 +620,7 @@ fn scatter(
         pdf: bs.pdf,
         throughput: next.throughput,
     });
-    Some(next)
+    true
 }
 
 impl Scene {
