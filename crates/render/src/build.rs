@@ -106,13 +106,14 @@ impl Scene {
         let hit = self.accel.intersect(ray, t_max)?;
         let shape = &self.shapes[hit.shape as usize];
         let si = interaction(&shape.geom, &hit, ray, shape.flip_normals);
-        if !self.has_cutouts {
+        if shape.opacity.is_none() {
             return Some(si);
         }
         self.skip_cutouts(ray, t_max, hit, si)
     }
 
-    /// The first hit from `hit` on that is not cut out (see [`Scene::intersect`]).
+    /// The first hit from `hit` (on a shape with an opacity) on that is not cut out (see
+    /// [`Scene::intersect`]).
     #[cold]
     fn skip_cutouts(
         &self,
