@@ -304,6 +304,69 @@ pub fn cube_mesh() -> TriMesh {
     m
 }
 
+/// An opacity read from a bitmap whose file has an alpha channel uses that channel (an RGBA
+/// `map_d`, or the diffuse map itself as exporters write it); files without one use their
+/// first channel, as any scalar texture does. The alpha textures are appended to `textures`.
+fn opacity_from_alpha(
+    desc: &SceneDesc,
+    base: &Path,
+    shapes: &mut [ShapeInfo],
+    textures: &mut Vec<Texture>,
+) -> Result<(), BuildError> {
+    let mut alpha_of: std::collections::HashMap<u32, Option<u32>> = Default::default();
+    for shape in shapes.iter_mut() {
+        let Some(FloatParam::Texture(t)) = &mut shape.opacity else {
+            continue;
+        };
+        let id = match alpha_of.get(&t.0) {
+            Some(id) => *id,
+            None => {
+                let id = alpha_texture(&desc.textures[t.0 as usize], base)?.map(|tex| {
+                    textures.push(tex);
+                    textures.len() as u32 - 1
+                });
+                alpha_of.insert(t.0, id);
+                id
+            }
+        };
+        if let Some(id) = id {
+            t.0 = id;
+        }
+    }
+    Ok(())
+}
+
+/// The alpha channel of a bitmap texture as a texture, if the file has a non-opaque one.
+fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Texture>, BuildError> {
+    let scene::Texture::Bitmap {
+        path,
+        filter,
+        wrap,
+        to_uv,
+        ..
+    } = &desc.texture
+    else {
+        return Ok(None);
+    };
+    let (mut image, alpha) =
+        image_io::read_image_alpha(&base.join(path), Decode::Raw).map_err(|e| BuildError {
+            loc: desc.loc.clone(),
+            message: format!("cannot read texture: {e}"),
+        })?;
+    if alpha.iter().all(|&a| a >= 1.0) {
+        return Ok(None);
+    }
+    for (p, a) in image.pixels.iter_mut().zip(alpha) {
+        *p = Vec3::splat(a);
+    }
+    Ok(Some(Texture::Bitmap {
+        image: Arc::new(image),
+        filter: *filter,
+        wrap: *wrap,
+        to_uv: *to_uv,
+    }))
+}
+
 fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, BuildError> {
     Ok(match &desc.texture {
         scene::Texture::Constant(c) => Texture::Constant(*c),
@@ -535,11 +598,12 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
     let accel = Accel::build(shapes.iter().map(|s| s.geom.accel_shape()).collect());
     let bounds = accel.bounds();
 
-    let textures = desc
+    let mut textures = desc
         .textures
         .iter()
         .map(|t| load_texture(t, &base))
         .collect::<Result<Vec<_>, _>>()?;
+    opacity_from_alpha(desc, &base, &mut shapes, &mut textures)?;
 
     let selection = opts.light_selection.unwrap_or(desc.light_selection);
     let split = selection != LightSelection::Uniform;

@@ -8,7 +8,8 @@
 //!   BSDF-sampled rays, as next-event estimation of so large an emitter has a negligible MIS
 //!   weight; under a directional light of irradiance 1 it sees (1 − α)²·ρ/π, found by shadow
 //!   rays alone (a delta light);
-//! - a fully opaque mask (α = 1) is an ordinary surface and α = 0 an absent one.
+//! - a fully opaque mask (α = 1) is an ordinary surface and α = 0 an absent one;
+//! - an opacity bitmap with an alpha channel (an RGBA `map_d`) uses that channel, not red.
 
 use render::build::BuildOptions;
 use render::compare::image_mean;
@@ -130,4 +131,32 @@ fn light_reaches_through_a_mask_by_both_strategies() {
     let desc = scene(&body, "sun.xml");
     let expected = 0.6 * 0.6 * 0.5 / std::f64::consts::PI;
     check("sun through opacity 0.4", mean_and_se(&desc, 64), expected);
+}
+
+#[test]
+fn an_rgba_opacity_map_uses_its_alpha_channel() {
+    let dir = std::env::temp_dir().join(format!("penumbra-cutout-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // Red 255 everywhere (opaque if red were read), alpha 64/255.
+    let png = dir.join("leaf.png");
+    image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 0, 0, 64]))
+        .save(&png)
+        .unwrap();
+    let body = format!(
+        r#"<emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="100"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="mask">
+            <texture name="opacity" type="bitmap"><string name="filename" value="{}"/></texture>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        </bsdf>
+    </shape>"#,
+        png.display()
+    );
+    let desc = scene(&body, "rgba.xml");
+    check(
+        "RGBA opacity map",
+        mean_and_se(&desc, 16),
+        1.0 - 64.0 / 255.0,
+    );
 }

@@ -281,9 +281,9 @@ pub enum Material {
         texture: TextureId,
     },
     /// Alpha cut-out around `nested` (Mitsuba `mask`, OBJ `map_d`/`d`): the surface is there
-    /// with probability `opacity` (read from the texture's first channel, raw) and the ray
-    /// passes through it otherwise. Only meaningful as a shape's own material: below a
-    /// `twosided` or `normalmap` the opacity is ignored (with a warning).
+    /// with probability `opacity` (a bitmap's alpha channel when its file has one, else its
+    /// first channel) and the ray passes through it otherwise. Only meaningful as a shape's own
+    /// material: below a `twosided` or `normalmap` the opacity is ignored (with a warning).
     Mask {
         nested: MaterialId,
         opacity: FloatParam,
