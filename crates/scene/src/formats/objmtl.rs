@@ -19,9 +19,10 @@
 //! the image, so bitmaps get the uv transform (u, 1 − v). `Ke` becomes two-sided area
 //! emission of that radiance on the material's triangles. A missing texture file gives one
 //! warning and the constant colour instead. `map_bump`/`bump`/`norm` are tangent-space normal
-//! maps (read raw, wrapping the material in `Material::NormalMap`). `map_d` (read raw: its alpha
-//! channel when the file has one, else its first channel) or `d` < 1 (`Tr` > 0) on a material that is not transparent is an alpha cut-out
-//! (`Material::Mask` outermost). `disp`, `Ka`, `map_Ka` are reported as ignored.
+//! maps (read raw, wrapping the material in `Material::NormalMap`). `map_d` (read raw: its
+//! alpha channel when the file has one, else its first channel) or `d` < 1 (`Tr` > 0) on a
+//! material that is not transparent is an alpha cut-out (`Material::Mask` outermost). `disp`,
+//! `Ka`, `map_Ka` are reported as ignored.
 //!
 //! # Scene defaults (the course application's, which the file does not store)
 //! A perspective camera looking down −z at the bounding box's centre (just inside the box when
