@@ -620,25 +620,27 @@ fn map_material(
             reflectance: param(m.kd.min(Rgb::ONE), &m.map_kd, desc),
         }
     };
-    let mut id = desc.add_material(MaterialDesc {
-        material,
-        ambient: Rgb::ZERO,
-        name: Some(m.name.clone()),
-        loc: m.loc.clone(),
-    });
+    // The MTL material is the base; maps wrap it in further materials of the same name.
+    let add = |material: Material, desc: &mut SceneDesc| {
+        desc.add_material(MaterialDesc {
+            material,
+            ambient: Rgb::ZERO,
+            name: Some(m.name.clone()),
+            loc: m.loc.clone(),
+        })
+    };
+    let mut id = add(material, desc);
     // `map_bump`/`bump`/`norm`: a tangent-space normal map (read raw) around the material.
     if let Some(p) = &m.map_bump
         && let Some(texture) = texture(p, &m.loc, desc, cache, true)
     {
-        id = desc.add_material(MaterialDesc {
-            material: Material::NormalMap {
+        id = add(
+            Material::NormalMap {
                 nested: id,
                 texture,
             },
-            ambient: Rgb::ZERO,
-            name: Some(m.name.clone()),
-            loc: m.loc.clone(),
-        });
+            desc,
+        );
     }
     // `map_d` / `d`: alpha cut-out (not for the transparent illum modes, which are glass).
     if !m.is_transparent() {
@@ -651,15 +653,13 @@ fn map_material(
             None => (m.d < 1.0).then_some(FloatParam::Const(m.d)),
         };
         if let Some(opacity) = opacity {
-            id = desc.add_material(MaterialDesc {
-                material: Material::Mask {
+            id = add(
+                Material::Mask {
                     nested: id,
                     opacity,
                 },
-                ambient: Rgb::ZERO,
-                name: Some(m.name.clone()),
-                loc: m.loc.clone(),
-            });
+                desc,
+            );
         }
     }
     (id, m.ke)
