@@ -97,40 +97,38 @@ fn camera_rays_pass_a_partial_mask() {
 
 #[test]
 fn light_reaches_through_a_mask_by_both_strategies() {
-    let body = format!(
-        r#"<shape type="rectangle">
-        <transform name="to_world"><scale value="1000"/><rotate x="1" angle="90"/><translate y="2"/></transform>
-        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
-    </shape>
+    // A diffuse floor (ρ = 0.5) under a black mask of opacity 0.4, lit by `light`.
+    let lit_floor = |light: &str, name: &str| {
+        let body = format!(
+            r#"{light}
     <shape type="rectangle">
         <transform name="to_world"><scale value="1000"/><rotate x="1" angle="-90"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
     </shape>
     {}"#,
-        masked_black_plane(1.0, 0.4)
-    );
-    let desc = scene(&body, "lit.xml");
+            masked_black_plane(1.0, 0.4)
+        );
+        mean_and_se(&scene(&body, name), 64)
+    };
+    let ceiling = r#"<shape type="rectangle">
+        <transform name="to_world"><scale value="1000"/><rotate x="1" angle="90"/><translate y="2"/></transform>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>"#;
     // A 1000 m ceiling 2 m up subtends all but 2·10⁻⁶ of the cosine-weighted hemisphere.
     check(
         "ceiling through opacity 0.4",
-        mean_and_se(&desc, 64),
+        lit_floor(ceiling, "lit.xml"),
         0.6 * 0.6 * 0.5,
     );
-
-    let body = format!(
-        r#"<emitter type="directional">
+    let sun = r#"<emitter type="directional">
         <vector name="direction" x="0" y="-1" z="0"/><rgb name="irradiance" value="1"/>
-    </emitter>
-    <shape type="rectangle">
-        <transform name="to_world"><scale value="1000"/><rotate x="1" angle="-90"/></transform>
-        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
-    </shape>
-    {}"#,
-        masked_black_plane(1.0, 0.4)
-    );
-    let desc = scene(&body, "sun.xml");
+    </emitter>"#;
     let expected = 0.6 * 0.6 * 0.5 / std::f64::consts::PI;
-    check("sun through opacity 0.4", mean_and_se(&desc, 64), expected);
+    check(
+        "sun through opacity 0.4",
+        lit_floor(sun, "sun.xml"),
+        expected,
+    );
 }
 
 #[test]
