@@ -459,6 +459,18 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         Ok(id)
     }
 
+    /// The single nested bsdf of a wrapper (`normalmap`, `mask`), or an error naming it.
+    fn one_nested_bsdf(&mut self, pl: &Plugin<'s>) -> Result<MaterialId> {
+        let nested = self.nested_bsdfs(pl)?;
+        match nested[..] {
+            [one] => Ok(one),
+            _ => Err(err(
+                pl.loc(),
+                format!("{} needs one nested bsdf, found {}", pl.ty, nested.len()),
+            )),
+        }
+    }
+
     fn nested_bsdfs(&mut self, pl: &Plugin<'s>) -> Result<Vec<MaterialId>> {
         let children: Vec<&Child<'s>> = pl.children_with(&["bsdf"]).collect();
         let mut out = Vec::with_capacity(children.len());
@@ -572,13 +584,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
             }
             "normalmap" => {
-                let nested = self.nested_bsdfs(pl)?;
-                let [nested] = nested[..] else {
-                    return Err(err(
-                        pl.loc(),
-                        format!("normalmap needs one nested bsdf, found {}", nested.len()),
-                    ));
-                };
+                let nested = self.one_nested_bsdf(pl)?;
                 let Some(c) = pl
                     .named_child("normalmap")
                     .filter(|c| c.elem.tag == "texture")
@@ -592,13 +598,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 Material::NormalMap { nested, texture }
             }
             "mask" => {
-                let nested = self.nested_bsdfs(pl)?;
-                let [nested] = nested[..] else {
-                    return Err(err(
-                        pl.loc(),
-                        format!("mask needs one nested bsdf, found {}", nested.len()),
-                    ));
-                };
+                let nested = self.one_nested_bsdf(pl)?;
                 let opacity = self.float_param(pl, "opacity", 0.5)?;
                 Material::Mask { nested, opacity }
             }
