@@ -16,10 +16,9 @@ use crate::geometry::Ray;
 use crate::image_io::{self, Decode};
 use crate::integrators::Integrator;
 use crate::lights::select::LightSampler;
-use crate::lights::{EnvMap, Light, Receiver};
+use crate::lights::{EnvMap, Light, MeshSampling, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
-use crate::sampling::distrib::Distribution1D;
 use crate::shapes::{ShapeGeom, SurfaceInteraction, interaction};
 use crate::textures::Texture;
 
@@ -456,7 +455,7 @@ fn build_lights(
                     }
                     continue;
                 }
-                Some(Arc::new(Distribution1D::new(&areas)))
+                Some(MeshSampling::new(positions, indices, &areas))
             }
             ShapeGeom::Plane { .. } => {
                 return Err(BuildError {

@@ -200,6 +200,31 @@ fn emitter_sampling_matches_its_pdf() {
             ],
         ),
         (
+            // A skewed parallelogram split along its long diagonal, its two triangles
+            // sharing positions but not indices (the one-step parallelogram sampling).
+            "parallelogram",
+            emitting(
+                Shape::Mesh(Arc::new(TriMesh {
+                    positions: vec![
+                        Vec3::new(-1.0, -0.5, 2.0),
+                        Vec3::new(0.8, -0.2, 2.3),
+                        Vec3::new(2.0, 1.0, 2.3),
+                        Vec3::new(0.8, -0.2, 2.3),
+                        Vec3::new(0.2, 0.7, 2.0),
+                        Vec3::new(-1.0, -0.5, 2.0),
+                    ],
+                    indices: vec![[0, 4, 1], [2, 3, 4]],
+                    ..Default::default()
+                })),
+                Mat4::IDENTITY,
+            ),
+            vec![
+                Vec3::ZERO,
+                Vec3::new(-2.0, 1.0, 0.5),
+                Vec3::new(1.5, 0.5, 1.9),
+            ],
+        ),
+        (
             "disk",
             emitting(Shape::Disk, disk),
             vec![

@@ -15,6 +15,7 @@
 //! Roughness values are clamped to ≥ 1e-4 like Mitsuba.
 
 use crate::math::{PI, Vec2, Vec3};
+use crate::sampling::warp;
 
 use super::fresnel::{fresnel_dielectric, refract_m};
 
@@ -153,8 +154,7 @@ impl Microfacet {
         };
         let t2 = vh.cross(t1);
         let r = u.x.sqrt();
-        let phi = 2.0 * PI * u.y;
-        let (sp, cp) = phi.sin_cos();
+        let (sp, cp) = warp::sin_cos_2pi(u.y);
         let p1 = r * cp;
         let mut p2 = r * sp;
         let s = 0.5 * (1.0 + vh.z);

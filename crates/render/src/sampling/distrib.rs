@@ -44,6 +44,9 @@ pub struct Distribution1D {
     cdf: Vec<f64>,
     /// Σ func.
     sum: f64,
+    /// 1 / Σ func (0 when the sum is 0): the pmf is `f · inv_sum`, one multiplication instead
+    /// of a double-precision division per sample (the mesh emitters' triangle choice).
+    inv_sum: f64,
 }
 
 impl Distribution1D {
@@ -75,7 +78,13 @@ impl Distribution1D {
             }
         }
         cdf[n] = 1.0;
-        Distribution1D { func, cdf, sum }
+        let inv_sum = if sum > 0.0 { 1.0 / sum } else { 0.0 };
+        Distribution1D {
+            func,
+            cdf,
+            sum,
+            inv_sum,
+        }
     }
 
     /// Number of cells.
@@ -120,7 +129,7 @@ impl Distribution1D {
     #[inline]
     fn cell_pdf(&self, i: usize) -> f32 {
         if self.sum > 0.0 {
-            (self.func[i] as f64 * self.func.len() as f64 / self.sum) as f32
+            (self.func[i] as f64 * self.func.len() as f64 * self.inv_sum) as f32
         } else {
             1.0
         }
@@ -150,7 +159,7 @@ impl Distribution1D {
     #[inline]
     pub fn pmf(&self, i: usize) -> f32 {
         match self.func.get(i) {
-            Some(&f) if self.sum > 0.0 => (f as f64 / self.sum) as f32,
+            Some(&f) if self.sum > 0.0 => (f as f64 * self.inv_sum) as f32,
             Some(_) => 1.0 / self.func.len() as f32,
             None => 0.0,
         }
