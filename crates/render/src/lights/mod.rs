@@ -284,11 +284,11 @@ impl MeshSampling {
 /// `(s, t) ∈ [0, 1]²`, split along the diagonal from `a + e₁` to `a + e₂`. One 2D sample gives
 /// a uniform point with no discrete choice and no triangle warp: the same density as choosing
 /// a triangle by area (the halves have equal areas), for a third of the work of a quad light.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parallelogram {
-    /// Which vertex slot of each triangle is which corner: in triangle 0 (which holds `a`),
-    /// `a`, `a + e₁`, `a + e₂`; in triangle 1, `a + e₁`, `a + e₂`, `a + e₁ + e₂`.
-    slots: [[u8; 3]; 2],
+    /// Per triangle (0 holds `a`, 1 the opposite corner), the barycentrics `b₁`, `b₂` of the
+    /// point as affine functions of the sample: coefficients of `(1, s, t)`.
+    coef: [[Vec3; 2]; 2],
 }
 
 impl Parallelogram {
@@ -319,33 +319,40 @@ impl Parallelogram {
         let ok = (a + e1 + e2 - p1[l1]).abs().max_element() <= Self::TOLERANCE * scale
             && e1.cross(e2).length_squared() > 0.0
             && scale.is_finite();
-        ok.then_some(Parallelogram {
-            slots: [
-                [k0 as u8, i0 as u8, j0 as u8],
-                [i1 as u8, j1 as u8, l1 as u8],
+        if !ok {
+            return None;
+        }
+        // Weights of the corners as coefficients of (1, s, t): in triangle 0, a, a + e₁, a + e₂
+        // take 1 − s − t, s, t; in triangle 1, a + e₁, a + e₂, a + e₁ + e₂ take 1 − t, 1 − s,
+        // s + t − 1. b₁, b₂ are the weights of the corners in vertex slots 1 and 2.
+        let weights = [
+            [Vec3::new(1.0, -1.0, -1.0), Vec3::Y, Vec3::Z],
+            [
+                Vec3::new(1.0, 0.0, -1.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 1.0),
             ],
-        })
+        ];
+        let slots = [[k0, i0, j0], [i1, j1, l1]];
+        let mut coef = [[Vec3::ZERO; 2]; 2];
+        for (tri, (slots, weights)) in slots.iter().zip(weights).enumerate() {
+            for (&slot, w) in slots.iter().zip(weights) {
+                if slot > 0 {
+                    coef[tri][slot - 1] = w;
+                }
+            }
+        }
+        Some(Parallelogram { coef })
     }
 
     /// A uniform point: its triangle and its barycentrics `(b₁, b₂)` in that triangle's vertex
     /// order (`p = (1 − b₁ − b₂) p₀ + b₁ p₁ + b₂ p₂`).
     #[inline]
     pub fn sample(&self, u: Vec2) -> (usize, Vec2) {
-        let (s, t) = (u.x, u.y);
-        let far = s + t > 1.0;
-        // Weights of the slots' corners: a + s e₁ + t e₂ in the first triangle, or in the
-        // second, (1 − t)(a + e₁) + (1 − s)(a + e₂) + (s + t − 1)(a + e₁ + e₂).
-        let w = if far {
-            [1.0 - t, 1.0 - s, s + t - 1.0]
-        } else {
-            [1.0 - s - t, s, t]
-        };
-        let slots = self.slots[far as usize];
-        let mut b = [0.0f32; 3];
-        for (slot, w) in slots.iter().zip(w) {
-            b[*slot as usize] = w;
-        }
-        (far as usize, Vec2::new(b[1], b[2]))
+        let tri = (u.x + u.y > 1.0) as usize;
+        let [c1, c2] = self.coef[tri];
+        let x = Vec3::new(1.0, u.x, u.y);
+        (tri, Vec2::new(c1.dot(x), c2.dot(x)))
     }
 }
 
