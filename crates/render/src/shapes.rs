@@ -227,9 +227,9 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
             };
             let ns = match normals {
                 Some(n) => {
-                    let v = b0 * n[i0] + b1 * n[i1] + b2 * n[i2];
-                    let v = v.normalize_or_zero();
-                    if v == Vec3::ZERO { ng } else { v }
+                    // `normalize_or`: comparing with zero component by component is a branch on
+                    // the normal's direction, which the predictor cannot learn.
+                    (b0 * n[i0] + b1 * n[i1] + b2 * n[i2]).normalize_or(ng)
                 }
                 None => ng,
             };
@@ -237,8 +237,7 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
         }
         ShapeGeom::Sphere { center, radius } => {
             let raw = ray.at(hit.t);
-            let dir = (raw - *center).normalize_or_zero();
-            let dir = if dir == Vec3::ZERO { Vec3::Z } else { dir };
+            let dir = (raw - *center).normalize_or(Vec3::Z);
             let p = *center + dir * *radius;
             let p_error = gamma(5) * (p.abs() + center.abs());
             // Mitsuba's sphere parameterisation: u = φ / 2π, v = θ / π (θ from +z).
@@ -309,7 +308,9 @@ fn flat_interaction(
     let n = if flip { -ng } else { ng };
     let len2 = e1.length_squared();
     // Accel drops zero-area triangles, so `e1` is non-zero; keep the generic fallback anyway.
-    let shading = if len2 > 1e-12 && len2.is_finite() && n != Vec3::ZERO {
+    // `n` is unit or zero: its squared length is the one test (`!= Vec3::ZERO` compares
+    // component by component, a branch on which way the surface faces).
+    let shading = if len2 > 1e-12 && len2.is_finite() && n.length_squared() > 0.0 {
         let s = e1 / len2.sqrt();
         Frame {
             s,

@@ -39,11 +39,10 @@ impl WoopRay {
         let dz = d[kz];
         // (kz + 1) % 3 and (kz + 2) % 3, swapped to preserve the winding of the triangle (so
         // det has a consistent sign).
-        let (kx, ky) = if dz < 0.0 {
-            ([2, 0, 1][kz], [1, 2, 0][kz])
-        } else {
-            ([1, 2, 0][kz], [2, 0, 1][kz])
-        };
+        // By table rather than by branch: the sign of the direction is a coin toss.
+        const NEXT: [[usize; 3]; 2] = [[1, 2, 0], [2, 0, 1]];
+        let neg = (dz < 0.0) as usize;
+        let (kx, ky) = (NEXT[neg][kz], NEXT[1 - neg][kz]);
         // One vector division: lane-wise IEEE division gives the same values as three scalar ones.
         let s = Vec4::new(d[kx], d[ky], 1.0, 1.0) / Vec4::splat(dz);
         WoopRay {

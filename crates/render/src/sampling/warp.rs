@@ -1,7 +1,7 @@
 //! Warps from the unit square to common domains, each with its pdf (χ²-tested in
 //! `tests/chi2_warps.rs`).
 
-use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, Vec2, Vec3};
+use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, Vec2, Vec3, Vec4};
 
 /// Shirley–Chiu concentric map to the unit disk (area pdf 1/π).
 pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
@@ -13,14 +13,20 @@ pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
     // larger) lies in [−π/4, π/4]; in the upper/lower wedges the angle is π/2 − θ, which swaps
     // sine and cosine. Written with selects rather than a branch (which way a sample falls
     // cannot be predicted), and with a polynomial sin/cos valid on that interval.
-    let swap = o.x.abs() <= o.y.abs();
-    let (r, other) = if swap { (o.y, o.x) } else { (o.x, o.y) };
+    //
+    // The selects are vector selects on a comparison mask: on the SSE2 baseline LLVM lowers a
+    // scalar float select (even `select_unpredictable`) to a jump over a move, and which wedge
+    // a sample falls in is a coin toss for the branch predictor.
+    let swap = Vec4::splat(o.x.abs()).cmple(Vec4::splat(o.y.abs()));
+    let ro = Vec4::select(
+        swap,
+        Vec4::new(o.y, o.x, 0.0, 0.0),
+        Vec4::new(o.x, o.y, 0.0, 0.0),
+    );
+    let (r, other) = (ro.x, ro.y);
     let (s, c) = sin_cos_quarter_pi((PI / 4.0) * (other / r));
-    if swap {
-        Vec2::new(r * s, r * c)
-    } else {
-        Vec2::new(r * c, r * s)
-    }
+    let sc = Vec4::select(swap, Vec4::new(s, c, 0.0, 0.0), Vec4::new(c, s, 0.0, 0.0));
+    Vec2::new(r * sc.x, r * sc.y)
 }
 
 /// `(sin 2πt, cos 2πt)`: the azimuth of a sample `t ∈ [0, 1)`, reduced exactly to the nearest
