@@ -251,12 +251,37 @@ fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {
     } else {
         Arc::from(mesh.indices.as_slice())
     };
+    // Vertex normals that only repeat each face's own normal (Mitsuba's rectangles and cubes,
+    // OBJ files with per-face `vn`) change nothing but the cost of every hit and light sample:
+    // the shading normal is then the geometric one.
+    let normals = normals.filter(|n| !is_flat_shading(&positions, n, &indices));
     ShapeGeom::Mesh {
         positions,
         normals,
         uvs,
         indices,
     }
+}
+
+/// Whether every vertex normal of every triangle equals that triangle's geometric normal (up
+/// to rounding), so that the normals can be dropped without changing any shading frame.
+fn is_flat_shading(positions: &[Vec3], normals: &[Vec3], indices: &[[u32; 3]]) -> bool {
+    let get = |v: &[Vec3], i: u32| v.get(i as usize).copied();
+    indices.iter().all(|&[a, b, c]| {
+        let (Some(p0), Some(p1), Some(p2), Some(n0), Some(n1), Some(n2)) = (
+            get(positions, a),
+            get(positions, b),
+            get(positions, c),
+            get(normals, a),
+            get(normals, b),
+            get(normals, c),
+        ) else {
+            return false;
+        };
+        let face = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        // A degenerate triangle is never hit nor sampled: its normals do not matter.
+        face == Vec3::ZERO || [n0, n1, n2].iter().all(|n| n.dot(face) >= 1.0 - 1e-6)
+    })
 }
 
 /// Mitsuba's rectangle: [-1,1]² at z = 0, normal +z, uv ((x+1)/2, (y+1)/2).
@@ -711,6 +736,31 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn has_normals(g: &ShapeGeom) -> bool {
+        matches!(
+            g,
+            ShapeGeom::Mesh {
+                normals: Some(_),
+                ..
+            }
+        )
+    }
+
+    #[test]
+    fn normals_that_repeat_the_faces_are_dropped() {
+        // Rectangles and cubes (per-face normals), under a mirroring, non-uniform transform.
+        let m = Mat4::from_scale(Vec3::new(-2.0, 0.5, 3.0)) * Mat4::from_rotation_y(0.4);
+        assert!(!has_normals(&mesh_geom(&rectangle_mesh(), &m)));
+        assert!(!has_normals(&mesh_geom(&cube_mesh(), &m)));
+        // Smooth normals, or normals against the winding, stay.
+        let mut smooth = rectangle_mesh();
+        smooth.normals[2] = Vec3::new(0.3, 0.0, 1.0).normalize();
+        assert!(has_normals(&mesh_geom(&smooth, &m)));
+        let mut against = rectangle_mesh();
+        against.normals = vec![-Vec3::Z; 4];
+        assert!(has_normals(&mesh_geom(&against, &m)));
+    }
 
     #[test]
     fn cube_faces_point_outwards() {

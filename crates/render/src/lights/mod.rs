@@ -289,6 +289,8 @@ pub struct Parallelogram {
     /// Per triangle (0 holds `a`, 1 the opposite corner), the barycentrics `b₁`, `b₂` of the
     /// point as affine functions of the sample: coefficients of `(1, s, t)`.
     coef: [[Vec3; 2]; 2],
+    /// The unit normal of both triangles (by their winding), which they share.
+    normal: Vec3,
 }
 
 impl Parallelogram {
@@ -316,8 +318,12 @@ impl Parallelogram {
         let l1 = 3 - i1 - j1;
         let (a, e1, e2) = (p0[k0], p0[i0] - p0[k0], p0[j0] - p0[k0]);
         let scale = e1.abs().max(e2.abs()).max_element();
+        let face = |p: [Vec3; 3]| (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        let normal = face(p0);
+        // Both windings alike (a mesh may flip one triangle: each then emits to its own side).
         let ok = (a + e1 + e2 - p1[l1]).abs().max_element() <= Self::TOLERANCE * scale
-            && e1.cross(e2).length_squared() > 0.0
+            && normal != Vec3::ZERO
+            && normal.dot(face(p1)) > 0.0
             && scale.is_finite();
         if !ok {
             return None;
@@ -342,7 +348,7 @@ impl Parallelogram {
                 }
             }
         }
-        Some(Parallelogram { coef })
+        Some(Parallelogram { coef, normal })
     }
 
     /// A uniform point: its triangle and its barycentrics `(b₁, b₂)` in that triangle's vertex
@@ -510,7 +516,11 @@ impl Light {
                         let p = b0 * p0 + b.x * p1 + b.y * p2;
                         let err =
                             gamma(6) * ((b0 * p0).abs() + (b.x * p1).abs() + (b.y * p2).abs());
-                        let mut n = (p1 - p0).cross(p2 - p0).normalize_or_zero() * flip;
+                        let face = match triangles {
+                            Some(MeshSampling::Parallelogram(q)) => q.normal,
+                            _ => (p1 - p0).cross(p2 - p0).normalize_or_zero(),
+                        };
+                        let mut n = face * flip;
                         if let Some(ns) = normals {
                             let s = b0 * ns[i0] + b.x * ns[i1] + b.y * ns[i2];
                             if s.dot(n) < 0.0 {
@@ -725,13 +735,13 @@ mod tests {
             Vec3::new(0.5, 0.0, 1.5),
         );
         let corners = [a, a + e1, a + e1 + e2, a + e2];
-        // Split along either diagonal, with rotated and reversed windings and unshared
+        // Split along either diagonal, with rotated and reversed (but matching) windings and unshared
         // vertices (the triangles share positions, not indices).
         let splits: [[[usize; 3]; 2]; 4] = [
             [[0, 1, 3], [1, 2, 3]],
             [[2, 3, 1], [3, 0, 1]],
             [[0, 2, 1], [0, 3, 2]],
-            [[3, 0, 2], [2, 1, 0]],
+            [[3, 0, 2], [2, 0, 1]],
         ];
         for split in splits {
             let pos: Vec<Vec3> = split.iter().flatten().map(|&c| corners[c]).collect();
@@ -769,7 +779,9 @@ mod tests {
         let sq = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
         let quad = |p: [Vec3; 4]| Parallelogram::detect(&p, &[[0, 1, 3], [1, 2, 3]]);
         assert!(quad(sq).is_some());
-        // A trapezoid, a folded quad, triangles sharing only a vertex, a degenerate one.
+        // A trapezoid, a folded quad, triangles sharing only a vertex, a degenerate one, and
+        // a square whose second triangle is wound the other way.
+        assert!(Parallelogram::detect(&sq, &[[0, 1, 3], [1, 3, 2]]).is_none());
         assert!(quad([sq[0], sq[1], Vec3::new(0.7, 1.0, 0.0), sq[3]]).is_none());
         assert!(quad([sq[0], sq[1], Vec3::new(1.0, 1.0, 0.5), sq[3]]).is_none());
         assert!(Parallelogram::detect(&sq, &[[0, 1, 2], [2, 3, 2]]).is_none());
