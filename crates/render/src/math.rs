@@ -1,6 +1,6 @@
 //! Math helpers on top of glam: orthonormal frames and spherical coordinates.
 
-pub use glam::{Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
+pub use glam::{IVec2, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 
 pub const PI: f32 = std::f32::consts::PI;
 pub const INV_PI: f32 = std::f32::consts::FRAC_1_PI;

@@ -59,7 +59,7 @@
 //! Memory: 96 bytes per stored pixel.
 
 use super::{Filter, Image, filter};
-use crate::math::{UVec2, Vec2, Vec3};
+use crate::math::{IVec2, UVec2, Vec2, Vec3};
 use scene::CropWindow;
 
 /// The sums of one pixel (see the module docs).
@@ -231,8 +231,8 @@ impl FilmTile {
     #[inline(always)]
     fn splat(&mut self, p: Vec2, l: [f64; 3], r: f32, g: impl Fn(f32) -> f32) {
         let c = p - 0.5;
-        let first = ((c - r).floor() + 1.0).as_ivec2().max(self.min.as_ivec2());
-        let last = (c + r).floor().as_ivec2().min(self.max.as_ivec2() - 1);
+        let first = (floor_to_int(c - r) + 1).max(self.min.as_ivec2());
+        let last = floor_to_int(c + r).min(self.max.as_ivec2() - 1);
         if first.cmpgt(last).any() {
             return; // a filter narrower than a pixel may miss every centre
         }
@@ -479,10 +479,29 @@ impl Film {
     }
 }
 
+/// `⌊v⌋` as integers, for film coordinates (finite, far inside the `i32` range): truncate,
+/// then step down where that rounded up. On the SSE2 baseline `f32::floor` is a libm call,
+/// four per sample here.
+#[inline(always)]
+fn floor_to_int(v: Vec2) -> IVec2 {
+    let t = v.as_ivec2();
+    t - IVec2::new((t.x as f32 > v.x) as i32, (t.y as f32 > v.y) as i32)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use scene::FilterDesc;
+
+    #[test]
+    fn floor_to_int_is_floor() {
+        for x in [
+            -3.5f32, -3.0, -2.9, -0.5, -1e-7, -0.0, 0.0, 1e-7, 0.5, 1.0, 2.999, 511.5, 4095.0,
+        ] {
+            let v = Vec2::new(x, -x);
+            assert_eq!(floor_to_int(v), v.floor().as_ivec2(), "{x}");
+        }
+    }
 
     #[test]
     fn crop_is_clipped_and_tiles_cover_it() {
