@@ -33,7 +33,7 @@ impl Frame {
         if !len2.is_finite() || len2 <= 1e-12 {
             return Frame::from_normal(n);
         }
-        let s = s / len2.sqrt();
+        let s = s * rsqrt(len2);
         Frame {
             s,
             t: n.cross(s),
@@ -101,8 +101,60 @@ pub fn safe_sqrt(x: f32) -> f32 {
     x.max(0.0).sqrt()
 }
 
+/// `v / |v|` by [`rsqrt`]; zero when `v` is zero, tiny or not finite (as `normalize_or_zero`).
+#[inline(always)]
+pub fn normalize_or_zero_fast(v: Vec3) -> Vec3 {
+    let l2 = v.length_squared();
+    if l2 >= f32::MIN_POSITIVE && l2.is_finite() {
+        v * rsqrt(l2)
+    } else {
+        v.normalize_or_zero()
+    }
+}
+
+/// `1/√x` for `x > 0` (finite): the SSE reciprocal square-root estimate refined by one
+/// Newton–Raphson step (relative error below 2⁻²², a few ulp), instead of a square root and a
+/// division (together ~25 cycles of latency on the hit-to-shading critical path).
+#[inline(always)]
+pub fn rsqrt(x: f32) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvtss_f32, _mm_rsqrt_ss, _mm_set_ss};
+        // SAFETY: SSE is part of the x86_64 baseline, so these intrinsics are always available.
+        let r = unsafe { _mm_cvtss_f32(_mm_rsqrt_ss(_mm_set_ss(x))) };
+        r * (1.5 - 0.5 * x * r * r)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        1.0 / x.sqrt()
+    }
+}
+
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn rsqrt_is_within_a_few_ulp() {
+        let mut worst = 0f64;
+        let mut x = 1e-30f32;
+        while x < 1e30 {
+            let exact = 1.0 / (x as f64).sqrt();
+            worst = worst.max((rsqrt(x) as f64 / exact - 1.0).abs());
+            x *= 1.001_7;
+        }
+        assert!(worst < 4.0 * f32::EPSILON as f64, "relative error {worst}");
+        for v in [
+            Vec3::ZERO,
+            Vec3::splat(1e-30),
+            Vec3::new(f32::MAX, 0.0, 0.0),
+            Vec3::NAN,
+        ] {
+            assert!(normalize_or_zero_fast(v).is_finite(), "{v:?}");
+        }
+        let v = Vec3::new(3.0, -4.0, 12.0);
+        assert!((normalize_or_zero_fast(v) - v / 13.0).length() < 1e-6);
+    }
+
     use super::*;
 
     #[test]

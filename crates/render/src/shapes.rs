@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use crate::accel::{AccelShape, Hit};
 use crate::geometry::Ray;
-use crate::math::{Frame, Mat4, PI, Vec2, Vec3};
+use crate::math::{Frame, Mat4, PI, Vec2, Vec3, normalize_or_zero_fast, rsqrt};
 
 /// γ(n) of Higham / pbrt: a bound on the relative error of n floating-point operations.
 #[inline]
@@ -186,7 +186,7 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
 
 /// Compute the surface interaction of `hit` on `geom`. `flip` flips both normals.
 pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> SurfaceInteraction {
-    let wo = -ray.d.normalize();
+    let wo = -ray.d * rsqrt(ray.d.length_squared());
     let (p, p_error, mut ng, mut ns, dpdu, uv) = match geom {
         ShapeGeom::Mesh {
             positions,
@@ -202,7 +202,7 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
             let p_error = gamma(7) * ((b0 * p0).abs() + (b1 * p1).abs() + (b2 * p2).abs());
             let e1 = p1 - p0;
             let e2 = p2 - p0;
-            let ng = e1.cross(e2).normalize_or_zero();
+            let ng = normalize_or_zero_fast(e1.cross(e2));
             if uvs.is_none() && normals.is_none() {
                 // Flat, unparameterised mesh (the common case for OBJ/PLY without `vt`/`vn`):
                 // the shading frame is the geometric one, with `s` along the first edge,
@@ -311,7 +311,7 @@ fn flat_interaction(
     // `n` is unit or zero: its squared length is the one test (`!= Vec3::ZERO` compares
     // component by component, a branch on which way the surface faces).
     let shading = if len2 > 1e-12 && len2.is_finite() && n.length_squared() > 0.0 {
-        let s = e1 / len2.sqrt();
+        let s = e1 * rsqrt(len2);
         Frame {
             s,
             t: n.cross(s),

@@ -23,7 +23,7 @@ use scene::{ColorParam, EnvMapping};
 
 use crate::build::Scene;
 use crate::film::Image;
-use crate::math::{Frame, INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
+use crate::math::{Frame, INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance, rsqrt};
 use crate::sampling::distrib::{Distribution1D, Distribution2D};
 use crate::sampling::warp;
 use crate::shapes::{ShapeGeom, SurfaceInteraction, gamma};
@@ -554,10 +554,10 @@ impl Light {
                 };
                 let to = p - r.p;
                 let d2 = to.length_squared();
-                if d2 <= 0.0 {
+                if d2 <= 0.0 || d2.is_infinite() {
                     return None;
                 }
-                let wi = to / d2.sqrt();
+                let wi = to * rsqrt(d2);
                 let cos_l = n.dot(-wi);
                 if cos_l == 0.0 || (!*two_sided && cos_l < 0.0) {
                     return None;
