@@ -5,9 +5,15 @@ use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, Vec2, Vec3, Vec4};
 
 /// Shirley–Chiu concentric map to the unit disk (area pdf 1/π).
 pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
+    concentric(u).0
+}
+
+/// The concentric map and its radius `r` (signed: the point is `|r|` from the centre).
+#[inline(always)]
+fn concentric(u: Vec2) -> (Vec2, f32) {
     let o = 2.0 * u - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
-        return Vec2::ZERO;
+        return (Vec2::ZERO, 0.0);
     }
     // Shirley–Chiu: the radius is the larger coordinate and the angle θ = π/4 · (smaller /
     // larger) lies in [−π/4, π/4]; in the upper/lower wedges the angle is π/2 − θ, which swaps
@@ -26,7 +32,7 @@ pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
     let (r, other) = (ro.x, ro.y);
     let (s, c) = sin_cos_quarter_pi((PI / 4.0) * (other / r));
     let sc = Vec4::select(swap, Vec4::new(s, c, 0.0, 0.0), Vec4::new(c, s, 0.0, 0.0));
-    Vec2::new(r * sc.x, r * sc.y)
+    (Vec2::new(r * sc.x, r * sc.y), r)
 }
 
 /// `(sin 2πt, cos 2πt)`: the azimuth of a sample `t ∈ [0, 1)`, reduced exactly to the nearest
@@ -63,8 +69,10 @@ pub fn uniform_disk_pdf() -> f32 {
 
 /// Cosine-weighted hemisphere around +z (pdf cos θ / π).
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
-    let d = square_to_uniform_disk_concentric(u);
-    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    let (d, r) = concentric(u);
+    // From the radius rather than from |d|²: the square root then starts alongside the
+    // sine/cosine polynomial instead of after it (sin² + cos² = 1 to within an ulp).
+    let z = (1.0 - r * r).max(0.0).sqrt();
     Vec3::new(d.x, d.y, z)
 }
 
