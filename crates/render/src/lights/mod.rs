@@ -282,8 +282,8 @@ impl MeshSampling {
 
 /// A mesh of two triangles that together form a parallelogram `a + s·e₁ + t·e₂`,
 /// `(s, t) ∈ [0, 1]²`, split along the diagonal from `a + e₁` to `a + e₂`. One 2D sample gives
-/// a uniform point with no discrete choice and no triangle warp: the same density as choosing
-/// a triangle by area (the halves have equal areas), for a third of the work of a quad light.
+/// a uniform point with no discrete choice (an `f64` CDF search) and no triangle warp: the
+/// same density as choosing a triangle by area, since the halves have equal areas.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parallelogram {
     /// Per triangle (0 holds `a`, 1 the opposite corner), the barycentrics `b₁`, `b₂` of the
