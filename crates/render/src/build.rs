@@ -19,6 +19,7 @@ use crate::lights::select::LightSampler;
 use crate::lights::{EnvMap, Light, MeshSampling, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
+use crate::sampling::sampler::{mix64, u64_to_unit};
 use crate::shapes::{ShapeGeom, SurfaceInteraction, interaction};
 use crate::textures::Texture;
 
@@ -130,7 +131,7 @@ impl Scene {
                 return Some(si);
             };
             let alpha = self.float(opacity, si.uv);
-            let u = hash_to_unit(key ^ ((hit.shape as u64) << 32 | hit.prim as u64));
+            let u = u64_to_unit(mix64(key ^ ((hit.shape as u64) << 32 | hit.prim as u64)));
             if alpha >= 1.0 || u < alpha {
                 return Some(si);
             }
@@ -213,18 +214,6 @@ fn ray_hash(ray: &Ray) -> u64 {
         (v.x.to_bits() as u64) ^ (v.y.to_bits() as u64) << 21 ^ (v.z.to_bits() as u64) << 42
     };
     mix64(bits(ray.o) ^ mix64(bits(ray.d)))
-}
-
-/// SplitMix64's finaliser.
-fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-/// A uniform number in [0, 1) from a 64-bit key.
-fn hash_to_unit(key: u64) -> f32 {
-    (mix64(key) >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
 fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {

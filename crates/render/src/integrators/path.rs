@@ -277,6 +277,12 @@ fn nee_pdf(scene: &Scene, cfg: &PathConfig, r: &Receiver, light: u32, pdf_li: f3
     } else {
         scene.light_pmf(r, light)
     };
+    nee_density(cfg, selection, pdf_li)
+}
+
+/// [`nee_pdf`] for a light chosen with probability `selection` (known when it was just drawn).
+#[inline]
+fn nee_density(cfg: &PathConfig, selection: f32, pdf_li: f32) -> f32 {
     selection * pdf_li * cfg.light_samples as f32
 }
 
@@ -487,8 +493,11 @@ fn sample_emitter(
         let w = if ls.delta || cfg.combine == Combine::EmitterOnly {
             1.0
         } else {
-            let p_nee = selection * ls.pdf * cfg.light_samples as f32;
-            mis(cfg.combine, p_nee, direction_pdf(cfg, bsdf, wo, wi))
+            mis(
+                cfg.combine,
+                nee_density(cfg, selection, ls.pdf),
+                direction_pdf(cfg, bsdf, wo, wi),
+            )
         };
         f * ls.li * (w / ls.pdf)
     };

@@ -66,7 +66,7 @@ pub fn hash2(a: u64, b: u64) -> u64 {
 
 /// Uniform `f32` in `[0, 1)` from the top 24 bits of a 64-bit hash.
 #[inline]
-fn u64_to_unit(x: u64) -> f32 {
+pub fn u64_to_unit(x: u64) -> f32 {
     (x >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 

@@ -133,6 +133,13 @@ pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
 mod tests {
     use super::*;
 
+    /// The points `(i + offset) / n` of an `n × n` grid over the unit square.
+    fn grid(n: u32, offset: Vec2) -> impl Iterator<Item = Vec2> {
+        (0..n).flat_map(move |i| {
+            (0..n).map(move |j| (Vec2::new(i as f32, j as f32) + offset) / n as f32)
+        })
+    }
+
     #[test]
     fn polynomial_sin_cos_is_accurate_on_the_quarter_interval() {
         let n = 100_000;
@@ -168,20 +175,16 @@ mod tests {
 
     #[test]
     fn concentric_disk_matches_the_trigonometric_mapping() {
-        let n = 256;
-        for i in 0..n {
-            for j in 0..n {
-                let u = Vec2::new((i as f32 + 0.37) / n as f32, (j as f32 + 0.61) / n as f32);
-                let o = 2.0 * u - Vec2::ONE;
-                let (r, theta) = if o.x.abs() > o.y.abs() {
-                    (o.x, (PI / 4.0) * (o.y / o.x))
-                } else {
-                    (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
-                };
-                let (s, c) = theta.sin_cos();
-                let d = square_to_uniform_disk_concentric(u);
-                assert!((d - Vec2::new(r * c, r * s)).length() < 1e-6, "{u:?}");
-            }
+        for u in grid(256, Vec2::new(0.37, 0.61)) {
+            let o = 2.0 * u - Vec2::ONE;
+            let (r, theta) = if o.x.abs() > o.y.abs() {
+                (o.x, (PI / 4.0) * (o.y / o.x))
+            } else {
+                (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
+            };
+            let (s, c) = theta.sin_cos();
+            let d = square_to_uniform_disk_concentric(u);
+            assert!((d - Vec2::new(r * c, r * s)).length() < 1e-6, "{u:?}");
         }
         assert_eq!(
             square_to_uniform_disk_concentric(Vec2::splat(0.5)),
@@ -191,20 +194,16 @@ mod tests {
 
     #[test]
     fn warps_land_in_their_domains() {
-        let n = 64;
-        for i in 0..n {
-            for j in 0..n {
-                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
-                assert!(square_to_uniform_disk_concentric(u).length() <= 1.0 + 1e-6);
-                let c = square_to_cosine_hemisphere(u);
-                assert!((c.length() - 1.0).abs() < 1e-5 && c.z >= 0.0);
-                let s = square_to_uniform_sphere(u);
-                assert!((s.length() - 1.0).abs() < 1e-5);
-                let k = square_to_uniform_cone(u, 0.8);
-                assert!(k.z >= 0.8 - 1e-6);
-                let b = square_to_uniform_triangle(u);
-                assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
-            }
+        for u in grid(64, Vec2::splat(0.5)) {
+            assert!(square_to_uniform_disk_concentric(u).length() <= 1.0 + 1e-6);
+            let c = square_to_cosine_hemisphere(u);
+            assert!((c.length() - 1.0).abs() < 1e-5 && c.z >= 0.0);
+            let s = square_to_uniform_sphere(u);
+            assert!((s.length() - 1.0).abs() < 1e-5);
+            let k = square_to_uniform_cone(u, 0.8);
+            assert!(k.z >= 0.8 - 1e-6);
+            let b = square_to_uniform_triangle(u);
+            assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
         }
     }
 }
