@@ -265,7 +265,7 @@ fn develop(post: bool, gamma: bool) -> impl Fn(&mut Image) + Sync {
         if !gamma {
             // The writer encodes with the sRGB curve; pre-decode so the file holds raw values.
             for p in &mut img.pixels {
-                *p = Vec3::new(
+                *p = render::math::Vec3::new(
                     srgb_to_linear(p.x.clamp(0.0, 1.0)),
                     srgb_to_linear(p.y.clamp(0.0, 1.0)),
                     srgb_to_linear(p.z.clamp(0.0, 1.0)),

@@ -414,38 +414,38 @@ mod tests {
         // its mirror.)
         for (x, y) in [(3, 3), (7, 4), (11, 3), (4, 1), (12, 5), (9, 6)] {
             let mut img = Image::new(w, h);
-            img.set(x, y, Vec3::splat(100.0));
+            img.set(x, y, Vec3::splat(100.0).into());
             let env = EnvMap::new(img, 1.0, &to_world, mapping);
             let (u, v) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
             let d = cs184_dir(u, v);
-            let lit = env.eval(d).x;
+            let lit = env.eval(d.into()).x;
             assert!(lit > 50.0, "texel ({x}, {y}): {lit} along {d}");
-            let mirrored = env.eval(Vec3::new(d.z, d.y, d.x)).x;
+            let mirrored = env.eval(Vec3::new(d.z, d.y, d.x).into()).x;
             assert_eq!(
                 mirrored, 0.0,
                 "texel ({x}, {y}) also lights the mirror of {d}"
             );
             if !(3..=4).contains(&y) {
-                let below = env.eval(Vec3::new(d.x, -d.y, d.z)).x;
+                let below = env.eval(Vec3::new(d.x, -d.y, d.z).into()).x;
                 assert_eq!(below, 0.0, "texel ({x}, {y}) also lights {d} flipped in y");
             }
         }
         // The axes: the map's left edge looks along −X, the top row is +Y.
         let mut img = Image::new(w, h);
-        img.set(0, 3, Vec3::splat(1.0));
-        img.set(0, 4, Vec3::splat(1.0));
-        img.set(w - 1, 3, Vec3::splat(1.0));
-        img.set(w - 1, 4, Vec3::splat(1.0));
+        img.set(0, 3, Vec3::splat(1.0).into());
+        img.set(0, 4, Vec3::splat(1.0).into());
+        img.set(w - 1, 3, Vec3::splat(1.0).into());
+        img.set(w - 1, 4, Vec3::splat(1.0).into());
         let env = EnvMap::new(img, 1.0, &to_world, mapping);
-        assert!((env.eval(Vec3::NEG_X).x - 1.0).abs() < 1e-5);
-        assert_eq!(env.eval(Vec3::X).x, 0.0);
+        assert!((env.eval(Vec3::NEG_X.into()).x - 1.0).abs() < 1e-5);
+        assert_eq!(env.eval(Vec3::X.into()).x, 0.0);
         let mut img = Image::new(w, h);
         for x in 0..w {
-            img.set(x, 0, Vec3::splat(1.0));
+            img.set(x, 0, Vec3::splat(1.0).into());
         }
         let env = EnvMap::new(img, 1.0, &to_world, mapping);
-        assert!((env.eval(Vec3::Y).x - 1.0).abs() < 1e-5);
-        assert_eq!(env.eval(Vec3::NEG_Y).x, 0.0);
+        assert!((env.eval(Vec3::Y.into()).x - 1.0).abs() < 1e-5);
+        assert_eq!(env.eval(Vec3::NEG_Y.into()).x, 0.0);
     }
 
     #[test]

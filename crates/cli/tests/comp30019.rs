@@ -200,14 +200,14 @@ fn layers_sum_to_beauty() {
     let layers: Vec<Image> = films.layers.iter().map(|f| f.develop()).collect();
     let mut nonzero = [false; 5];
     for (i, b) in beauty.pixels.iter().enumerate() {
-        let sum: glam::Vec3 = layers.iter().map(|l| l.pixels[i]).sum();
+        let sum: glam::Vec3A = layers.iter().map(|l| l.pixels[i]).sum();
         let tol = 1e-4 * (1.0 + b.abs().max_element());
         assert!(
             (sum - *b).abs().max_element() <= tol,
             "pixel {i}: layers sum {sum} vs beauty {b}"
         );
         for (k, l) in layers.iter().enumerate() {
-            nonzero[k] |= l.pixels[i] != glam::Vec3::ZERO;
+            nonzero[k] |= l.pixels[i] != glam::Vec3::ZERO.into();
         }
     }
     // The showcase has visible emitters, direct and indirect light, mirrors and glass.

@@ -258,9 +258,9 @@ fn obvhs_peer(
     let tris: Vec<Triangle> = idx
         .iter()
         .map(|t| Triangle {
-            v0: pos[t[0] as usize].into(),
-            v1: pos[t[1] as usize].into(),
-            v2: pos[t[2] as usize].into(),
+            v0: pos[t[0] as usize],
+            v1: pos[t[1] as usize],
+            v2: pos[t[2] as usize],
         })
         .collect();
     let t0 = Instant::now();
@@ -273,7 +273,7 @@ fn obvhs_peer(
     });
     let build = t0.elapsed();
     let closest_t = |r: &Ray| {
-        let ray = ORay::new_inf(r.o.into(), r.d.into());
+        let ray = ORay::new_inf(r.o, r.d);
         let mut hit = RayHit::none();
         if bvh.ray_traverse(ray, &mut hit, |ray, id| {
             tris[bvh.primitive_indices[id] as usize].intersect(ray)
@@ -289,7 +289,7 @@ fn obvhs_peer(
         pool.install(|| {
             rays.par_iter()
                 .filter(|(r, tm)| {
-                    let ray = ORay::new(r.o.into(), r.d.into(), 0.0, *tm);
+                    let ray = ORay::new(r.o, r.d, 0.0, *tm);
                     !bvh.ray_traverse_miss(ray, |ray, id| {
                         tris[bvh.primitive_indices[id] as usize].intersect(ray)
                     })

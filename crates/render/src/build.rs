@@ -18,7 +18,7 @@ use crate::integrators::Integrator;
 use crate::lights::select::LightSampler;
 use crate::lights::{EnvMap, Light, MeshSampling, Receiver};
 use crate::materials::RtMaterial;
-use crate::math::{Mat3, Mat4, Vec2, Vec3};
+use crate::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
 use crate::shapes::{ShapeGeom, SurfaceInteraction, interaction};
 use crate::textures::Texture;
@@ -189,7 +189,7 @@ impl Scene {
     #[inline]
     pub fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3 {
         match p {
-            ColorParam::Const(c) => *c,
+            ColorParam::Const(c) => (*c).into(),
             ColorParam::Texture(t) => self.textures[t.0 as usize].eval(uv),
         }
     }
@@ -220,14 +220,14 @@ fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {
     let positions: Arc<[Vec3]> = mesh
         .positions
         .iter()
-        .map(|p| to_world.transform_point3(*p))
+        .map(|p| to_world.transform_point3a((*p).into()))
         .collect();
     let normal_matrix = Mat3::from_mat4(*to_world).inverse().transpose();
     let normals =
         (!mesh.normals.is_empty() && mesh.normals.len() == mesh.positions.len()).then(|| {
             mesh.normals
                 .iter()
-                .map(|n| (normal_matrix * *n).normalize_or_zero())
+                .map(|n| (normal_matrix * Vec3::from(*n)).normalize_or_zero())
                 .collect::<Arc<[Vec3]>>()
         });
     let uvs = (!mesh.uvs.is_empty() && mesh.uvs.len() == mesh.positions.len())
@@ -277,12 +277,12 @@ fn is_flat_shading(positions: &[Vec3], normals: &[Vec3], indices: &[[u32; 3]]) -
 pub fn rectangle_mesh() -> TriMesh {
     TriMesh {
         positions: vec![
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
+            PVec3::new(-1.0, -1.0, 0.0),
+            PVec3::new(1.0, -1.0, 0.0),
+            PVec3::new(1.0, 1.0, 0.0),
+            PVec3::new(-1.0, 1.0, 0.0),
         ],
-        normals: vec![Vec3::Z; 4],
+        normals: vec![PVec3::Z; 4],
         uvs: vec![
             Vec2::new(0.0, 0.0),
             Vec2::new(1.0, 0.0),
@@ -298,10 +298,10 @@ pub fn cube_mesh() -> TriMesh {
     let mut m = TriMesh::default();
     for axis in 0..3 {
         for sign in [-1.0f32, 1.0] {
-            let mut n = Vec3::ZERO;
+            let mut n = PVec3::ZERO;
             n[axis] = sign;
             // Two tangent axes forming a right-handed frame with n.
-            let mut s = Vec3::ZERO;
+            let mut s = PVec3::ZERO;
             s[(axis + 1) % 3] = 1.0;
             let t = n.cross(s);
             let base = m.positions.len() as u32;
@@ -382,14 +382,14 @@ fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Textur
 
 fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, BuildError> {
     Ok(match &desc.texture {
-        scene::Texture::Constant(c) => Texture::Constant(*c),
+        scene::Texture::Constant(c) => Texture::Constant((*c).into()),
         scene::Texture::Checkerboard {
             color0,
             color1,
             to_uv,
         } => Texture::Checkerboard {
-            color0: *color0,
-            color1: *color1,
+            color0: (*color0).into(),
+            color1: (*color1).into(),
             to_uv: *to_uv,
         },
         scene::Texture::Bitmap {
@@ -501,24 +501,24 @@ fn build_lights(
                 position,
                 intensity,
             } => Light::Point {
-                position: *position,
-                intensity: *intensity,
+                position: (*position).into(),
+                intensity: (*intensity).into(),
             },
             scene::Emitter::Spot {
                 to_world,
                 intensity,
                 cutoff_angle,
                 beam_width,
-            } => Light::spot(to_world, *intensity, *cutoff_angle, *beam_width),
+            } => Light::spot(to_world, (*intensity).into(), *cutoff_angle, *beam_width),
             scene::Emitter::Directional {
                 direction,
                 irradiance,
             } => Light::Directional {
-                direction: direction.normalize_or_zero(),
-                irradiance: *irradiance,
+                direction: direction.normalize_or_zero().into(),
+                irradiance: (*irradiance).into(),
             },
             scene::Emitter::Constant { radiance } => Light::Constant {
-                radiance: *radiance,
+                radiance: (*radiance).into(),
             },
             scene::Emitter::EnvMap {
                 path,
@@ -570,10 +570,10 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                 let c = s.to_world.transform_point3(*center);
                 let r = s
                     .to_world
-                    .transform_vector3(Vec3::new(*radius, 0.0, 0.0))
+                    .transform_vector3(Vec3::new(*radius, 0.0, 0.0).into())
                     .length();
                 ShapeGeom::Sphere {
-                    center: c,
+                    center: c.into(),
                     radius: r,
                 }
             }
@@ -588,8 +588,8 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
             Shape::InfinitePlane { point, normal } => {
                 let nm = Mat3::from_mat4(s.to_world).inverse().transpose();
                 ShapeGeom::Plane {
-                    point: s.to_world.transform_point3(*point),
-                    normal: (nm * *normal).normalize_or_zero(),
+                    point: s.to_world.transform_point3(*point).into(),
+                    normal: (nm * *normal).normalize_or_zero().into(),
                 }
             }
         };
@@ -685,6 +685,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
             scene::Emitter::Ambient { radiance } => Some(radiance),
             _ => None,
         })
+        .map(Vec3::from)
         .sum();
     if ambient != Vec3::ZERO && !matches!(integrator, IntegratorDesc::Whitted { .. }) {
         warnings.push(format!(
@@ -700,7 +701,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         materials: desc
             .materials
             .iter()
-            .map(|m| RtMaterial::new(m.material.clone(), m.ambient))
+            .map(|m| RtMaterial::new(m.material.clone(), m.ambient.into()))
             .collect(),
         warnings,
         textures,
@@ -708,7 +709,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         film,
         sampler,
         integrator,
-        background: desc.background,
+        background: desc.background.map(Vec3::from),
         ambient,
         lights,
         shape_lights,
@@ -739,15 +740,15 @@ mod tests {
     #[test]
     fn normals_that_repeat_the_faces_are_dropped() {
         // Rectangles and cubes (per-face normals), under a mirroring, non-uniform transform.
-        let m = Mat4::from_scale(Vec3::new(-2.0, 0.5, 3.0)) * Mat4::from_rotation_y(0.4);
+        let m = Mat4::from_scale(Vec3::new(-2.0, 0.5, 3.0).into()) * Mat4::from_rotation_y(0.4);
         assert!(!has_normals(&mesh_geom(&rectangle_mesh(), &m)));
         assert!(!has_normals(&mesh_geom(&cube_mesh(), &m)));
         // Smooth normals, or normals against the winding, stay.
         let mut smooth = rectangle_mesh();
-        smooth.normals[2] = Vec3::new(0.3, 0.0, 1.0).normalize();
+        smooth.normals[2] = Vec3::new(0.3, 0.0, 1.0).normalize().into();
         assert!(has_normals(&mesh_geom(&smooth, &m)));
         let mut against = rectangle_mesh();
-        against.normals = vec![-Vec3::Z; 4];
+        against.normals = vec![(-Vec3::Z).into(); 4];
         assert!(has_normals(&mesh_geom(&against, &m)));
     }
 

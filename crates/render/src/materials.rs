@@ -56,7 +56,7 @@ pub struct ConstantParams;
 impl Params for ConstantParams {
     fn color(&self, p: &ColorParam, _uv: Vec2) -> Vec3 {
         match p {
-            ColorParam::Const(c) => *c,
+            ColorParam::Const(c) => (*c).into(),
             ColorParam::Texture(_) => Vec3::splat(0.5),
         }
     }
@@ -103,7 +103,11 @@ impl RtMaterial {
                 eta,
                 k,
                 specular_reflectance,
-            } => Bsdf::Conductor(Conductor::new(*eta, *k, p.color(specular_reflectance, uv))),
+            } => Bsdf::Conductor(Conductor::new(
+                (*eta).into(),
+                (*k).into(),
+                p.color(specular_reflectance, uv),
+            )),
             Material::Mirror { reflectance } => {
                 Bsdf::Conductor(Conductor::mirror(p.color(reflectance, uv)))
             }
@@ -118,8 +122,8 @@ impl RtMaterial {
                 microfacet_type(*distribution),
                 alpha(p.float(alpha_u, uv)),
                 alpha(p.float(alpha_v, uv)),
-                *eta,
-                *k,
+                (*eta).into(),
+                (*k).into(),
                 p.color(specular_reflectance, uv),
             )),
             Material::Dielectric {
@@ -202,7 +206,12 @@ impl RtMaterial {
                 int_ior,
                 ext_ior,
                 kd,
-            } => Bsdf::NoriMicrofacet(NoriMicrofacet::new(alpha(*a), *int_ior, *ext_ior, *kd)),
+            } => Bsdf::NoriMicrofacet(NoriMicrofacet::new(
+                alpha(*a),
+                *int_ior,
+                *ext_ior,
+                (*kd).into(),
+            )),
             Material::PhongFamily {
                 model,
                 normalized,
@@ -219,7 +228,7 @@ impl RtMaterial {
                     *kd_fresnel,
                     *exponent,
                     p.color(diffuse, uv),
-                    *specular,
+                    (*specular).into(),
                     *ior,
                 )
                 .with_absorption(*ior, *absorption),
@@ -249,7 +258,7 @@ impl Scene {
             Material::Dielectric {
                 absorption: Some(sigma),
                 ..
-            } if *sigma != Vec3::ZERO => Some(*sigma),
+            } if *sigma != Vec3::ZERO.into() => Some((*sigma).into()),
             _ => None,
         }
     }

@@ -1,6 +1,8 @@
 //! Math helpers on top of glam: orthonormal frames and spherical coordinates.
 
-pub use glam::{IVec2, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
+/// Packed three-float vector (12 bytes), for storage and the scene model.
+pub use glam::Vec3 as PVec3;
+pub use glam::{IVec2, Mat3, Mat4, UVec2, Vec2, Vec3A, Vec3A as Vec3, Vec4};
 
 pub const PI: f32 = std::f32::consts::PI;
 pub const INV_PI: f32 = std::f32::consts::FRAC_1_PI;

@@ -68,7 +68,7 @@ fn bsdf_of(desc: &SceneDesc, id: MaterialId) -> Result<Bsdf, TestError> {
         .materials
         .get(id.0 as usize)
         .ok_or_else(|| TestError::Malformed(format!("material {} does not exist", id.0)))?;
-    RtMaterial::new(m.material.clone(), m.ambient)
+    RtMaterial::new(m.material.clone(), m.ambient.into())
         .bsdf(&ConstantParams, Vec2::ZERO)
         .ok_or_else(|| {
             TestError::Malformed(format!(

@@ -250,13 +250,13 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
         }
         ShapeGeom::Disk { to_world, normal } => {
             let local = Vec3::new(hit.u, hit.v, 0.0);
-            let p = to_world.transform_point3(local);
-            let p_error = gamma(6) * (p.abs() + to_world.w_axis.truncate().abs());
+            let p = to_world.transform_point3a(local);
+            let p_error = gamma(6) * (p.abs() + Vec3::from_vec4(to_world.w_axis).abs());
             let r = (hit.u * hit.u + hit.v * hit.v).sqrt();
             let phi = hit.v.atan2(hit.u);
             let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
             let uv = Vec2::new(r, phi / (2.0 * PI));
-            let dpdu = to_world.x_axis.truncate();
+            let dpdu = Vec3::from_vec4(to_world.x_axis);
             (p, p_error, *normal, *normal, dpdu, uv)
         }
         ShapeGeom::Plane { point, normal } => {

@@ -421,9 +421,9 @@ fn sphere_from_far_away() {
 #[test]
 fn disk_analytic() {
     // Non-uniform scale 2 × 0.5, rotated to face +x, moved to (5, 0, 0).
-    let to_world = Mat4::from_translation(Vec3::new(5.0, 0.0, 0.0))
+    let to_world = Mat4::from_translation(Vec3::new(5.0, 0.0, 0.0).into())
         * Mat4::from_rotation_y(std::f32::consts::FRAC_PI_2)
-        * Mat4::from_scale(Vec3::new(2.0, 0.5, 1.0));
+        * Mat4::from_scale(Vec3::new(2.0, 0.5, 1.0).into());
     let to_object = to_world.inverse();
     // Object x axis maps to world -z (scaled by 2), object y to world y (scaled by 0.5).
     let ray = Ray::new(Vec3::new(0.0, 0.25, -1.0), Vec3::X * 2.0);
@@ -544,7 +544,7 @@ fn empty_and_invalid() {
             radius: -1.0,
         },
         AccelShape::Disk {
-            to_world: Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)),
+            to_world: Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0).into()),
         },
         AccelShape::Plane {
             point: Vec3::ZERO,
@@ -674,9 +674,11 @@ fn random_scene(rng: &mut Rng, n_shapes: usize, tris_per_mesh: usize) -> Vec<Acc
                 radius: rng.range(0.05, 1.5),
             },
             6 => AccelShape::Disk {
-                to_world: Mat4::from_translation(rng.vec(-5.0, 5.0))
-                    * Mat4::from_axis_angle(rng.dir(), rng.range(0.0, 6.0))
-                    * Mat4::from_scale(Vec3::new(rng.range(0.2, 2.0), rng.range(0.2, 2.0), 1.0)),
+                to_world: Mat4::from_translation(rng.vec(-5.0, 5.0).into())
+                    * Mat4::from_axis_angle(rng.dir().into(), rng.range(0.0, 6.0))
+                    * Mat4::from_scale(
+                        Vec3::new(rng.range(0.2, 2.0), rng.range(0.2, 2.0), 1.0).into(),
+                    ),
             },
             _ => {
                 if rng.u32().is_multiple_of(4) {

@@ -68,7 +68,7 @@ fn emitting(shape: Shape, to_world: Mat4) -> SceneDesc {
 /// Run the χ² test of light 0 of `scene` seen from `p`.
 fn test_light(scene: &Scene, p: Vec3, level: f64, seed: u64) -> (bool, String) {
     let light = &scene.lights[0];
-    let r = Receiver::at(p);
+    let r = Receiver::at(p.into());
     let cfg = Chi2Config {
         res: 24,
         sample_count: 300_000,
@@ -82,7 +82,7 @@ fn test_light(scene: &Scene, p: Vec3, level: f64, seed: u64) -> (bool, String) {
             if light.is_infinite() {
                 return light.pdf_li(scene, &r, wi, None);
             }
-            match scene.intersect(&Ray::new(p, wi), f32::INFINITY) {
+            match scene.intersect(&Ray::new(p.into(), wi), f32::INFINITY) {
                 Some(si) if scene.shape_light(&si) == Some(0) => {
                     light.pdf_li(scene, &r, wi, Some(&si))
                 }
@@ -113,11 +113,11 @@ fn env_scene() -> SceneDesc {
     for y in 0..h {
         for x in 0..w {
             let v = 0.2 + 0.8 * (y as f32 / h as f32) + 0.1 * (x as f32 / w as f32);
-            img.set(x, y, Vec3::splat(v));
+            img.set(x, y, Vec3::splat(v).into());
         }
     }
-    img.set(20, 9, Vec3::splat(400.0));
-    img.set(21, 9, Vec3::splat(250.0));
+    img.set(20, 9, Vec3::splat(400.0).into());
+    img.set(21, 9, Vec3::splat(250.0).into());
     let dir = std::env::temp_dir().join(format!("penumbra-chi2-env-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("sky.exr");

@@ -7,9 +7,10 @@
 
 mod sampling_common;
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::{UVec2, Vec2};
 use rayon::prelude::*;
 use render::film::{Film, Filter};
+use render::math::Vec3;
 use render::sampling::Sampler;
 use sampling_common::{Rng, sidak};
 use scene::{CropWindow, FilterDesc, SamplerKind};

@@ -77,7 +77,7 @@ fn receivers(scene: &Scene, n: usize, seed: u64) -> Vec<Receiver> {
             rng.next_f32() - 0.5,
         )
         .normalize();
-        if let Some(si) = scene.intersect(&Ray::new(o, d), f32::INFINITY) {
+        if let Some(si) = scene.intersect(&Ray::new(o.into(), d.into()), f32::INFINITY) {
             out.push(Receiver::from(&si));
         }
     }

@@ -157,7 +157,7 @@ impl Accel {
                         }
                         prims.push(Prim::Tri([p0, p1, p2]));
                         ids.push([s, t as u32]);
-                        let (a, b, c) = (Vec3A::from(p0), Vec3A::from(p1), Vec3A::from(p2));
+                        let (a, b, c) = (p0, p1, p2);
                         aabbs.push(Aabb::new(a.min(b).min(c), a.max(b).max(c)));
                     }
                 }
@@ -167,7 +167,7 @@ impl Accel {
                     }
                     prims.push(Prim::Sphere { center, radius });
                     ids.push([s, 0]);
-                    let c = Vec3A::from(center);
+                    let c = center;
                     aabbs.push(Aabb::new(c - radius, c + radius));
                 }
                 &AccelShape::Disk { to_world } => {
@@ -182,7 +182,7 @@ impl Accel {
                     }
                     let mut bb = Aabb::INVALID;
                     for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
-                        bb.extend(Vec3A::from(to_world.transform_point3(Vec3::new(x, y, 0.0))));
+                        bb.extend(to_world.transform_point3a(Vec3A::new(x, y, 0.0)));
                     }
                     prims.push(Prim::Disk { to_object });
                     ids.push([s, 0]);
@@ -199,7 +199,7 @@ impl Accel {
             (Vec3::ZERO, Vec3::ZERO)
         } else {
             let bb = aabbs.iter().fold(Aabb::INVALID, |a, b| a.union(b));
-            (Vec3::from(bb.min), Vec3::from(bb.max))
+            (bb.min, bb.max)
         };
         let bvh = WideBvh::build(&prims, &ids, &aabbs);
         Accel {

@@ -438,8 +438,8 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
 /// `t` is preserved by the affine map, so it is in the caller's ray-parameter units.
 #[inline]
 pub fn intersect_disk(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<(f32, f32, f32)> {
-    let o = to_object.transform_point3(ray.o);
-    let d = to_object.transform_vector3(ray.d);
+    let o = to_object.transform_point3a(ray.o);
+    let d = to_object.transform_vector3a(ray.d);
     if d.z == 0.0 {
         return None;
     }

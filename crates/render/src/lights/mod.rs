@@ -368,7 +368,7 @@ impl Light {
         let beam = beam_deg.to_radians().min(cutoff);
         let rot = Mat3::from_mat4(*to_world);
         Light::Spot {
-            position: to_world.w_axis.truncate(),
+            position: to_world.w_axis.truncate().into(),
             to_local: rot.inverse(),
             intensity,
             cos_cutoff: cutoff.cos(),
@@ -535,8 +535,8 @@ impl Light {
                     }
                     ShapeGeom::Disk { to_world, normal } => {
                         let d = warp::square_to_uniform_disk_concentric(u);
-                        let p = to_world.transform_point3(Vec3::new(d.x, d.y, 0.0));
-                        let err = gamma(6) * (p.abs() + to_world.w_axis.truncate().abs());
+                        let p = to_world.transform_point3a(Vec3::new(d.x, d.y, 0.0));
+                        let err = gamma(6) * (p.abs() + Vec3::from_vec4(to_world.w_axis).abs());
                         let rr = d.length();
                         let mut phi = d.y.atan2(d.x);
                         if phi < 0.0 {
@@ -752,7 +752,7 @@ mod tests {
                 // Uniform in (s, t) over some parametrisation of the parallelogram: check the
                 // point lies inside and that the map is affine within each half.
                 let d = p - a;
-                let m = Mat3::from_cols(e1, e2, e1.cross(e2));
+                let m = Mat3::from_cols(e1.into(), e2.into(), e1.cross(e2).into());
                 let st = m.inverse() * d;
                 assert!(st.z.abs() < 1e-5, "{split:?} off the plane");
                 assert!(

@@ -34,7 +34,7 @@ fn mean(c: Vec3) -> f32 {
 /// Mean radiance of an emitter's colour over its texture space.
 fn mean_radiance(scene: &Scene, c: &ColorParam) -> f32 {
     match c {
-        ColorParam::Const(c) => mean(*c),
+        ColorParam::Const(c) => mean((*c).into()),
         ColorParam::Texture(_) => {
             const N: usize = 8;
             let mut sum = 0.0;
@@ -165,14 +165,14 @@ pub fn light_bounds(scene: &Scene, light: &Light) -> Option<LightBounds> {
                 }
                 ShapeGeom::Disk { to_world, normal } => {
                     let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                        .map(|(x, y)| to_world.transform_point3(Vec3::new(x, y, 0.0)));
+                        .map(|(x, y)| to_world.transform_point3(Vec3::new(x, y, 0.0).into()));
                     let lo = corners.iter().fold(corners[0], |a, c| a.min(*c));
                     let hi = corners.iter().fold(corners[0], |a, c| a.max(*c));
                     Some(LightBounds {
                         w: *normal * flip,
                         cos_o: 1.0,
                         two_sided: *two_sided,
-                        ..any(lo, hi)
+                        ..any(lo.into(), hi.into())
                     })
                 }
                 ShapeGeom::Mesh {
