@@ -148,6 +148,8 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 /// `NextFloatDown` without branches. The bits are mapped to an integer that is monotonic in
 /// the value (both zeros to 0), stepped and mapped back; infinities and NaN stay as they are,
 /// and so does `x` when `step` is 0.
+/// The reference for the SIMD [`next_float_away`] (and its portable form).
+#[cfg(any(test, not(target_arch = "x86_64")))]
 #[inline(always)]
 fn next_float(x: f32, step: i32) -> f32 {
     let b = x.to_bits() as i32;
@@ -175,12 +177,53 @@ fn next_float(x: f32, step: i32) -> f32 {
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(p_error);
     let offset = if w.dot(n) < 0.0 { -(n * d) } else { n * d };
-    let po = p + offset;
+    next_float_away(p + offset, offset)
+}
+
+/// Each coordinate of `x` moved by one ulp towards the sign of that coordinate of `offset`
+/// ([`next_float`] on all lanes at once, with SSE2 integer operations).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of the x86_64 baseline, so these intrinsics are always available;
+    // none of them touches memory.
+    unsafe {
+        let zero = _mm_setzero_ps();
+        let o: __m128 = offset.into();
+        // All-ones (−1) masks: step = (o < 0) − (o > 0) as integers is −1, 0 or +1.
+        let step = _mm_sub_epi32(
+            _mm_castps_si128(_mm_cmplt_ps(o, zero)),
+            _mm_castps_si128(_mm_cmpgt_ps(o, zero)),
+        );
+        let b = _mm_castps_si128(x.into());
+        let mag = _mm_and_si128(b, _mm_set1_epi32(0x7fff_ffff));
+        // Monotonic integer image (both zeros to 0): conditional negation by the sign mask.
+        let sign = _mm_srai_epi32(b, 31);
+        let m = _mm_add_epi32(_mm_sub_epi32(_mm_xor_si128(mag, sign), sign), step);
+        // Back to float bits: magnitude and sign of `m`.
+        let m_sign = _mm_srai_epi32(m, 31);
+        let m_abs = _mm_sub_epi32(_mm_xor_si128(m, m_sign), m_sign);
+        let stepped = _mm_or_si128(m_abs, _mm_and_si128(m_sign, _mm_set1_epi32(i32::MIN)));
+        // Unchanged where the step is 0 or `x` is infinite or NaN.
+        let keep = _mm_or_si128(
+            _mm_cmpeq_epi32(step, _mm_setzero_si128()),
+            _mm_cmpgt_epi32(mag, _mm_set1_epi32(0x7f7f_ffff)),
+        );
+        let r = _mm_or_si128(_mm_and_si128(keep, b), _mm_andnot_si128(keep, stepped));
+        Vec3::from(_mm_castsi128_ps(r))
+    }
+}
+
+/// Portable [`next_float_away`].
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
     let step = |o: f32| (o > 0.0) as i32 - (o < 0.0) as i32;
     Vec3::new(
-        next_float(po.x, step(offset.x)),
-        next_float(po.y, step(offset.y)),
-        next_float(po.z, step(offset.z)),
+        next_float(x.x, step(offset.x)),
+        next_float(x.y, step(offset.y)),
+        next_float(x.z, step(offset.z)),
     )
 }
 
@@ -367,5 +410,56 @@ mod tests {
         }
         assert!(next_float(f32::NAN, 1).is_nan());
         assert_eq!(next_float(-0.0, 0).to_bits(), (-0.0f32).to_bits());
+    }
+
+    #[test]
+    fn next_float_away_is_next_float_per_lane() {
+        use crate::sampling::sampler::mix64;
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let offsets = [
+            1e-3,
+            -1e-3,
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            -f32::MAX,
+            f32::NAN,
+        ];
+        let random = (0..100_000u64).map(|i| f32::from_bits(mix64(i) as u32));
+        let xs: Vec<f32> = special.into_iter().chain(random).collect();
+        for (i, &x) in xs.iter().enumerate() {
+            for (j, &o) in offsets.iter().enumerate() {
+                // Each lane gets a different (value, offset) pair.
+                let (y, z) = (xs[(i + 7) % xs.len()], xs[(i + 13) % xs.len()]);
+                let (oy, oz) = (
+                    offsets[(j + 1) % offsets.len()],
+                    offsets[(j + 3) % offsets.len()],
+                );
+                let got = next_float_away(Vec3::new(x, y, z), Vec3::new(o, oy, oz));
+                let step = |o: f32| (o > 0.0) as i32 - (o < 0.0) as i32;
+                for (g, (v, o)) in got.to_array().into_iter().zip([(x, o), (y, oy), (z, oz)]) {
+                    let want = next_float(v, step(o));
+                    assert_eq!(
+                        g.to_bits(),
+                        want.to_bits(),
+                        "x = {v:e} ({:#x}), offset {o:e}",
+                        v.to_bits()
+                    );
+                }
+            }
+        }
     }
 }
