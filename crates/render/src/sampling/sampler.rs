@@ -375,9 +375,20 @@ impl Sampler {
     }
 
     /// The next value in `[0, 1)`.
+    #[inline(always)]
     pub fn next_1d(&mut self) -> f32 {
         let d = self.dim;
         self.dim = self.dim.wrapping_add(1);
+        // The independent sampler inline; the others (bigger) behind a call.
+        if self.kind == SamplerKind::Independent {
+            self.independent(d)
+        } else {
+            self.next_1d_other(d)
+        }
+    }
+
+    #[inline(never)]
+    fn next_1d_other(&self, d: u32) -> f32 {
         match self.kind {
             SamplerKind::Independent => self.independent(d),
             SamplerKind::Stratified => {
@@ -403,9 +414,19 @@ impl Sampler {
     }
 
     /// The next pair of values in `[0, 1)²` (advances the dimension by 2).
+    #[inline(always)]
     pub fn next_2d(&mut self) -> Vec2 {
         let d = self.dim;
         self.dim = self.dim.wrapping_add(2);
+        if self.kind == SamplerKind::Independent {
+            Vec2::new(self.independent(d), self.independent(d + 1))
+        } else {
+            self.next_2d_other(d)
+        }
+    }
+
+    #[inline(never)]
+    fn next_2d_other(&self, d: u32) -> Vec2 {
         match self.kind {
             SamplerKind::Independent => Vec2::new(self.independent(d), self.independent(d + 1)),
             SamplerKind::Stratified => {
