@@ -141,8 +141,8 @@ impl Camera {
                 (q, Vec3::Z)
             }
         };
-        let o = self.to_world.transform_point3(o_cam.into());
-        let d_world = self.to_world.transform_vector3(d_cam.into());
+        let o = self.to_world.transform_point3a(o_cam);
+        let d_world = self.to_world.transform_vector3a(d_cam);
         // Mitsuba measures the clip distances along the camera axis (in camera units, so a
         // scaled to_world scales them too) and renormalises the world direction.
         let len = d_world.length();
@@ -151,7 +151,7 @@ impl Camera {
         let near_t = self.near_clip * inv_z * len;
         let far_t = self.far_clip * inv_z * len;
         CameraRay {
-            ray: Ray::new((o + d * near_t).into(), d.into()),
+            ray: Ray::new(o + d * near_t, d),
             t_max: far_t - near_t,
         }
     }

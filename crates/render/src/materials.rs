@@ -16,7 +16,7 @@ use crate::bsdf::{
     RoughConductor, RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
 };
 use crate::build::Scene;
-use crate::math::{Frame, Vec2, Vec3};
+use crate::math::{Frame, PVec3, Vec2, Vec3};
 use crate::shapes::SurfaceInteraction;
 
 #[derive(Clone, Debug)]
@@ -258,7 +258,7 @@ impl Scene {
             Material::Dielectric {
                 absorption: Some(sigma),
                 ..
-            } if *sigma != Vec3::ZERO.into() => Some((*sigma).into()),
+            } if *sigma != PVec3::ZERO => Some((*sigma).into()),
             _ => None,
         }
     }

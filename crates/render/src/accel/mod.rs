@@ -157,8 +157,7 @@ impl Accel {
                         }
                         prims.push(Prim::Tri([p0, p1, p2]));
                         ids.push([s, t as u32]);
-                        let (a, b, c) = (p0, p1, p2);
-                        aabbs.push(Aabb::new(a.min(b).min(c), a.max(b).max(c)));
+                        aabbs.push(Aabb::new(p0.min(p1).min(p2), p0.max(p1).max(p2)));
                     }
                 }
                 &AccelShape::Sphere { center, radius } => {
@@ -167,8 +166,7 @@ impl Accel {
                     }
                     prims.push(Prim::Sphere { center, radius });
                     ids.push([s, 0]);
-                    let c = center;
-                    aabbs.push(Aabb::new(c - radius, c + radius));
+                    aabbs.push(Aabb::new(center - radius, center + radius));
                 }
                 &AccelShape::Disk { to_world } => {
                     let to_object = to_world.inverse();
