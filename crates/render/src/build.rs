@@ -570,7 +570,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                 let c = s.to_world.transform_point3(*center);
                 let r = s
                     .to_world
-                    .transform_vector3(Vec3::new(*radius, 0.0, 0.0).into())
+                    .transform_vector3(PVec3::new(*radius, 0.0, 0.0))
                     .length();
                 ShapeGeom::Sphere {
                     center: c.into(),

@@ -134,6 +134,7 @@ pub fn rsqrt(x: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
     #[test]
     fn rsqrt_is_within_a_few_ulp() {
@@ -156,8 +157,6 @@ mod tests {
         let v = Vec3::new(3.0, -4.0, 12.0);
         assert!((normalize_or_zero_fast(v) - v / 13.0).length() < 1e-6);
     }
-
-    use super::*;
 
     #[test]
     fn frame_is_orthonormal() {

@@ -148,6 +148,7 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 /// `NextFloatDown` without branches. The bits are mapped to an integer that is monotonic in
 /// the value (both zeros to 0), stepped and mapped back; infinities and NaN stay as they are,
 /// and so does `x` when `step` is 0.
+///
 /// The reference for the SIMD [`next_float_away`] (and its portable form).
 #[cfg(any(test, not(target_arch = "x86_64")))]
 #[inline(always)]
@@ -165,6 +166,13 @@ fn next_float(x: f32, step: i32) -> f32 {
     } else {
         stepped
     })
+}
+
+/// The direction [`next_float`] rounds `x + o` to for an offset `o`: +1, −1, or 0 (also NaN).
+#[cfg(any(test, not(target_arch = "x86_64")))]
+#[inline(always)]
+fn step_sign(o: f32) -> i32 {
+    (o > 0.0) as i32 - (o < 0.0) as i32
 }
 
 /// pbrt-v4's OffsetRayOrigin: move `p` off the surface along `n` by the error bound, to the
@@ -191,7 +199,7 @@ fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
     unsafe {
         let zero = _mm_setzero_ps();
         let o: __m128 = offset.into();
-        // All-ones (−1) masks: step = (o < 0) − (o > 0) as integers is −1, 0 or +1.
+        // All-ones (−1) masks: step = (o < 0) − (o > 0) as integers is `step_sign(o)`.
         let step = _mm_sub_epi32(
             _mm_castps_si128(_mm_cmplt_ps(o, zero)),
             _mm_castps_si128(_mm_cmpgt_ps(o, zero)),
@@ -219,11 +227,10 @@ fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
 fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
-    let step = |o: f32| (o > 0.0) as i32 - (o < 0.0) as i32;
     Vec3::new(
-        next_float(x.x, step(offset.x)),
-        next_float(x.y, step(offset.y)),
-        next_float(x.z, step(offset.z)),
+        next_float(x.x, step_sign(offset.x)),
+        next_float(x.y, step_sign(offset.y)),
+        next_float(x.z, step_sign(offset.z)),
     )
 }
 
@@ -449,9 +456,8 @@ mod tests {
                     offsets[(j + 3) % offsets.len()],
                 );
                 let got = next_float_away(Vec3::new(x, y, z), Vec3::new(o, oy, oz));
-                let step = |o: f32| (o > 0.0) as i32 - (o < 0.0) as i32;
                 for (g, (v, o)) in got.to_array().into_iter().zip([(x, o), (y, oy), (z, oz)]) {
-                    let want = next_float(v, step(o));
+                    let want = next_float(v, step_sign(o));
                     assert_eq!(
                         g.to_bits(),
                         want.to_bits(),

@@ -47,7 +47,7 @@ impl WoopRay {
         let s = Vec4::new(d[kx], d[ky], 1.0, 1.0) / Vec4::splat(dz);
         WoopRay {
             k: [kx, ky, kz],
-            s: Vec3::new(s.x, s.y, s.z),
+            s: Vec3::from_vec4(s),
             o: Vec3::new(o[kx], o[ky], o[kz]),
         }
     }

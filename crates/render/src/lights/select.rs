@@ -165,14 +165,14 @@ pub fn light_bounds(scene: &Scene, light: &Light) -> Option<LightBounds> {
                 }
                 ShapeGeom::Disk { to_world, normal } => {
                     let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                        .map(|(x, y)| to_world.transform_point3(Vec3::new(x, y, 0.0).into()));
+                        .map(|(x, y)| to_world.transform_point3a(Vec3::new(x, y, 0.0)));
                     let lo = corners.iter().fold(corners[0], |a, c| a.min(*c));
                     let hi = corners.iter().fold(corners[0], |a, c| a.max(*c));
                     Some(LightBounds {
                         w: *normal * flip,
                         cos_o: 1.0,
                         two_sided: *two_sided,
-                        ..any(lo.into(), hi.into())
+                        ..any(lo, hi)
                     })
                 }
                 ShapeGeom::Mesh {
