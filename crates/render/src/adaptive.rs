@@ -22,7 +22,7 @@ use crate::film::image::Image;
 use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec3};
-use crate::render::{Progress, RenderObserver, RenderOptions};
+use crate::render::{Progress, RenderObserver, RenderOptions, camera_sample};
 use crate::sampling::Sampler;
 
 /// Confidence-interval factor: 95 % two-sided for a normal mean.
@@ -164,32 +164,34 @@ pub fn render_adaptive(
                     return None;
                 }
                 let mut tile = film.tile(lo, hi);
-                let mut sampler = template.clone();
                 let w = hi.x - lo.x;
-                let mut taken = 0u64;
-                for (i, p) in state.iter_mut().enumerate() {
-                    if p.done {
-                        continue;
-                    }
-                    let pixel = lo + UVec2::new(i as u32 % w, i as u32 / w);
-                    for k in s0..s1 {
-                        sampler.start_pixel_sample(pixel, k);
-                        let p_film = pixel.as_vec2() + sampler.next_2d();
-                        let u_lens = sampler.next_2d();
-                        let cray = scene.camera.generate_ray(p_film, u_lens);
-                        let l = integrator.li(scene, &cray, &mut sampler);
+                let active: Vec<usize> = (0..state.len()).filter(|&i| !state[i].done).collect();
+                let mut samples = active.iter().flat_map(|&i| (s0..s1).map(move |k| (i, k)));
+                integrator.li_stream(
+                    scene,
+                    &template,
+                    |sampler| {
+                        let (i, k) = samples.next()?;
+                        let pixel = lo + UVec2::new(i as u32 % w, i as u32 / w);
+                        let (p_film, cray) = camera_sample(scene, sampler, pixel, k);
+                        Some(((i, p_film), cray))
+                    },
+                    |(i, p_film), l| {
                         tile.add_sample(p_film, l);
                         let v = illuminance(l);
                         if v.is_finite() {
-                            p.s1 += v;
-                            p.s2 += v * v;
+                            state[i].s1 += v;
+                            state[i].s2 += v * v;
                         }
-                    }
+                    },
+                );
+                for &i in &active {
+                    let p = &mut state[i];
                     p.n = s1;
-                    taken += (s1 - s0) as u64;
                     p.done = s1 >= max_spp
                         || (s1.is_multiple_of(batch) && settings.converged(s1, p.s1, p.s2));
                 }
+                let taken = (active.len() * (s1 - s0) as usize) as u64;
                 let d = done.fetch_add(taken, Ordering::Relaxed) + taken;
                 observer.progress(&Progress {
                     samples_done: d,

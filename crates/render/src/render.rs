@@ -13,9 +13,10 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::build::Scene;
+use crate::camera::CameraRay;
 use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::Integrator;
-use crate::math::UVec2;
+use crate::math::{UVec2, Vec2};
 use crate::sampling::Sampler;
 
 #[derive(Clone, Debug)]
@@ -75,6 +76,20 @@ pub trait RenderObserver: Sync {
 pub struct Silent;
 impl RenderObserver for Silent {}
 
+/// Sets `sampler` up for sample `index` of `pixel` and draws its film position (uniform in
+/// the pixel) and camera ray.
+pub fn camera_sample(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    pixel: UVec2,
+    index: u32,
+) -> (Vec2, CameraRay) {
+    sampler.start_pixel_sample(pixel, index);
+    let p_film = pixel.as_vec2() + sampler.next_2d();
+    let u_lens = sampler.next_2d();
+    (p_film, scene.camera.generate_ray(p_film, u_lens))
+}
+
 /// Render sample indices `[s0, s1)` of every pixel of one tile (positions uniform in each
 /// pixel, splatted by the film's filter).
 fn render_tile(
@@ -87,20 +102,18 @@ fn render_tile(
     s1: u32,
 ) -> FilmTile {
     let mut tile = film.tile(lo, hi);
-    let mut sampler = template.clone();
-    for y in lo.y..hi.y {
-        for x in lo.x..hi.x {
-            let pixel = UVec2::new(x, y);
-            for index in s0..s1 {
-                sampler.start_pixel_sample(pixel, index);
-                let p_film = pixel.as_vec2() + sampler.next_2d();
-                let u_lens = sampler.next_2d();
-                let cray = scene.camera.generate_ray(p_film, u_lens);
-                let l = integrator.li(scene, &cray, &mut sampler);
-                tile.add_sample(p_film, l);
-            }
-        }
-    }
+    let mut samples = (lo.y..hi.y)
+        .flat_map(|y| (lo.x..hi.x).map(move |x| UVec2::new(x, y)))
+        .flat_map(|pixel| (s0..s1).map(move |index| (pixel, index)));
+    integrator.li_stream(
+        scene,
+        template,
+        |sampler| {
+            let (pixel, index) = samples.next()?;
+            Some(camera_sample(scene, sampler, pixel, index))
+        },
+        |p_film, l| tile.add_sample(p_film, l),
+    );
     tile
 }
 

@@ -55,7 +55,11 @@ pub fn li(
             }
             let wi = frame.to_local(ls.wi);
             let f = bsdf.eval(wo, wi, TransportMode::Radiance);
-            if f == Vec3::ZERO || scene.shadowed(&si, &ls.target, ls.wi) {
+            if f == Vec3::ZERO {
+                continue;
+            }
+            let (ray, t_max) = si.shadow_ray(&ls.target, ls.wi);
+            if scene.occluded(&ray, t_max) {
                 continue;
             }
             let pdf = ls.pdf * pmf;

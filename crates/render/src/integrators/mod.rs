@@ -104,6 +104,28 @@ impl Integrator {
     }
 }
 
+impl Integrator {
+    /// Estimates for a stream of camera samples: `next` sets the sampler up for the next sample
+    /// and returns its tag and camera ray (`None`: no more); `done` receives each estimate with
+    /// its tag, not necessarily in order. The path tracer keeps several paths in flight
+    /// ([`path::li_batched`]); the others trace one sample at a time with [`Integrator::li`].
+    pub fn li_stream<T>(
+        &self,
+        scene: &Scene,
+        template: &Sampler,
+        mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        mut done: impl FnMut(T, Vec3),
+    ) {
+        if let Integrator::Path(cfg) = self {
+            return path::li_batched(scene, cfg, template, next, done);
+        }
+        let mut sampler = template.clone();
+        while let Some((tag, cray)) = next(&mut sampler) {
+            done(tag, self.li(scene, &cray, &mut sampler));
+        }
+    }
+}
+
 /// Nori's unbiased estimators: Russian roulette from the third bounce, no depth limit unless
 /// `max_depth` (direct lighting: 2 segments).
 fn nori(max_depth: u32, combine: Combine) -> PathConfig {

@@ -21,7 +21,7 @@ use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::build::Scene;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
-use crate::lights::{Receiver, ShadowTarget};
+use crate::lights::{Light, Receiver, ShadowTarget};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::{Sampler, warp};
 use crate::shapes::SurfaceInteraction;
@@ -236,6 +236,22 @@ struct PathState {
     absorption: Option<Vec3>,
 }
 
+impl PathState {
+    fn start(cfg: &PathConfig, cray: &CameraRay) -> PathState {
+        PathState {
+            ray: cray.ray,
+            t_max: cray.t_max,
+            throughput: Vec3::ONE,
+            eta: 1.0,
+            depth: 0,
+            prev: None,
+            first: None,
+            split: cfg.splitting > 1,
+            absorption: None,
+        }
+    }
+}
+
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConfig) -> Vec3 {
     li_recorded(scene, cray, sampler, cfg, &mut NoRecorder)
 }
@@ -253,17 +269,7 @@ pub fn li_recorded(
         return result;
     }
     rec.camera_ray(&cray.ray);
-    let state = PathState {
-        ray: cray.ray,
-        t_max: cray.t_max,
-        throughput: Vec3::ONE,
-        eta: 1.0,
-        depth: 0,
-        prev: None,
-        first: None,
-        split: cfg.splitting > 1,
-        absorption: None,
-    };
+    let state = PathState::start(cfg, cray);
     trace(scene, sampler, cfg, rec, state, &mut result);
     result
 }
@@ -294,6 +300,197 @@ fn trace(
     mut st: PathState,
     result: &mut Vec3,
 ) {
+    loop {
+        let si = scene.intersect(&st.ray, st.t_max);
+        if !vertex(
+            scene,
+            sampler,
+            cfg,
+            rec,
+            &mut st,
+            si.as_ref(),
+            result,
+            &mut Immediate,
+        ) {
+            return;
+        }
+    }
+}
+
+/// Where next-event estimation's contributions go: each is counted only if its shadow segment
+/// is unblocked, tested now ([`Immediate`]) or later with other paths' ([`Deferred`]).
+trait Shadows {
+    /// Add `l` to `result` (and tell `rec`) unless `ray` is blocked within `(0, t_max)`.
+    #[allow(clippy::too_many_arguments)]
+    fn add(
+        &mut self,
+        scene: &Scene,
+        ray: &Ray,
+        t_max: f32,
+        l: Vec3,
+        result: &mut Vec3,
+        rec: &mut impl PathRecorder,
+        c: Contribution,
+    );
+}
+
+/// Tests each shadow ray when it is made.
+struct Immediate;
+
+impl Shadows for Immediate {
+    #[inline]
+    fn add(
+        &mut self,
+        scene: &Scene,
+        ray: &Ray,
+        t_max: f32,
+        l: Vec3,
+        result: &mut Vec3,
+        rec: &mut impl PathRecorder,
+        c: Contribution,
+    ) {
+        if !scene.occluded(ray, t_max) {
+            *result += l;
+            rec.contribution(l, c);
+        }
+    }
+}
+
+/// Collects the shadow rays of a batch, to be tested together after every path of the batch
+/// has been shaded.
+struct Deferred<'a> {
+    queue: &'a mut Vec<ShadowQuery>,
+    slot: u32,
+}
+
+/// A shadow ray of a batch: `l` counts for the path in `slot` if the ray is unblocked.
+struct ShadowQuery {
+    ray: Ray,
+    t_max: f32,
+    l: Vec3,
+    slot: u32,
+}
+
+impl Shadows for Deferred<'_> {
+    #[inline]
+    fn add(
+        &mut self,
+        _scene: &Scene,
+        ray: &Ray,
+        t_max: f32,
+        l: Vec3,
+        _result: &mut Vec3,
+        _rec: &mut impl PathRecorder,
+        _c: Contribution,
+    ) {
+        self.queue.push(ShadowQuery {
+            ray: *ray,
+            t_max,
+            l,
+            slot: self.slot,
+        });
+    }
+}
+
+/// Paths in flight at once in [`li_batched`].
+const BATCH: usize = 32;
+
+/// A path in flight.
+struct Slot<T> {
+    sampler: Sampler,
+    st: PathState,
+    result: Vec3,
+    tag: T,
+}
+
+/// [`li`] for a stream of camera rays, [`BATCH`] paths at a time. `next` sets the sampler up
+/// for the next camera sample and returns its tag and ray (`None`: no more); `done` receives
+/// each path's estimate with its tag, in the order the paths end.
+///
+/// Each round runs one stage over all paths in flight before the next stage: closest hits,
+/// then shading (emission, emitter sampling, the next direction), then the shadow rays of
+/// the whole batch; finished paths are replaced by new ones. One path at a time, every step
+/// waits for the one before it (hit → shading → next ray); across a batch the steps are
+/// independent, so the processor overlaps them. The estimates are those of [`li`] exactly:
+/// each path draws the same random numbers in the same order, and its shadow-ray
+/// contributions are added to its sum at the same point (with `splitting`, the split-off
+/// paths, traced at once, are added before the vertex's emitter samples instead of after).
+pub fn li_batched<T>(
+    scene: &Scene,
+    cfg: &PathConfig,
+    template: &Sampler,
+    mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+    mut done: impl FnMut(T, Vec3),
+) {
+    let mut slots: Vec<Slot<T>> = Vec::with_capacity(BATCH);
+    let mut hits: Vec<Option<SurfaceInteraction>> = Vec::with_capacity(BATCH);
+    let mut queue: Vec<ShadowQuery> = Vec::with_capacity(BATCH);
+    let mut alive = [false; BATCH];
+    let mut sampler = template.clone();
+    let mut more = true;
+    loop {
+        while more && slots.len() < BATCH {
+            match next(&mut sampler) {
+                None => more = false,
+                Some((tag, _)) if cfg.max_depth == 0 => done(tag, Vec3::ZERO),
+                Some((tag, cray)) => slots.push(Slot {
+                    sampler: sampler.clone(),
+                    st: PathState::start(cfg, &cray),
+                    result: Vec3::ZERO,
+                    tag,
+                }),
+            }
+        }
+        if slots.is_empty() {
+            return;
+        }
+        hits.extend(slots.iter().map(|s| scene.intersect(&s.st.ray, s.st.t_max)));
+        for (k, (s, si)) in slots.iter_mut().zip(&hits).enumerate() {
+            let mut shadows = Deferred {
+                queue: &mut queue,
+                slot: k as u32,
+            };
+            alive[k] = vertex(
+                scene,
+                &mut s.sampler,
+                cfg,
+                &mut NoRecorder,
+                &mut s.st,
+                si.as_ref(),
+                &mut s.result,
+                &mut shadows,
+            );
+        }
+        hits.clear();
+        for q in queue.drain(..) {
+            if !scene.occluded(&q.ray, q.t_max) {
+                slots[q.slot as usize].result += q.l;
+            }
+        }
+        // From the back, so that `swap_remove` only moves paths already looked at (alive).
+        for k in (0..slots.len()).rev() {
+            if !alive[k] {
+                let s = slots.swap_remove(k);
+                done(s.tag, s.result);
+            }
+        }
+    }
+}
+
+/// One segment of a path: the emission found by `st.ray` (whose closest hit is `si`), emitter
+/// sampling at the vertex, and the next direction (`st` advanced in place). `false` when the
+/// path ends here.
+#[allow(clippy::too_many_arguments)]
+fn vertex(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    cfg: &PathConfig,
+    rec: &mut impl PathRecorder,
+    st: &mut PathState,
+    si: Option<&SurfaceInteraction>,
+    result: &mut Vec3,
+    shadows: &mut impl Shadows,
+) -> bool {
     // Weight of emission reached by the sampled ray from `prev`, given the density with which
     // next-event estimation would have produced the same direction.
     let emission_weight = |prev: &Option<Previous>, nee_pdf: &dyn Fn(&Receiver) -> f32| match prev {
@@ -305,189 +502,217 @@ fn trace(
             c => mis(c, p.dir_pdf, nee_pdf(&p.receiver)),
         },
     };
-
-    loop {
-        let contribution = |via, depth| Contribution {
-            depth,
-            first: st.first,
-            via,
-        };
-        let Some(si) = scene.intersect(&st.ray, st.t_max) else {
-            if !(st.depth == 0 && cfg.hide_emitters) {
-                let mut l = Vec3::ZERO;
-                for &i in &scene.infinite_lights {
-                    let light = &scene.lights[i as usize];
-                    let le = light.environment(st.ray.d);
-                    if le == Vec3::ZERO {
-                        continue;
-                    }
-                    let w = emission_weight(&st.prev, &|r| {
-                        nee_pdf(scene, cfg, r, i, light.pdf_li(scene, r, st.ray.d, None))
-                    });
-                    l += st.throughput * le * w;
+    let first = st.first;
+    let contribution = |via, depth| Contribution { depth, first, via };
+    let Some(si) = si else {
+        if !(st.depth == 0 && cfg.hide_emitters) {
+            let mut l = Vec3::ZERO;
+            for &i in &scene.infinite_lights {
+                let light = &scene.lights[i as usize];
+                let le = light.environment(st.ray.d);
+                if le == Vec3::ZERO {
+                    continue;
                 }
-                if let Some(bg) = scene.background
-                    && st.depth == 0
-                {
-                    l += bg;
-                }
-                if l != Vec3::ZERO {
-                    *result += l;
-                    rec.contribution(l, contribution(Via::Emission, st.depth + 1));
-                }
-            }
-            rec.end(PathEnd::Escaped);
-            return;
-        };
-        st.t_max = f32::INFINITY;
-        if let Some(sigma) = st.absorption {
-            st.throughput *= (-sigma * (si.t * st.ray.d.length())).exp();
-        }
-
-        if let Some(li) = scene.shape_light(&si)
-            && !(st.depth == 0 && cfg.hide_emitters)
-        {
-            let light = &scene.lights[li as usize];
-            let le = light.le(scene, &si);
-            if le != Vec3::ZERO {
                 let w = emission_weight(&st.prev, &|r| {
-                    let pdf = light.pdf_li(scene, r, st.ray.d.normalize(), Some(&si));
-                    nee_pdf(scene, cfg, r, li, pdf)
+                    nee_pdf(scene, cfg, r, i, light.pdf_li(scene, r, st.ray.d, None))
                 });
-                let l = st.throughput * le * w;
+                l += st.throughput * le * w;
+            }
+            if let Some(bg) = scene.background
+                && st.depth == 0
+            {
+                l += bg;
+            }
+            if l != Vec3::ZERO {
                 *result += l;
                 rec.contribution(l, contribution(Via::Emission, st.depth + 1));
             }
         }
+        rec.end(PathEnd::Escaped);
+        return false;
+    };
+    st.t_max = f32::INFINITY;
+    if let Some(sigma) = st.absorption {
+        st.throughput *= (-sigma * (si.t * st.ray.d.length())).exp();
+    }
 
-        let bsdf = scene.bsdf_at(&si);
-        rec.vertex(&RecordedVertex {
-            p: si.p,
-            n: si.shading.n,
-            depth: st.depth + 1,
-            throughput: st.throughput,
-        });
-        if st.depth.saturating_add(1) >= cfg.max_depth {
-            rec.end(PathEnd::MaxDepth);
-            return;
-        }
-        let Some((bsdf, frame)) = bsdf else {
-            rec.end(PathEnd::Absorbed);
-            return;
-        };
-        let wo = frame.to_local(si.wo);
-        let receiver = Receiver::from(&si);
-
-        if !cfg.continue_diffuse
-            && scene.ambient != Vec3::ZERO
-            && let Some(ka) = scene.ambient_reflectance(&si)
-        {
-            let l = st.throughput * ka * scene.ambient;
-            if l != Vec3::ZERO {
-                *result += l;
-                rec.contribution(l, contribution(Via::Ambient, st.depth + 1));
-            }
-        }
-
-        // Emitter sampling.
-        let nee = bsdf.has_smooth() && cfg.combine != Combine::BsdfOnly;
-        if cfg.all_lights {
-            if nee {
-                for i in 0..scene.lights.len() as u32 {
-                    let l = sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, 1.0, sampler);
-                    if l != Vec3::ZERO {
-                        *result += st.throughput * l;
-                        rec.contribution(
-                            st.throughput * l,
-                            contribution(Via::EmitterSample, st.depth + 2),
-                        );
-                    }
-                }
-            }
-        } else {
-            for _ in 0..cfg.light_samples {
-                let u = sampler.next_1d();
-                let picked = if nee {
-                    scene.sample_light(u, &receiver)
-                } else {
-                    None
-                };
-                match picked {
-                    Some((i, _, pmf)) => {
-                        let l = sample_emitter(scene, cfg, &si, &bsdf, &frame, wo, i, pmf, sampler)
-                            / pmf;
-                        if l != Vec3::ZERO {
-                            *result += st.throughput * l;
-                            rec.contribution(
-                                st.throughput * l,
-                                contribution(Via::EmitterSample, st.depth + 2),
-                            );
-                        }
-                    }
-                    // Keep the sample dimensions aligned whatever the material.
-                    None => {
-                        sampler.next_2d();
-                    }
-                }
-            }
-        }
-
-        // Splitting: N continuations from this vertex, each carrying 1/N.
-        if st.split {
-            st.split = false;
-            let n = cfg.splitting;
-            st.throughput /= n as f32;
-            for _ in 1..n {
-                let mut next = st;
-                if scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &mut next) {
-                    trace(scene, sampler, cfg, rec, next, result);
-                }
-            }
-        }
-        if !scatter(scene, sampler, cfg, rec, &si, &bsdf, &frame, wo, &mut st) {
-            return;
+    if let Some(li) = scene.shape_light(si)
+        && !(st.depth == 0 && cfg.hide_emitters)
+    {
+        let light = &scene.lights[li as usize];
+        let le = light.le(scene, si);
+        if le != Vec3::ZERO {
+            let w = emission_weight(&st.prev, &|r| {
+                let pdf = light.pdf_li(scene, r, st.ray.d.normalize(), Some(si));
+                nee_pdf(scene, cfg, r, li, pdf)
+            });
+            let l = st.throughput * le * w;
+            *result += l;
+            rec.contribution(l, contribution(Via::Emission, st.depth + 1));
         }
     }
+
+    let bsdf = scene.bsdf_at(si);
+    rec.vertex(&RecordedVertex {
+        p: si.p,
+        n: si.shading.n,
+        depth: st.depth + 1,
+        throughput: st.throughput,
+    });
+    if st.depth.saturating_add(1) >= cfg.max_depth {
+        rec.end(PathEnd::MaxDepth);
+        return false;
+    }
+    let Some((bsdf, frame)) = bsdf else {
+        rec.end(PathEnd::Absorbed);
+        return false;
+    };
+    let wo = frame.to_local(si.wo);
+    let receiver = Receiver::from(si);
+
+    if !cfg.continue_diffuse
+        && scene.ambient != Vec3::ZERO
+        && let Some(ka) = scene.ambient_reflectance(si)
+    {
+        let l = st.throughput * ka * scene.ambient;
+        if l != Vec3::ZERO {
+            *result += l;
+            rec.contribution(l, contribution(Via::Ambient, st.depth + 1));
+        }
+    }
+
+    // Emitter sampling.
+    let nee = bsdf.has_smooth() && cfg.combine != Combine::BsdfOnly;
+    let mut emitter = Emitter {
+        scene,
+        cfg,
+        si,
+        bsdf: &bsdf,
+        frame: &frame,
+        wo,
+        throughput: st.throughput,
+        result,
+        contribution: contribution(Via::EmitterSample, st.depth + 2),
+    };
+    if cfg.all_lights {
+        if nee {
+            for i in 0..scene.lights.len() as u32 {
+                emitter.sample(i, 1.0, sampler, rec, shadows);
+            }
+        }
+    } else {
+        for _ in 0..cfg.light_samples {
+            let u = sampler.next_1d();
+            let picked = if nee {
+                scene.sample_light(u, &receiver)
+            } else {
+                None
+            };
+            match picked {
+                Some((i, _, pmf)) => {
+                    emitter.sample(i, pmf, sampler, rec, shadows);
+                }
+                // Keep the sample dimensions aligned whatever the material.
+                None => {
+                    sampler.next_2d();
+                }
+            }
+        }
+    }
+
+    // Splitting: N continuations from this vertex, each carrying 1/N.
+    if st.split {
+        st.split = false;
+        let n = cfg.splitting;
+        st.throughput /= n as f32;
+        for _ in 1..n {
+            let mut next = *st;
+            if scatter(scene, sampler, cfg, rec, si, &bsdf, &frame, wo, &mut next) {
+                trace(scene, sampler, cfg, rec, next, result);
+            }
+        }
+    }
+    scatter(scene, sampler, cfg, rec, si, &bsdf, &frame, wo, st)
 }
 
-/// Next-event estimation towards light `i` (one sample; `light_samples` are averaged by the
-/// caller through the MIS densities): f·L·w / p, selection probability not included.
-/// `selection` is the probability with which `i` was chosen (1 when all lights are sampled):
-/// the MIS density needs it, and recomputing it would walk the light BVH a second time.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn sample_emitter(
-    scene: &Scene,
-    cfg: &PathConfig,
-    si: &SurfaceInteraction,
-    bsdf: &Bsdf,
-    frame: &Frame,
+/// A non-delta vertex, as next-event estimation sees it.
+struct Emitter<'a> {
+    scene: &'a Scene,
+    cfg: &'a PathConfig,
+    si: &'a SurfaceInteraction,
+    bsdf: &'a Bsdf,
+    frame: &'a Frame,
     wo: Vec3,
-    i: u32,
-    selection: f32,
-    sampler: &mut Sampler,
-) -> Vec3 {
-    let light = &scene.lights[i as usize];
-    let receiver = Receiver::from(si);
-    let n = if cfg.all_lights && light.is_delta() {
-        1
-    } else if cfg.all_lights {
-        cfg.light_samples
-    } else {
-        1
-    };
-    let mut one = || -> Vec3 {
+    throughput: Vec3,
+    result: &'a mut Vec3,
+    contribution: Contribution,
+}
+
+impl Emitter<'_> {
+    /// Next-event estimation towards light `i`: throughput · f·L·w / (p · selection) per
+    /// sample, each handed to `shadows` with its shadow ray (`light_samples` are averaged
+    /// through the MIS densities). `selection` is the probability with which `i` was chosen (1 when all lights
+    /// are sampled): the MIS density needs it, and recomputing it would walk the light BVH a
+    /// second time.
+    #[inline]
+    fn sample(
+        &mut self,
+        i: u32,
+        selection: f32,
+        sampler: &mut Sampler,
+        rec: &mut impl PathRecorder,
+        shadows: &mut impl Shadows,
+    ) {
+        let (scene, cfg) = (self.scene, self.cfg);
+        let light = &scene.lights[i as usize];
+        let n = if cfg.all_lights && light.is_delta() {
+            1
+        } else if cfg.all_lights {
+            cfg.light_samples
+        } else {
+            1
+        };
+        let per_light = if cfg.all_lights { n } else { cfg.light_samples } as f32;
+        let receiver = Receiver::from(self.si);
+        // One sample is the common case (always, unless every light is visited): without the
+        // loop, nothing of the loop body is hoisted ahead of it for nothing.
+        if n == 1 {
+            self.one(
+                light, selection, per_light, &receiver, sampler, rec, shadows,
+            );
+        } else {
+            for _ in 0..n {
+                self.one(
+                    light, selection, per_light, &receiver, sampler, rec, shadows,
+                );
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn one(
+        &mut self,
+        light: &Light,
+        selection: f32,
+        per_light: f32,
+        receiver: &Receiver,
+        sampler: &mut Sampler,
+        rec: &mut impl PathRecorder,
+        shadows: &mut impl Shadows,
+    ) {
+        let cfg = self.cfg;
         let u = sampler.next_2d();
-        let Some(ls) = light.sample_li(scene, &receiver, u) else {
-            return Vec3::ZERO;
+        let Some(ls) = light.sample_li(self.scene, receiver, u) else {
+            return;
         };
         if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
-            return Vec3::ZERO;
+            return;
         }
-        let wi = frame.to_local(ls.wi);
-        let f = bsdf.eval(wo, wi, TransportMode::Radiance);
-        if f == Vec3::ZERO || scene.shadowed(si, &ls.target, ls.wi) {
-            return Vec3::ZERO;
+        let wi = self.frame.to_local(ls.wi);
+        let f = self.bsdf.eval(self.wo, wi, TransportMode::Radiance);
+        if f == Vec3::ZERO {
+            return;
         }
         // Density of this strategy for MIS: all samples of all lights considered.
         let w = if ls.delta || cfg.combine == Combine::EmitterOnly {
@@ -496,20 +721,21 @@ fn sample_emitter(
             mis(
                 cfg.combine,
                 nee_density(cfg, selection, ls.pdf),
-                direction_pdf(cfg, bsdf, wo, wi),
+                direction_pdf(cfg, self.bsdf, self.wo, wi),
             )
         };
-        f * ls.li * (w / ls.pdf)
-    };
-    // One sample is the common case (always, unless every light is visited): without the
-    // loop, nothing of the loop body is hoisted ahead of it for nothing.
-    let sum = if n == 1 {
-        one()
-    } else {
-        (0..n).fold(Vec3::ZERO, |sum, _| sum + one())
-    };
-    let per_light = if cfg.all_lights { n } else { cfg.light_samples };
-    sum / per_light as f32
+        let l = self.throughput * (f * ls.li * (w / ls.pdf) / per_light / selection);
+        let (ray, t_max) = self.si.shadow_ray(&ls.target, ls.wi);
+        shadows.add(
+            self.scene,
+            &ray,
+            t_max,
+            l,
+            self.result,
+            rec,
+            self.contribution,
+        );
+    }
 }
 
 /// Density of the direction strategy at a non-delta vertex.
@@ -632,24 +858,14 @@ fn scatter(
     true
 }
 
-impl Scene {
-    /// Whether the segment from `si` to a light sample is blocked.
-    pub fn shadowed(
-        &self,
-        si: &crate::shapes::SurfaceInteraction,
-        target: &ShadowTarget,
-        wi: Vec3,
-    ) -> bool {
+impl SurfaceInteraction {
+    /// The shadow ray from this point towards a light sample and its range `(0, t_max)`.
+    #[inline]
+    pub fn shadow_ray(&self, target: &ShadowTarget, wi: Vec3) -> (Ray, f32) {
         match *target {
-            ShadowTarget::Infinite => self.occluded(&si.spawn_ray(wi), f32::INFINITY),
-            ShadowTarget::Point(p) => {
-                let (ray, t) = si.spawn_ray_to(p);
-                self.occluded(&ray, t)
-            }
-            ShadowTarget::Surface { p, p_error, n } => {
-                let (ray, t) = si.spawn_ray_to_surface(p, p_error, n);
-                self.occluded(&ray, t)
-            }
+            ShadowTarget::Infinite => (self.spawn_ray(wi), f32::INFINITY),
+            ShadowTarget::Point(p) => self.spawn_ray_to(p),
+            ShadowTarget::Surface { p, p_error, n } => self.spawn_ray_to_surface(p, p_error, n),
         }
     }
 }
