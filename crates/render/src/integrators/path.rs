@@ -17,6 +17,7 @@
 
 use scene::{DirectionSampling, RussianRoulette};
 
+use crate::accel::Hit;
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::build::Scene;
 use crate::camera::CameraRay;
@@ -423,7 +424,7 @@ pub fn li_batched<T>(
     mut done: impl FnMut(T, Vec3),
 ) {
     let mut slots: Vec<Slot<T>> = Vec::with_capacity(BATCH);
-    let mut hits: Vec<Option<SurfaceInteraction>> = Vec::with_capacity(BATCH);
+    let mut hits: Vec<Option<Hit>> = Vec::with_capacity(BATCH);
     let mut queue: Vec<ShadowQuery> = Vec::with_capacity(BATCH);
     let mut alive = [false; BATCH];
     let mut sampler = template.clone();
@@ -444,22 +445,25 @@ pub fn li_batched<T>(
         if slots.is_empty() {
             return;
         }
-        hits.extend(slots.iter().map(|s| scene.intersect(&s.st.ray, s.st.t_max)));
-        for (k, (s, si)) in slots.iter_mut().zip(&hits).enumerate() {
+        hits.extend(slots.iter().map(|s| scene.hit(&s.st.ray, s.st.t_max)));
+        for (k, (s, &hit)) in slots.iter_mut().zip(&hits).enumerate() {
             let mut shadows = Deferred {
                 queue: &mut queue,
                 slot: k as u32,
             };
-            alive[k] = vertex(
-                scene,
-                &mut s.sampler,
-                cfg,
-                &mut NoRecorder,
-                &mut s.st,
-                si.as_ref(),
-                &mut s.result,
-                &mut shadows,
-            );
+            let (ray, t_max) = (s.st.ray, s.st.t_max);
+            alive[k] = scene.surface(&ray, t_max, hit, |si| {
+                vertex(
+                    scene,
+                    &mut s.sampler,
+                    cfg,
+                    &mut NoRecorder,
+                    &mut s.st,
+                    si,
+                    &mut s.result,
+                    &mut shadows,
+                )
+            });
         }
         hits.clear();
         for q in queue.drain(..) {
