@@ -210,20 +210,28 @@ impl Scene {
         }
     }
 
-    #[inline]
+    /// The value of a colour parameter at `uv`. Constants are inline; texture lookups stay
+    /// behind a call, so that constants (most parameters) cost no call in the hot loops.
+    #[inline(always)]
     pub fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3 {
         match p {
             ColorParam::Const(c) => (*c).into(),
-            ColorParam::Texture(t) => self.textures[t.0 as usize].eval(uv),
+            ColorParam::Texture(t) => self.texture(t.0, uv),
         }
     }
 
-    #[inline]
+    /// [`Scene::color`] for a float parameter.
+    #[inline(always)]
     pub fn float(&self, p: &FloatParam, uv: Vec2) -> f32 {
         match p {
             FloatParam::Const(c) => *c,
-            FloatParam::Texture(t) => self.textures[t.0 as usize].eval(uv).x,
+            FloatParam::Texture(t) => self.texture(t.0, uv).x,
         }
+    }
+
+    #[inline(never)]
+    fn texture(&self, t: u32, uv: Vec2) -> Vec3 {
+        self.textures[t as usize].eval(uv)
     }
 
     /// A representative reflectance colour at `si` (the `albedo` AOV).
