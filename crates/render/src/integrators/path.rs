@@ -302,17 +302,21 @@ fn trace(
     result: &mut Vec3,
 ) {
     loop {
-        let si = scene.intersect(&st.ray, st.t_max);
-        if !vertex(
-            scene,
-            sampler,
-            cfg,
-            rec,
-            &mut st,
-            si.as_ref(),
-            result,
-            &mut Immediate,
-        ) {
+        let (ray, t_max) = (st.ray, st.t_max);
+        let hit = scene.hit(&ray, t_max);
+        let go_on = scene.surface(&ray, t_max, hit, |si| {
+            vertex(
+                scene,
+                sampler,
+                cfg,
+                rec,
+                &mut st,
+                si,
+                result,
+                &mut Immediate,
+            )
+        });
+        if !go_on {
             return;
         }
     }
@@ -321,18 +325,22 @@ fn trace(
 /// Where next-event estimation's contributions go: each is counted only if its shadow segment
 /// is unblocked, tested now ([`Immediate`]) or later with other paths' ([`Deferred`]).
 trait Shadows {
-    /// Add `l` to `result` (and tell `rec`) unless `ray` is blocked within `(0, t_max)`.
-    #[allow(clippy::too_many_arguments)]
+    /// Add `q.l` to `result` (and tell `rec`) unless `q.ray` is blocked within `(0, q.t_max)`.
     fn add(
         &mut self,
         scene: &Scene,
-        ray: &Ray,
-        t_max: f32,
-        l: Vec3,
+        q: ShadowQuery,
         result: &mut Vec3,
         rec: &mut impl PathRecorder,
         c: Contribution,
     );
+}
+
+/// A candidate contribution `l` of next-event estimation and its shadow segment.
+struct ShadowQuery {
+    ray: Ray,
+    t_max: f32,
+    l: Vec3,
 }
 
 /// Tests each shadow ray when it is made.
@@ -343,32 +351,22 @@ impl Shadows for Immediate {
     fn add(
         &mut self,
         scene: &Scene,
-        ray: &Ray,
-        t_max: f32,
-        l: Vec3,
+        q: ShadowQuery,
         result: &mut Vec3,
         rec: &mut impl PathRecorder,
         c: Contribution,
     ) {
-        if !scene.occluded(ray, t_max) {
-            *result += l;
-            rec.contribution(l, c);
+        if !scene.occluded(&q.ray, q.t_max) {
+            *result += q.l;
+            rec.contribution(q.l, c);
         }
     }
 }
 
-/// Collects the shadow rays of a batch, to be tested together after every path of the batch
-/// has been shaded.
+/// Collects the shadow rays of a batch with the slot of their path, to be tested together
+/// after every path of the batch has been shaded.
 struct Deferred<'a> {
-    queue: &'a mut Vec<ShadowQuery>,
-    slot: u32,
-}
-
-/// A shadow ray of a batch: `l` counts for the path in `slot` if the ray is unblocked.
-struct ShadowQuery {
-    ray: Ray,
-    t_max: f32,
-    l: Vec3,
+    queue: &'a mut Vec<(ShadowQuery, u32)>,
     slot: u32,
 }
 
@@ -376,20 +374,13 @@ impl Shadows for Deferred<'_> {
     #[inline]
     fn add(
         &mut self,
-        _scene: &Scene,
-        ray: &Ray,
-        t_max: f32,
-        l: Vec3,
-        _result: &mut Vec3,
-        _rec: &mut impl PathRecorder,
-        _c: Contribution,
+        _: &Scene,
+        q: ShadowQuery,
+        _: &mut Vec3,
+        _: &mut impl PathRecorder,
+        _: Contribution,
     ) {
-        self.queue.push(ShadowQuery {
-            ray: *ray,
-            t_max,
-            l,
-            slot: self.slot,
-        });
+        self.queue.push((q, self.slot));
     }
 }
 
@@ -425,7 +416,7 @@ pub fn li_batched<T>(
 ) {
     let mut slots: Vec<Slot<T>> = Vec::with_capacity(BATCH);
     let mut hits: Vec<Option<Hit>> = Vec::with_capacity(BATCH);
-    let mut queue: Vec<ShadowQuery> = Vec::with_capacity(BATCH);
+    let mut queue: Vec<(ShadowQuery, u32)> = Vec::with_capacity(BATCH);
     let mut alive = [false; BATCH];
     let mut sampler = template.clone();
     let mut more = true;
@@ -466,9 +457,9 @@ pub fn li_batched<T>(
             });
         }
         hits.clear();
-        for q in queue.drain(..) {
+        for (q, slot) in queue.drain(..) {
             if !scene.occluded(&q.ray, q.t_max) {
-                slots[q.slot as usize].result += q.l;
+                slots[slot as usize].result += q.l;
             }
         }
         // From the back, so that `swap_remove` only moves paths already looked at (alive).
@@ -730,15 +721,8 @@ impl Emitter<'_> {
         };
         let l = self.throughput * (f * ls.li * (w / ls.pdf) / per_light / selection);
         let (ray, t_max) = self.si.shadow_ray(&ls.target, ls.wi);
-        shadows.add(
-            self.scene,
-            &ray,
-            t_max,
-            l,
-            self.result,
-            rec,
-            self.contribution,
-        );
+        let q = ShadowQuery { ray, t_max, l };
+        shadows.add(self.scene, q, self.result, rec, self.contribution);
     }
 }
 
