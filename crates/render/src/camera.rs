@@ -124,8 +124,10 @@ impl Camera {
     /// The ray through continuous film position `p_film`; `u_lens` is used by the thin lens.
     pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2) -> CameraRay {
         let p = self.film_to_camera(p_film);
+        // `d_cam` need not be unit length: only its direction and its z component relative
+        // to its length enter below.
         let (o_cam, d_cam) = match self.kind {
-            Kind::Perspective => (Vec3::ZERO, p.normalize()),
+            Kind::Perspective => (Vec3::ZERO, p),
             Kind::ThinLens {
                 aperture_radius,
                 focus_distance,
@@ -133,7 +135,7 @@ impl Camera {
                 let lens = square_to_uniform_disk_concentric(u_lens) * aperture_radius;
                 let o = Vec3::new(lens.x, lens.y, 0.0);
                 let focus = p * focus_distance;
-                (o, (focus - o).normalize())
+                (o, focus - o)
             }
             Kind::Orthographic => {
                 // The orthographic image plane spans [-1,1] horizontally.
@@ -144,12 +146,13 @@ impl Camera {
         let o = self.to_world.transform_point3a(o_cam);
         let d_world = self.to_world.transform_vector3a(d_cam);
         // Mitsuba measures the clip distances along the camera axis (in camera units, so a
-        // scaled to_world scales them too) and renormalises the world direction.
+        // scaled to_world scales them too) and renormalises the world direction: with `d_cam`
+        // of any length, a camera-space depth z is reached at t = z · |d_world| / d_cam.z.
         let len = d_world.length();
         let d = d_world / len;
-        let inv_z = 1.0 / d_cam.z;
-        let near_t = self.near_clip * inv_z * len;
-        let far_t = self.far_clip * inv_z * len;
+        let t_per_z = len / d_cam.z;
+        let near_t = self.near_clip * t_per_z;
+        let far_t = self.far_clip * t_per_z;
         CameraRay {
             ray: Ray::new(o + d * near_t, d),
             t_max: far_t - near_t,
