@@ -257,7 +257,8 @@ fn ray_ok(ray: &Ray, t_max: f32) -> bool {
     // `x - x` is 0 for finite `x` and NaN otherwise: one comparison covers all six
     // components, without a branch per component.
     let z = (ray.o - ray.o) + (ray.d - ray.d);
-    t_max > 0.0 && z.x + z.y + z.z == 0.0 && ray.d != Vec3::ZERO
+    // `cmpne(..).any()`: one mask test, where `!=` would branch on each component.
+    t_max > 0.0 && z.x + z.y + z.z == 0.0 && ray.d.cmpne(Vec3::ZERO).any()
 }
 
 #[cfg(test)]

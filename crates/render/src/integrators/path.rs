@@ -558,7 +558,7 @@ fn vertex(
         rec.end(PathEnd::MaxDepth);
         return false;
     }
-    let Some((bsdf, frame)) = bsdf else {
+    let Some((bsdf, frame)) = &bsdf else {
         rec.end(PathEnd::Absorbed);
         return false;
     };
@@ -582,8 +582,8 @@ fn vertex(
         scene,
         cfg,
         si,
-        bsdf: &bsdf,
-        frame: &frame,
+        bsdf,
+        frame,
         wo,
         throughput: st.throughput,
         result,
@@ -622,12 +622,12 @@ fn vertex(
         st.throughput /= n as f32;
         for _ in 1..n {
             let mut next = *st;
-            if scatter(scene, sampler, cfg, rec, si, &bsdf, &frame, wo, &mut next) {
+            if scatter(scene, sampler, cfg, rec, si, bsdf, frame, wo, &mut next) {
                 trace(scene, sampler, cfg, rec, next, result);
             }
         }
     }
-    scatter(scene, sampler, cfg, rec, si, &bsdf, &frame, wo, st)
+    scatter(scene, sampler, cfg, rec, si, bsdf, frame, wo, st)
 }
 
 /// A non-delta vertex, as next-event estimation sees it.
@@ -698,7 +698,9 @@ impl Emitter<'_> {
     ) {
         let cfg = self.cfg;
         let u = sampler.next_2d();
-        let Some(ls) = light.sample_li(self.scene, receiver, u) else {
+        // Borrowed, not moved out of the `Option`: a light sample is 112 bytes.
+        let ls = light.sample_li(self.scene, receiver, u);
+        let Some(ls) = &ls else {
             return;
         };
         if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
@@ -719,7 +721,7 @@ impl Emitter<'_> {
                 direction_pdf(cfg, self.bsdf, self.wo, wi),
             )
         };
-        let l = self.throughput * (f * ls.li * (w / ls.pdf) / per_light / selection);
+        let l = self.throughput * (f * ls.li) * (w / (ls.pdf * per_light * selection));
         let (ray, t_max) = self.si.shadow_ray(&ls.target, ls.wi);
         let q = ShadowQuery { ray, t_max, l };
         shadows.add(self.scene, q, self.result, rec, self.contribution);
