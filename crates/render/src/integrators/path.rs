@@ -356,7 +356,8 @@ impl Shadows for Immediate {
         rec: &mut impl PathRecorder,
         c: Contribution,
     ) {
-        if !scene.occluded(&q.ray, q.t_max) {
+        // A zero value (an MIS weight of 0) is neither traced nor recorded.
+        if q.l != Vec3::ZERO && !scene.occluded(&q.ray, q.t_max) {
             *result += q.l;
             rec.contribution(q.l, c);
         }
