@@ -58,7 +58,7 @@ pub fn li(
             if f == Vec3::ZERO {
                 continue;
             }
-            let (ray, t_max) = si.shadow_ray(&ls.target, ls.wi);
+            let (ray, t_max) = ls.target.ray_from(&si, ls.wi);
             if scene.occluded(&ray, t_max) {
                 continue;
             }

@@ -102,9 +102,7 @@ impl Integrator {
             } => direct::li(scene, cray, sampler, *emitter_samples, *bsdf_samples),
         }
     }
-}
 
-impl Integrator {
     /// Estimates for a stream of camera samples: `next` sets the sampler up for the next sample
     /// and returns its tag and camera ray (`None`: no more); `done` receives each estimate with
     /// its tag, not necessarily in order. The path tracer keeps several paths in flight

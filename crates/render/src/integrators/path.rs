@@ -22,7 +22,7 @@ use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::build::Scene;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
-use crate::lights::{Light, Receiver, ShadowTarget};
+use crate::lights::{Light, Receiver};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::{Sampler, warp};
 use crate::shapes::SurfaceInteraction;
@@ -313,27 +313,13 @@ fn trace(
                 &mut st,
                 si,
                 result,
-                &mut Immediate,
+                &mut Shadows::Immediate,
             )
         });
         if !go_on {
             return;
         }
     }
-}
-
-/// Where next-event estimation's contributions go: each is counted only if its shadow segment
-/// is unblocked, tested now ([`Immediate`]) or later with other paths' ([`Deferred`]).
-trait Shadows {
-    /// Add `q.l` to `result` (and tell `rec`) unless `q.ray` is blocked within `(0, q.t_max)`.
-    fn add(
-        &mut self,
-        scene: &Scene,
-        q: ShadowQuery,
-        result: &mut Vec3,
-        rec: &mut impl PathRecorder,
-        c: Contribution,
-    );
 }
 
 /// A candidate contribution `l` of next-event estimation and its shadow segment.
@@ -343,10 +329,22 @@ struct ShadowQuery {
     l: Vec3,
 }
 
-/// Tests each shadow ray when it is made.
-struct Immediate;
+/// Where next-event estimation's candidate contributions go: each counts only if its shadow
+/// segment is unblocked.
+enum Shadows<'a> {
+    /// Test each shadow ray when it is made (the single-path loop).
+    Immediate,
+    /// Queue it with the slot of its path, to be tested with the rest of the batch after
+    /// every path of the batch has been shaded.
+    Deferred {
+        queue: &'a mut Vec<(ShadowQuery, u32)>,
+        slot: u32,
+    },
+}
 
-impl Shadows for Immediate {
+impl Shadows<'_> {
+    /// Add `q.l` to `result` (and tell `rec`) unless `q.ray` is blocked within `(0, q.t_max)`,
+    /// or queue it for the batch to do so.
     #[inline]
     fn add(
         &mut self,
@@ -356,32 +354,16 @@ impl Shadows for Immediate {
         rec: &mut impl PathRecorder,
         c: Contribution,
     ) {
-        // A zero value (an MIS weight of 0) is neither traced nor recorded.
-        if q.l != Vec3::ZERO && !scene.occluded(&q.ray, q.t_max) {
-            *result += q.l;
-            rec.contribution(q.l, c);
+        match self {
+            // A zero value (an MIS weight of 0) is neither traced nor recorded.
+            Shadows::Immediate => {
+                if q.l != Vec3::ZERO && !scene.occluded(&q.ray, q.t_max) {
+                    *result += q.l;
+                    rec.contribution(q.l, c);
+                }
+            }
+            Shadows::Deferred { queue, slot } => queue.push((q, *slot)),
         }
-    }
-}
-
-/// Collects the shadow rays of a batch with the slot of their path, to be tested together
-/// after every path of the batch has been shaded.
-struct Deferred<'a> {
-    queue: &'a mut Vec<(ShadowQuery, u32)>,
-    slot: u32,
-}
-
-impl Shadows for Deferred<'_> {
-    #[inline]
-    fn add(
-        &mut self,
-        _: &Scene,
-        q: ShadowQuery,
-        _: &mut Vec3,
-        _: &mut impl PathRecorder,
-        _: Contribution,
-    ) {
-        self.queue.push((q, self.slot));
     }
 }
 
@@ -439,7 +421,7 @@ pub fn li_batched<T>(
         }
         hits.extend(slots.iter().map(|s| scene.hit(&s.st.ray, s.st.t_max)));
         for (k, (s, &hit)) in slots.iter_mut().zip(&hits).enumerate() {
-            let mut shadows = Deferred {
+            let mut shadows = Shadows::Deferred {
                 queue: &mut queue,
                 slot: k as u32,
             };
@@ -485,7 +467,7 @@ fn vertex(
     st: &mut PathState,
     si: Option<&SurfaceInteraction>,
     result: &mut Vec3,
-    shadows: &mut impl Shadows,
+    shadows: &mut Shadows,
 ) -> bool {
     // Weight of emission reached by the sampled ray from `prev`, given the density with which
     // next-event estimation would have produced the same direction.
@@ -564,7 +546,6 @@ fn vertex(
         return false;
     };
     let wo = frame.to_local(si.wo);
-    let receiver = Receiver::from(si);
 
     if !cfg.continue_diffuse
         && scene.ambient != Vec3::ZERO
@@ -586,6 +567,7 @@ fn vertex(
         bsdf,
         frame,
         wo,
+        receiver: Receiver::from(si),
         throughput: st.throughput,
         result,
         contribution: contribution(Via::EmitterSample, st.depth + 2),
@@ -600,7 +582,7 @@ fn vertex(
         for _ in 0..cfg.light_samples {
             let u = sampler.next_1d();
             let picked = if nee {
-                scene.sample_light(u, &receiver)
+                scene.sample_light(u, &emitter.receiver)
             } else {
                 None
             };
@@ -639,6 +621,7 @@ struct Emitter<'a> {
     bsdf: &'a Bsdf,
     frame: &'a Frame,
     wo: Vec3,
+    receiver: Receiver,
     throughput: Vec3,
     result: &'a mut Vec3,
     contribution: Contribution,
@@ -647,9 +630,9 @@ struct Emitter<'a> {
 impl Emitter<'_> {
     /// Next-event estimation towards light `i`: throughput · f·L·w / (p · selection) per
     /// sample, each handed to `shadows` with its shadow ray (`light_samples` are averaged
-    /// through the MIS densities). `selection` is the probability with which `i` was chosen (1 when all lights
-    /// are sampled): the MIS density needs it, and recomputing it would walk the light BVH a
-    /// second time.
+    /// through the MIS densities). `selection` is the probability with which `i` was chosen
+    /// (1 when all lights are sampled): the MIS density needs it, and recomputing it would
+    /// walk the light BVH a second time.
     #[inline]
     fn sample(
         &mut self,
@@ -657,7 +640,7 @@ impl Emitter<'_> {
         selection: f32,
         sampler: &mut Sampler,
         rec: &mut impl PathRecorder,
-        shadows: &mut impl Shadows,
+        shadows: &mut Shadows,
     ) {
         let (scene, cfg) = (self.scene, self.cfg);
         let light = &scene.lights[i as usize];
@@ -669,18 +652,13 @@ impl Emitter<'_> {
             1
         };
         let per_light = if cfg.all_lights { n } else { cfg.light_samples } as f32;
-        let receiver = Receiver::from(self.si);
         // One sample is the common case (always, unless every light is visited): without the
         // loop, nothing of the loop body is hoisted ahead of it for nothing.
         if n == 1 {
-            self.one(
-                light, selection, per_light, &receiver, sampler, rec, shadows,
-            );
+            self.one(light, selection, per_light, sampler, rec, shadows);
         } else {
             for _ in 0..n {
-                self.one(
-                    light, selection, per_light, &receiver, sampler, rec, shadows,
-                );
+                self.one(light, selection, per_light, sampler, rec, shadows);
             }
         }
     }
@@ -692,15 +670,14 @@ impl Emitter<'_> {
         light: &Light,
         selection: f32,
         per_light: f32,
-        receiver: &Receiver,
         sampler: &mut Sampler,
         rec: &mut impl PathRecorder,
-        shadows: &mut impl Shadows,
+        shadows: &mut Shadows,
     ) {
         let cfg = self.cfg;
         let u = sampler.next_2d();
         // Borrowed, not moved out of the `Option`: a light sample is 112 bytes.
-        let ls = light.sample_li(self.scene, receiver, u);
+        let ls = light.sample_li(self.scene, &self.receiver, u);
         let Some(ls) = &ls else {
             return;
         };
@@ -723,7 +700,7 @@ impl Emitter<'_> {
             )
         };
         let l = self.throughput * (f * ls.li) * (w / (ls.pdf * per_light * selection));
-        let (ray, t_max) = self.si.shadow_ray(&ls.target, ls.wi);
+        let (ray, t_max) = ls.target.ray_from(self.si, ls.wi);
         let q = ShadowQuery { ray, t_max, l };
         shadows.add(self.scene, q, self.result, rec, self.contribution);
     }
@@ -847,16 +824,4 @@ fn scatter(
         throughput: next.throughput,
     });
     true
-}
-
-impl SurfaceInteraction {
-    /// The shadow ray from this point towards a light sample and its range `(0, t_max)`.
-    #[inline]
-    pub fn shadow_ray(&self, target: &ShadowTarget, wi: Vec3) -> (Ray, f32) {
-        match *target {
-            ShadowTarget::Infinite => (self.spawn_ray(wi), f32::INFINITY),
-            ShadowTarget::Point(p) => self.spawn_ray_to(p),
-            ShadowTarget::Surface { p, p_error, n } => self.spawn_ray_to_surface(p, p_error, n),
-        }
-    }
 }

@@ -23,6 +23,7 @@ use scene::{ColorParam, EnvMapping};
 
 use crate::build::Scene;
 use crate::film::Image;
+use crate::geometry::Ray;
 use crate::math::{Frame, INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance, rsqrt};
 use crate::sampling::distrib::{Distribution1D, Distribution2D};
 use crate::sampling::warp;
@@ -50,6 +51,19 @@ pub enum ShadowTarget {
     Point(Vec3),
     /// Infinitely far along `wi`.
     Infinite,
+}
+
+impl ShadowTarget {
+    /// The shadow ray from `si` towards this light sample (direction `wi`) and its range
+    /// `(0, t_max)`.
+    #[inline]
+    pub fn ray_from(&self, si: &SurfaceInteraction, wi: Vec3) -> (Ray, f32) {
+        match *self {
+            ShadowTarget::Infinite => (si.spawn_ray(wi), f32::INFINITY),
+            ShadowTarget::Point(p) => si.spawn_ray_to(p),
+            ShadowTarget::Surface { p, p_error, n } => si.spawn_ray_to_surface(p, p_error, n),
+        }
+    }
 }
 
 /// The receiving point of a light query.
