@@ -147,6 +147,12 @@ pub fn render_adaptive(
             vec![PixelState::default(); (n.x * n.y) as usize]
         })
         .collect();
+    // One tile per region for the whole render, cleared before each round it takes part in.
+    let mut tiles: Vec<FilmTile> = tile_list
+        .iter()
+        .map(|&(lo, hi)| film.tile(lo, hi))
+        .collect();
+    let mut ran = vec![false; tile_list.len()];
 
     let mut cancelled = false;
     let mut spp_round = 0u32;
@@ -156,14 +162,16 @@ pub fn render_adaptive(
             break;
         }
         let (s0, s1) = (spp_round, (spp_round + batch).min(max_spp));
-        let finished: Vec<Option<FilmTile>> = tile_list
+        tile_list
             .par_iter()
             .zip(states.par_iter_mut())
-            .map(|(&(lo, hi), state)| {
-                if state.iter().all(|p| p.done) {
-                    return None;
+            .zip(tiles.par_iter_mut().zip(ran.par_iter_mut()))
+            .for_each(|((&(lo, hi), state), (tile, ran))| {
+                *ran = !state.iter().all(|p| p.done);
+                if !*ran {
+                    return;
                 }
-                let mut tile = film.tile(lo, hi);
+                tile.clear();
                 let w = hi.x - lo.x;
                 let active: Vec<usize> = (0..state.len()).filter(|&i| !state[i].done).collect();
                 let mut samples = active.iter().flat_map(|&i| (s0..s1).map(move |k| (i, k)));
@@ -199,11 +207,9 @@ pub fn render_adaptive(
                     elapsed: start.elapsed(),
                     spp_done: s0,
                 });
-                Some(tile)
-            })
-            .collect();
+            });
         let mut any = false;
-        for t in finished.into_iter().flatten() {
+        for (t, _) in tiles.iter().zip(&ran).filter(|(_, ran)| **ran) {
             film.merge(t);
             any = true;
         }

@@ -126,9 +126,9 @@ pub fn render_layers(scene: &Scene, cfg: &PathConfig, spp: u32, tile_size: u32) 
         })
         .collect();
     for (bt, lt) in finished {
-        beauty.merge(bt);
+        beauty.merge(&bt);
         for (f, t) in layers.iter_mut().zip(lt) {
-            f.merge(t);
+            f.merge(&t);
         }
     }
     LayerFilms { beauty, layers }

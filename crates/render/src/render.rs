@@ -96,12 +96,11 @@ fn render_tile(
     scene: &Scene,
     integrator: &Integrator,
     template: &Sampler,
-    film: &Film,
+    tile: &mut FilmTile,
     (lo, hi): (UVec2, UVec2),
     s0: u32,
     s1: u32,
-) -> FilmTile {
-    let mut tile = film.tile(lo, hi);
+) {
     let mut samples = (lo.y..hi.y)
         .flat_map(|y| (lo.x..hi.x).map(move |x| UVec2::new(x, y)))
         .flat_map(|pixel| (s0..s1).map(move |index| (pixel, index)));
@@ -114,7 +113,6 @@ fn render_tile(
         },
         |p_film, l| tile.add_sample(p_film, l),
     );
-    tile
 }
 
 /// Render `scene` with `integrator` on the current rayon pool.
@@ -129,6 +127,11 @@ pub fn render(
     let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop, filter);
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
     let tile_list = film.tile_bounds(opts.tile_size.max(1));
+    // One tile per region for the whole render, cleared before each pass.
+    let mut tiles: Vec<FilmTile> = tile_list
+        .iter()
+        .map(|&(lo, hi)| film.tile(lo, hi))
+        .collect();
     let (pmin, pmax) = film.pixel_bounds();
     let pixels = (pmax - pmin).as_u64vec2();
     let pixels = pixels.x * pixels.y;
@@ -148,10 +151,12 @@ pub fn render(
         let s1 = (s0 + pass_spp).min(target);
         let pass_start = Instant::now();
         let samples_total = pixels * target as u64;
-        let finished: Vec<FilmTile> = tile_list
+        tile_list
             .par_iter()
-            .map(|&bounds| {
-                let tile = render_tile(scene, integrator, &template, &film, bounds, s0, s1);
+            .zip(tiles.par_iter_mut())
+            .for_each(|(&bounds, tile)| {
+                tile.clear();
+                render_tile(scene, integrator, &template, tile, bounds, s0, s1);
                 let n = (bounds.1 - bounds.0).as_u64vec2();
                 let d = done.fetch_add(n.x * n.y * (s1 - s0) as u64, Ordering::Relaxed)
                     + n.x * n.y * (s1 - s0) as u64;
@@ -161,10 +166,8 @@ pub fn render(
                     elapsed: start.elapsed(),
                     spp_done: s0,
                 });
-                tile
-            })
-            .collect();
-        for t in finished {
+            });
+        for t in &tiles {
             film.merge(t);
         }
         spp_done = s1;

@@ -91,7 +91,7 @@ fn render(
         bounds.iter().map(work).collect()
     };
     for t in tiles {
-        film.merge(t);
+        film.merge(&t);
     }
 }
 
@@ -227,7 +227,7 @@ fn tiles_merge_deterministically_and_match_a_single_tile() {
     );
     // Merging a whole film into an empty one is exact.
     let mut copy = Film::new(w, h, None, filter);
-    copy.merge(one.clone().into_tile());
+    copy.merge(&one.clone().into_tile());
     assert_eq!(bits(&one.develop().pixels), bits(&copy.develop().pixels));
     assert_eq!(copy.sample_count(), one.sample_count());
 }
@@ -308,7 +308,7 @@ fn uniform_noise_film(filter: Filter, w: u32, h: u32, n: u32, seed: u64) -> Film
             }
         }
     }
-    film.merge(tile);
+    film.merge(&tile);
     film
 }
 
@@ -408,10 +408,10 @@ fn nonfinite_samples_are_rejected_and_counted_once() {
     tile.add_sample(Vec2::new(2.5, f32::INFINITY), Vec3::ONE);
     tile.add_sample(p, Vec3::new(0.5, 2.0, 3.0));
     assert_eq!((tile.nonfinite_count(), tile.sample_count()), (4, 1));
-    film.merge(tile);
+    film.merge(&tile);
     let mut tile = film.tile(UVec2::ZERO, UVec2::new(1, 1));
     tile.add_sample(Vec2::splat(0.5), Vec3::splat(f32::INFINITY));
-    film.merge(tile);
+    film.merge(&tile);
     assert_eq!(film.nonfinite_count(), 5);
     assert_eq!(film.sample_count(), 1);
     let img = film.develop();
