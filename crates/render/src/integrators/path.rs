@@ -402,23 +402,25 @@ pub fn li_batched<T>(
     let mut queue: Vec<(ShadowQuery, u32)> = Vec::with_capacity(BATCH);
     let mut alive = [false; BATCH];
     let mut sampler = template.clone();
+    if cfg.max_depth == 0 {
+        while let Some((tag, _)) = next(&mut sampler) {
+            done(tag, Vec3::ZERO);
+        }
+        return;
+    }
     let mut more = true;
-    loop {
-        while more && slots.len() < BATCH {
-            match next(&mut sampler) {
-                None => more = false,
-                Some((tag, _)) if cfg.max_depth == 0 => done(tag, Vec3::ZERO),
-                Some((tag, cray)) => slots.push(Slot {
-                    sampler: sampler.clone(),
-                    st: PathState::start(cfg, &cray),
-                    result: Vec3::ZERO,
-                    tag,
-                }),
-            }
+    while more && slots.len() < BATCH {
+        match next(&mut sampler) {
+            None => more = false,
+            Some((tag, cray)) => slots.push(Slot {
+                sampler: sampler.clone(),
+                st: PathState::start(cfg, &cray),
+                result: Vec3::ZERO,
+                tag,
+            }),
         }
-        if slots.is_empty() {
-            return;
-        }
+    }
+    while !slots.is_empty() {
         hits.extend(slots.iter().map(|s| scene.hit(&s.st.ray, s.st.t_max)));
         for (k, (s, &hit)) in slots.iter_mut().zip(&hits).enumerate() {
             let mut shadows = Shadows::Deferred {
@@ -445,11 +447,25 @@ pub fn li_batched<T>(
                 slots[slot as usize].result += q.l;
             }
         }
-        // From the back, so that `swap_remove` only moves paths already looked at (alive).
+        // A finished path's slot takes the next camera sample in place (building a new slot
+        // and moving it in cost a 224-byte copy per path); without one, the slot goes. From
+        // the back, so that `swap_remove` only moves paths already looked at (alive).
         for k in (0..slots.len()).rev() {
-            if !alive[k] {
-                let s = slots.swap_remove(k);
-                done(s.tag, s.result);
+            if alive[k] {
+                continue;
+            }
+            let s = &mut slots[k];
+            match if more { next(&mut s.sampler) } else { None } {
+                Some((tag, cray)) => {
+                    s.st = PathState::start(cfg, &cray);
+                    let result = std::mem::replace(&mut s.result, Vec3::ZERO);
+                    done(std::mem::replace(&mut s.tag, tag), result);
+                }
+                None => {
+                    more = false;
+                    let s = slots.swap_remove(k);
+                    done(s.tag, s.result);
+                }
             }
         }
     }
