@@ -123,7 +123,6 @@ struct TravRay {
     inv: [Vec4; 3],
     /// 1 where the direction component is negative (then the near plane is the max plane).
     neg: [usize; 3],
-    woop: WoopRay4,
 }
 
 impl TravRay {
@@ -150,7 +149,6 @@ impl TravRay {
                 ((neg >> 1) & 1) as usize,
                 ((neg >> 2) & 1) as usize,
             ],
-            woop: WoopRay4::new(&WoopRay::new(ray)),
         }
     }
 
@@ -441,6 +439,7 @@ impl WideBvh {
             return None;
         }
         let tr = TravRay::new(ray);
+        let woop = WoopRay4::new(&WoopRay::new(ray));
         let mut stack_node = [0u32; N];
         let mut stack_t = [0f32; N];
         let mut sp = 0usize;
@@ -515,7 +514,7 @@ impl WideBvh {
                 for (pi, p) in self.packets[first..first + count].iter().enumerate() {
                     match p {
                         Packet::Tri4(tri) => {
-                            if let Some((lane, t, u, v)) = tri4_closest(&tr.woop, tri, t_max) {
+                            if let Some((lane, t, u, v)) = tri4_closest(&woop, tri, t_max) {
                                 t_max = t;
                                 best = Some(((first + pi) as u32, t, u, v));
                                 best_lane = lane;
@@ -569,6 +568,9 @@ impl WideBvh {
             return false;
         }
         let tr = TravRay::new(ray);
+        // The triangle test's constants, made when the first leaf is reached: most shadow
+        // rays in small scenes reach none.
+        let mut woop: Option<WoopRay4> = None;
         let mut stack = [0u32; N];
         let mut sp = 0usize;
         let mut cur = self.root;
@@ -599,7 +601,10 @@ impl WideBvh {
                 let count = ((cur & !LEAF_BIT) >> COUNT_SHIFT) as usize;
                 for p in &self.packets[first..first + count] {
                     let hit = match p {
-                        Packet::Tri4(tri) => tri4_any(&tr.woop, tri, t_max),
+                        Packet::Tri4(tri) => {
+                            let w = woop.get_or_insert_with(|| WoopRay4::new(&WoopRay::new(ray)));
+                            tri4_any(w, tri, t_max)
+                        }
                         Packet::Sphere { center, radius } => {
                             sphere_packet(ray, *center, *radius, t_max).is_some()
                         }

@@ -280,6 +280,10 @@ pub struct Sampler {
     seed: u64,
     /// Stratified 2D grid `m × n = spp` (m ≤ n).
     grid: (u32, u32),
+    /// hash(seed): constant over the render.
+    seed_key: u64,
+    /// The pixel of the current sample.
+    pixel: UVec2,
     /// hash(seed, pixel): constant over a pixel's samples (permutations, scrambles).
     pixel_key: u64,
     /// hash(pixel_key, index): the independent stream of the current sample.
@@ -307,13 +311,20 @@ impl Sampler {
             spp,
             seed,
             grid: stratified_grid(spp),
+            seed_key: mix64(seed ^ GOLDEN),
+            pixel: UVec2::ZERO,
             pixel_key: 0,
             sample_key: 0,
             index: 0,
             dim: 0,
         };
+        s.pixel_key = s.key_of(UVec2::ZERO);
         s.start_pixel_sample(UVec2::ZERO, 0);
         s
+    }
+
+    fn key_of(&self, pixel: UVec2) -> u64 {
+        hash2(self.seed_key, pixel.x as u64 | ((pixel.y as u64) << 32))
     }
 
     #[inline]
@@ -346,8 +357,11 @@ impl Sampler {
     /// Starts sample `index` of `pixel` at dimension `dim` (pbrt-v4's `StartPixelSample`), e.g.
     /// to give a sub-path a fixed dimension budget.
     pub fn start_pixel_sample_at(&mut self, pixel: UVec2, index: u32, dim: u32) {
-        let p = pixel.x as u64 | ((pixel.y as u64) << 32);
-        self.pixel_key = hash2(mix64(self.seed ^ GOLDEN), p);
+        // Consecutive samples are usually of the same pixel: keep its key.
+        if pixel != self.pixel {
+            self.pixel = pixel;
+            self.pixel_key = self.key_of(pixel);
+        }
         self.sample_key = hash2(self.pixel_key, index as u64);
         self.index = index;
         self.dim = dim;
