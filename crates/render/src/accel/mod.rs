@@ -50,7 +50,8 @@
 //! PLOC construction and reinsertion) and own the traversal layout. `benches/accel.rs` measures
 //! ours, obvhs' stock CWBVH and (with `--features embree`) Embree 3 in the same run.
 //!
-//! # Performance (1M-triangle bumpy sphere, 1M incoherent rays, 2 threads, SSE2 baseline build)
+//! # Performance (1M-triangle bumpy sphere, 1M incoherent rays, 2 threads, measured on an SSE2
+//! baseline build, before builds targeted the host processor)
 //! Measured in one run with `benches/accel.rs` (per CPU-second, the machine being shared):
 //! ~1.6× obvhs' stock CWBVH traversal for closest hits and ~1.3× for occlusion; ~0.5× Embree 3
 //! for closest hits and ~0.6× for occlusion (Embree dispatches to AVX2 at run time; building
