@@ -1,10 +1,11 @@
-//! An 8-wide BVH with single-precision child boxes in SoA layout, traversed one ray at a time
-//! with 4-wide (SSE, via glam `Vec4`) box and triangle tests: a node is two groups of four
-//! children, 256 bytes on 64-byte boundaries.
+//! An 8-wide BVH with single-precision child boxes in SoA layout, traversed one ray at a time:
+//! the eight box tests are one 8-wide operation per slab plane (AVX, via `wide::f32x8`; two
+//! SSE halves on processors without AVX), the triangle tests 4-wide (SSE, via glam `Vec4`). A
+//! node is 256 bytes on 64-byte boundaries.
 //!
-//! Why 8-wide on a 4-wide ISA: incoherent rays on large meshes are bound by the latency of
-//! dependent node fetches; a wider node halves the depth, and its four cache lines load in
-//! parallel. On the 1M-triangle benchmark 8-wide was ~20% faster than 4-wide.
+//! Why 8-wide even on a 4-wide ISA: incoherent rays on large meshes are bound by the latency
+//! of dependent node fetches; a wider node halves the depth, and its four cache lines load in
+//! parallel. On the 1M-triangle benchmark 8-wide was ~20% faster than 4-wide (SSE2 build).
 //!
 //! Construction: obvhs builds a binary BVH (PLOC, Meister & Bittner 2018, followed by SAH
 //! reinsertion optimisation, Meister & Bittner 2017); we collapse it into the wide tree by
@@ -30,6 +31,7 @@ use super::prim::{
 };
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3, Vec4};
+use wide::f32x8;
 
 /// Subtrees with at most this many primitives become leaves (triangles packed by four into
 /// [`Tri4`]s). Measured on the 1M-triangle benchmark: 8 beats 2 and 4 (fewer dependent node
@@ -72,16 +74,16 @@ pub(crate) enum Packet {
     Disk { to_object: Mat4 },
 }
 
-/// Groups of four children per node (node width `4 · HALVES`).
-const HALVES: usize = 2;
-const WIDTH: usize = 4 * HALVES;
+/// Children per node.
+const WIDTH: usize = 8;
 
-/// Inner node: child boxes as `b[group][axis][0 = min, 1 = max]`, one child per lane.
-/// A child reference with [`LEAF_BIT`] set encodes `count` packets starting at `first`.
+/// Inner node: child boxes as `b[axis][0 = min, 1 = max]`, one child per lane (one AVX register
+/// per plane; two SSE registers without AVX). A child reference with [`LEAF_BIT`] set encodes
+/// `count` packets starting at `first`.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct Node {
-    b: [[[Vec4; 2]; 3]; HALVES],
+    b: [[f32x8; 2]; 3],
     child: [u32; WIDTH],
 }
 
@@ -119,8 +121,8 @@ const PREFETCH_MIN_BYTES: usize = 256 * 1024;
 
 /// Per-ray traversal constants.
 struct TravRay {
-    o: [Vec4; 3],
-    inv: [Vec4; 3],
+    o: [f32x8; 3],
+    inv: [f32x8; 3],
     /// 1 where the direction component is negative (then the near plane is the max plane).
     neg: [usize; 3],
 }
@@ -139,11 +141,11 @@ impl TravRay {
         let neg = i.is_negative_bitmask();
         TravRay {
             o: [
-                Vec4::splat(ray.o.x),
-                Vec4::splat(ray.o.y),
-                Vec4::splat(ray.o.z),
+                f32x8::splat(ray.o.x),
+                f32x8::splat(ray.o.y),
+                f32x8::splat(ray.o.z),
             ],
-            inv: [Vec4::splat(i.x), Vec4::splat(i.y), Vec4::splat(i.z)],
+            inv: [f32x8::splat(i.x), f32x8::splat(i.y), f32x8::splat(i.z)],
             neg: [
                 (neg & 1) as usize,
                 ((neg >> 1) & 1) as usize,
@@ -154,23 +156,20 @@ impl TravRay {
 
     /// Entry distances of the children and the mask of those entered within `(0, t_max)`.
     #[inline(always)]
-    fn hit_node(&self, n: &Node, t_max: f32) -> ([Vec4; HALVES], u32) {
+    fn hit_node(&self, n: &Node, t_max: f32) -> (f32x8, u32) {
         let [nx, ny, nz] = self.neg;
-        let mut tns = [Vec4::ZERO; HALVES];
-        let mut mask = 0;
-        for (h, b) in n.b.iter().enumerate() {
-            let tnx = (b[0][nx & 1] - self.o[0]) * self.inv[0];
-            let tny = (b[1][ny & 1] - self.o[1]) * self.inv[1];
-            let tnz = (b[2][nz & 1] - self.o[2]) * self.inv[2];
-            let tfx = (b[0][(nx ^ 1) & 1] - self.o[0]) * self.inv[0];
-            let tfy = (b[1][(ny ^ 1) & 1] - self.o[1]) * self.inv[1];
-            let tfz = (b[2][(nz ^ 1) & 1] - self.o[2]) * self.inv[2];
-            let tn = tnx.max(tny).max(tnz).max(Vec4::ZERO);
-            let tf = (tfx.min(tfy).min(tfz) * ROBUST).min(Vec4::splat(t_max));
-            tns[h] = tn;
-            mask |= tn.cmple(tf).bitmask() << (4 * h);
-        }
-        (tns, mask)
+        let b = &n.b;
+        let tnx = (b[0][nx & 1] - self.o[0]) * self.inv[0];
+        let tny = (b[1][ny & 1] - self.o[1]) * self.inv[1];
+        let tnz = (b[2][nz & 1] - self.o[2]) * self.inv[2];
+        let tfx = (b[0][(nx ^ 1) & 1] - self.o[0]) * self.inv[0];
+        let tfy = (b[1][(ny ^ 1) & 1] - self.o[1]) * self.inv[1];
+        let tfz = (b[2][(nz ^ 1) & 1] - self.o[2]) * self.inv[2];
+        // `fast_max`/`fast_min` are the plain max/min instructions (no NaN can arise here).
+        let tn = tnx.fast_max(tny).fast_max(tnz).fast_max(f32x8::ZERO);
+        let tf =
+            (tfx.fast_min(tfy).fast_min(tfz) * f32x8::splat(ROBUST)).fast_min(f32x8::splat(t_max));
+        (tn, tn.simd_le(tf).to_bitmask())
     }
 }
 
@@ -317,7 +316,7 @@ impl WideBvh {
         *need = (*need).max(pushed);
         let index = self.nodes.len();
         self.nodes.push(Node {
-            b: [[[Vec4::INFINITY, Vec4::NEG_INFINITY]; 3]; HALVES],
+            b: [[f32x8::splat(f32::INFINITY), f32x8::splat(f32::NEG_INFINITY)]; 3],
             child: [EMPTY; WIDTH],
         });
         let mut lo = [[f32::INFINITY; WIDTH]; 3];
@@ -332,11 +331,8 @@ impl WideBvh {
             child[slot] = self.emit(tree, counts, prims, ids, c, pushed, need);
         }
         let node = &mut self.nodes[index];
-        for (h, b) in node.b.iter_mut().enumerate() {
-            for axis in 0..3 {
-                let part = |v: &[f32; WIDTH]| Vec4::from_slice(&v[4 * h..4 * h + 4]);
-                b[axis] = [part(&lo[axis]), part(&hi[axis])];
-            }
+        for (b, (lo, hi)) in node.b.iter_mut().zip(lo.iter().zip(&hi)) {
+            *b = [f32x8::new(*lo), f32x8::new(*hi)];
         }
         node.child = child;
         index as u32
@@ -391,9 +387,9 @@ impl WideBvh {
     fn touch(&self, c: u32) -> u32 {
         if c & LEAF_BIT == 0 {
             let n = &self.nodes[c as usize];
-            n.b[0][0][0].x.to_bits()
-                ^ n.b[0][2][0].x.to_bits()
-                ^ n.b[1][1][0].x.to_bits()
+            n.b[0][0].to_array()[0].to_bits()
+                ^ n.b[1][0].to_array()[0].to_bits()
+                ^ n.b[2][0].to_array()[0].to_bits()
                 ^ n.child[0]
         } else if c != EMPTY {
             match &self.packets[(c & FIRST_MASK) as usize] {
@@ -464,10 +460,7 @@ impl WideBvh {
                             m &= m - 1;
                         }
                     }
-                    let mut tb = [0f32; WIDTH];
-                    for (h, t) in tn.iter().enumerate() {
-                        tb[4 * h..4 * h + 4].copy_from_slice(&t.to_array());
-                    }
+                    let tb = tn.to_array();
                     let s0 = mask.trailing_zeros() as usize;
                     let rest = mask & (mask - 1);
                     if rest & (rest - 1) == 0 {
