@@ -41,6 +41,16 @@ impl BsdfModel for Diffuse {
         cosine_hemisphere_pdf(wi)
     }
 
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> (Vec3, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        (
+            self.reflectance * (INV_PI * wi.z),
+            cosine_hemisphere_pdf(wi),
+        )
+    }
+
     fn sample(&self, wo: Vec3, _u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;

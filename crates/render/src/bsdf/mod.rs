@@ -89,6 +89,10 @@ impl BsdfSample {
 pub(crate) trait BsdfModel {
     fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
+    /// `(eval, pdf)` at once (Mitsuba's `eval_pdf`): models whose two share work override it.
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
+        (self.eval(wo, wi, mode), self.pdf(wo, wi))
+    }
     fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample>;
     fn has_delta(&self) -> bool;
     fn has_smooth(&self) -> bool;
@@ -141,6 +145,13 @@ impl Bsdf {
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         dispatch!(self, b => b.pdf(wo, wi))
+    }
+
+    /// [`Self::eval`] and [`Self::pdf`] with one dispatch (next-event estimation with MIS
+    /// needs both).
+    #[inline]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
+        dispatch!(self, b => b.eval_pdf(wo, wi, mode))
     }
 
     /// Sample a direction `wi` given `wo`, with `u1` choosing the lobe and `u2` the direction.

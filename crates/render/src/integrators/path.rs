@@ -701,19 +701,30 @@ impl Emitter<'_> {
             return;
         }
         let wi = self.frame.to_local(ls.wi);
-        let f = self.bsdf.eval(self.wo, wi, TransportMode::Radiance);
+        let mode = TransportMode::Radiance;
+        // The BSDF's density only when MIS needs it.
+        let weighted = !(ls.delta || cfg.combine == Combine::EmitterOnly);
+        let (f, pdf_bsdf) = if weighted && cfg.directions == DirectionSampling::Bsdf {
+            self.bsdf.eval_pdf(self.wo, wi, mode)
+        } else {
+            let f = self.bsdf.eval(self.wo, wi, mode);
+            (
+                f,
+                if weighted {
+                    direction_pdf(cfg, self.bsdf, self.wo, wi)
+                } else {
+                    0.0
+                },
+            )
+        };
         if f == Vec3::ZERO {
             return;
         }
         // Density of this strategy for MIS: all samples of all lights considered.
-        let w = if ls.delta || cfg.combine == Combine::EmitterOnly {
-            1.0
+        let w = if weighted {
+            mis(cfg.combine, nee_density(cfg, selection, ls.pdf), pdf_bsdf)
         } else {
-            mis(
-                cfg.combine,
-                nee_density(cfg, selection, ls.pdf),
-                direction_pdf(cfg, self.bsdf, self.wo, wi),
-            )
+            1.0
         };
         let l = self.throughput * (f * ls.li) * (w / (ls.pdf * per_light * selection));
         let (ray, t_max) = ls.target.ray_from(self.si, ls.wi);
