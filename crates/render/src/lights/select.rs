@@ -261,6 +261,16 @@ impl LightSampler {
                 let i = ((u * n as f32) as u32).min(n - 1);
                 Some((i, 1.0 / n as f32))
             }
+            _ => self.sample_other(u, r),
+        }
+    }
+
+    /// [`Self::sample`] by power or with the light BVH: out of line, so that the uniform
+    /// choice inlined into the path loop stays a few instructions.
+    #[inline(never)]
+    fn sample_other(&self, u: f32, r: &Receiver) -> Option<(u32, f32)> {
+        match self {
+            LightSampler::Uniform => unreachable!("handled inline"),
             LightSampler::Power(table) => {
                 let (i, pmf) = table.sample(u);
                 (pmf > 0.0).then_some((i as u32, pmf))
