@@ -221,19 +221,6 @@ pub fn light_bounds(scene: &Scene, light: &Light) -> Option<LightBounds> {
     }
 }
 
-/// [`LightSampler::sample`] by power.
-#[inline(never)]
-fn sample_power(table: &AliasTable, u: f32) -> Option<(u32, f32)> {
-    let (i, pmf) = table.sample(u);
-    (pmf > 0.0).then_some((i as u32, pmf))
-}
-
-/// [`LightSampler::sample`] with the light BVH.
-#[inline(never)]
-fn sample_bvh(bvh: &LightBvh, u: f32, r: &Receiver) -> Option<(u32, f32)> {
-    bvh.sample(u, r)
-}
-
 impl LightSampler {
     /// Builds the strategy `kind` over the lights of `scene`.
     pub fn new(kind: LightSelection, scene: &Scene) -> LightSampler {
@@ -274,10 +261,21 @@ impl LightSampler {
                 let i = ((u * n as f32) as u32).min(n - 1);
                 Some((i, 1.0 / n as f32))
             }
-            // Out of line, so that the uniform choice inlined into the path loop stays a few
-            // instructions.
-            LightSampler::Power(table) => sample_power(table, u),
-            LightSampler::Bvh(bvh) => sample_bvh(bvh, u, r),
+            _ => self.sample_other(u, r),
+        }
+    }
+
+    /// [`Self::sample`] by power or with the light BVH: out of line, so that the uniform
+    /// choice inlined into the path loop stays a few instructions.
+    #[inline(never)]
+    fn sample_other(&self, u: f32, r: &Receiver) -> Option<(u32, f32)> {
+        match self {
+            LightSampler::Uniform => unreachable!("handled inline"),
+            LightSampler::Power(table) => {
+                let (i, pmf) = table.sample(u);
+                (pmf > 0.0).then_some((i as u32, pmf))
+            }
+            LightSampler::Bvh(bvh) => bvh.sample(u, r),
         }
     }
 
