@@ -221,6 +221,15 @@ pub fn light_bounds(scene: &Scene, light: &Light) -> Option<LightBounds> {
     }
 }
 
+/// One of `n > 0` lights, uniformly. In u32: conversions between f32 and 64-bit unsigned
+/// integers take several instructions on x86-64, 32-bit ones one or two.
+#[inline(always)]
+fn uniform_choice(u: f32, n: usize) -> Option<(u32, f32)> {
+    let n = n as u32;
+    let i = ((u * n as f32) as u32).min(n - 1);
+    Some((i, 1.0 / n as f32))
+}
+
 impl LightSampler {
     /// Builds the strategy `kind` over the lights of `scene`.
     pub fn new(kind: LightSelection, scene: &Scene) -> LightSampler {
@@ -254,23 +263,17 @@ impl LightSampler {
             return None;
         }
         match self {
-            LightSampler::Uniform => {
-                // In u32: conversions between f32 and 64-bit unsigned integers take several
-                // instructions on x86-64, 32-bit ones one or two.
-                let n = n as u32;
-                let i = ((u * n as f32) as u32).min(n - 1);
-                Some((i, 1.0 / n as f32))
-            }
-            _ => self.sample_other(u, r),
+            LightSampler::Uniform => uniform_choice(u, n),
+            _ => self.sample_other(u, r, n),
         }
     }
 
-    /// [`Self::sample`] by power or with the light BVH: out of line, so that the uniform
-    /// choice inlined into the path loop stays a few instructions.
+    /// [`Self::sample`] by power or with the light BVH: out of line (one call site keeps the
+    /// uniform choice inlined into the path loop at a few instructions).
     #[inline(never)]
-    fn sample_other(&self, u: f32, r: &Receiver) -> Option<(u32, f32)> {
+    fn sample_other(&self, u: f32, r: &Receiver, n: usize) -> Option<(u32, f32)> {
         match self {
-            LightSampler::Uniform => unreachable!("handled inline"),
+            LightSampler::Uniform => uniform_choice(u, n),
             LightSampler::Power(table) => {
                 let (i, pmf) = table.sample(u);
                 (pmf > 0.0).then_some((i as u32, pmf))
