@@ -21,6 +21,7 @@ use crate::build::Scene;
 use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::path::{Contribution, PathConfig, PathRecorder, li_recorded};
 use crate::math::{UVec2, Vec3};
+use crate::render::camera_sample;
 use crate::sampling::Sampler;
 
 /// The layers besides beauty; they sum to it.
@@ -109,10 +110,7 @@ pub fn render_layers(scene: &Scene, cfg: &PathConfig, spp: u32, tile_size: u32) 
                 for x in lo.x..hi.x {
                     let pixel = UVec2::new(x, y);
                     for index in 0..spp {
-                        sampler.start_pixel_sample(pixel, index);
-                        let p_film = pixel.as_vec2() + sampler.next_2d();
-                        let u_lens = sampler.next_2d();
-                        let cray = scene.camera.generate_ray(p_film, u_lens);
+                        let (p_film, cray) = camera_sample(scene, &mut sampler, pixel, index);
                         let mut split = Split::default();
                         let l = li_recorded(scene, &cray, &mut sampler, cfg, &mut split);
                         bt.add_sample(p_film, l);

@@ -704,18 +704,13 @@ impl Emitter<'_> {
         let mode = TransportMode::Radiance;
         // The BSDF's density only when MIS needs it.
         let weighted = !(ls.delta || cfg.combine == Combine::EmitterOnly);
-        let (f, pdf_bsdf) = if weighted && cfg.directions == DirectionSampling::Bsdf {
+        let (f, pdf_bsdf) = if !weighted {
+            (self.bsdf.eval(self.wo, wi, mode), 0.0)
+        } else if cfg.directions == DirectionSampling::Bsdf {
             self.bsdf.eval_pdf(self.wo, wi, mode)
         } else {
             let f = self.bsdf.eval(self.wo, wi, mode);
-            (
-                f,
-                if weighted {
-                    direction_pdf(cfg, self.bsdf, self.wo, wi)
-                } else {
-                    0.0
-                },
-            )
+            (f, direction_pdf(cfg, self.bsdf, self.wo, wi))
         };
         if f == Vec3::ZERO {
             return;
