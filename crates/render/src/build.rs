@@ -20,7 +20,7 @@ use crate::lights::{EnvMap, Light, MeshSampling, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
-use crate::shapes::{ShapeGeom, SurfaceInteraction, interaction};
+use crate::shapes::{Reads, ShapeGeom, SurfaceInteraction, interaction};
 use crate::textures::Texture;
 
 /// A problem found while building (unreadable texture, unsupported feature).
@@ -53,6 +53,8 @@ pub struct ShapeInfo {
     /// Alpha cut-out (the shape's material is a `mask`): the probability that a ray hitting
     /// the surface stops there. See [`Scene::intersect`].
     pub opacity: Option<FloatParam>,
+    /// What shading reads of this shape's interactions beyond position and normals.
+    pub reads: Reads,
 }
 
 /// The lights of one shape.
@@ -129,7 +131,7 @@ impl Scene {
             return f(None);
         };
         let shape = &self.shapes[hit.shape as usize];
-        let si = interaction(&shape.geom, &hit, ray, shape.flip_normals);
+        let si = interaction(&shape.geom, &hit, ray, shape.flip_normals, shape.reads);
         if shape.opacity.is_none() {
             return f(Some(&si));
         }
@@ -167,7 +169,7 @@ impl Scene {
             }
             hit = self.accel.intersect(&cur, t_left)?;
             let shape = &self.shapes[hit.shape as usize];
-            si = interaction(&shape.geom, &hit, &cur, shape.flip_normals);
+            si = interaction(&shape.geom, &hit, &cur, shape.flip_normals, shape.reads);
         }
         None
     }
@@ -637,6 +639,12 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                     _ => None,
                 }
             }),
+            reads: Reads {
+                tangent: !crate::materials::isotropic(&desc.materials, s.material),
+                // Only textures read uv (material and emitter parameters, normal maps and
+                // opacity masks all go through one).
+                uv: !desc.textures.is_empty(),
+            },
         });
     }
     let triangle_count = shapes.iter().map(|s| s.geom.triangle_count()).sum();

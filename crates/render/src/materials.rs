@@ -242,6 +242,57 @@ impl RtMaterial {
     }
 }
 
+/// Whether shading with material `id` is unchanged when the tangent frame turns about the
+/// normal: no normal map and no anisotropic roughness anywhere in its `twosided`/`mask` chain
+/// (`None`, Mitsuba's default diffuse, is). Interaction may then take the tangent from a
+/// triangle edge instead of the uv parameterisation (see [`crate::shapes::interaction`]); only
+/// the mapping of random numbers to directions changes, not any distribution. An unknown id
+/// counts as not isotropic.
+pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId>) -> bool {
+    let Some(id) = id else { return true };
+    let mut todo = vec![id];
+    let mut seen = vec![false; materials.len()];
+    while let Some(id) = todo.pop() {
+        let Some(m) = materials.get(id.0 as usize) else {
+            return false;
+        };
+        if std::mem::replace(&mut seen[id.0 as usize], true) {
+            continue;
+        }
+        let same = |a: &FloatParam, b: &FloatParam| match (a, b) {
+            (FloatParam::Const(a), FloatParam::Const(b)) => a == b,
+            (FloatParam::Texture(a), FloatParam::Texture(b)) => a == b,
+            _ => false,
+        };
+        match &m.material {
+            Material::TwoSided { front, back } => todo.extend(std::iter::once(*front).chain(*back)),
+            Material::Mask { nested, .. } => todo.push(*nested),
+            Material::NormalMap { .. } => return false,
+            Material::RoughConductor {
+                alpha_u, alpha_v, ..
+            }
+            | Material::RoughDielectric {
+                alpha_u, alpha_v, ..
+            } => {
+                if !same(alpha_u, alpha_v) {
+                    return false;
+                }
+            }
+            Material::Diffuse { .. }
+            | Material::Conductor { .. }
+            | Material::Mirror { .. }
+            | Material::Dielectric { .. }
+            | Material::ThinDielectric { .. }
+            | Material::Plastic { .. }
+            | Material::RoughPlastic { .. }
+            | Material::NoriMicrofacet { .. }
+            | Material::PhongFamily { .. }
+            | Material::Null => {}
+        }
+    }
+    true
+}
+
 /// Mitsuba clamps roughness away from 0 to keep the microfacet models finite.
 fn alpha(a: f32) -> f32 {
     a.max(1e-4)
@@ -313,5 +364,70 @@ impl Scene {
         }
         let bsdf = mat?.bsdf(self, si.uv)?;
         Some((bsdf, frame))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scene::{MaterialDesc, MaterialId, MicrofacetDistribution, Rgb};
+
+    fn desc(material: Material) -> MaterialDesc {
+        MaterialDesc {
+            material,
+            ambient: Default::default(),
+            name: None,
+            loc: Default::default(),
+        }
+    }
+
+    fn rough(alpha_u: f32, alpha_v: f32) -> Material {
+        Material::RoughConductor {
+            distribution: MicrofacetDistribution::Ggx,
+            alpha_u: FloatParam::Const(alpha_u),
+            alpha_v: FloatParam::Const(alpha_v),
+            eta: Rgb::splat(1.5),
+            k: Rgb::splat(0.0),
+            specular_reflectance: ColorParam::Const(Rgb::splat(1.0)),
+        }
+    }
+
+    #[test]
+    fn isotropy_follows_the_whole_chain() {
+        let diffuse = Material::Diffuse {
+            reflectance: ColorParam::Const(Rgb::splat(0.5)),
+        };
+        let mats = [
+            desc(diffuse),         // 0
+            desc(rough(0.1, 0.1)), // 1
+            desc(rough(0.1, 0.3)), // 2
+            desc(Material::TwoSided {
+                front: MaterialId(0),
+                back: Some(MaterialId(2)),
+            }), // 3
+            desc(Material::NormalMap {
+                nested: MaterialId(0),
+                texture: scene::TextureId(0),
+            }), // 4
+            desc(Material::Mask {
+                nested: MaterialId(1),
+                opacity: FloatParam::Const(0.5),
+            }), // 5
+            desc(Material::TwoSided {
+                front: MaterialId(6),
+                back: None,
+            }), // 6: a cycle
+            desc(Material::Mask {
+                nested: MaterialId(4),
+                opacity: FloatParam::Const(0.5),
+            }), // 7
+        ];
+        let iso = |id: Option<u32>| isotropic(&mats, id.map(MaterialId));
+        assert!(iso(None), "Mitsuba's default diffuse");
+        assert!(iso(Some(0)) && iso(Some(1)) && iso(Some(5)) && iso(Some(6)));
+        assert!(!iso(Some(2)), "alpha_u != alpha_v");
+        assert!(!iso(Some(3)), "anisotropic back side");
+        assert!(!iso(Some(4)) && !iso(Some(7)), "normal map");
+        assert!(!iso(Some(99)), "unknown id");
     }
 }

@@ -234,8 +234,30 @@ fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
     )
 }
 
-/// Compute the surface interaction of `hit` on `geom`. `flip` flips both normals.
-pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> SurfaceInteraction {
+/// What shading at a shape reads of its interactions beyond position and normals, fixed at
+/// build time (see [`crate::build::ShapeInfo`]); [`interaction`] skips computing the rest.
+/// Mitsuba's ray flags serve the same purpose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reads {
+    /// How the tangent turns about the normal (normal maps, anisotropic roughness). Without
+    /// it a triangle's tangent is its first edge rather than `∂p/∂u` of its uv
+    /// parameterisation: no solve for `∂p/∂u` and no Gram–Schmidt step. Isotropic BSDFs only
+    /// map random numbers to directions differently; no distribution changes.
+    pub tangent: bool,
+    /// The uv coordinates (textures). Without them `uv` holds a triangle's barycentrics, or
+    /// zero on spheres and disks (no trigonometry).
+    pub uv: bool,
+}
+
+/// Compute the surface interaction of `hit` on `geom`. `flip` flips both normals; `reads`
+/// says what the caller's shading reads (the rest is skipped).
+pub fn interaction(
+    geom: &ShapeGeom,
+    hit: &Hit,
+    ray: &Ray,
+    flip: bool,
+    reads: Reads,
+) -> SurfaceInteraction {
     let wo = -ray.d * rsqrt(ray.d.length_squared());
     let (p, p_error, mut ng, mut ns, dpdu, uv) = match geom {
         ShapeGeom::Mesh {
@@ -253,27 +275,31 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
             let e1 = p1 - p0;
             let e2 = p2 - p0;
             let ng = normalize_or_zero_fast(e1.cross(e2));
-            if uvs.is_none() && normals.is_none() {
-                // Flat, unparameterised mesh (the common case for OBJ/PLY without `vt`/`vn`):
-                // the shading frame is the geometric one, with `s` along the first edge,
-                // which is already orthogonal to `ng`, so no Gram–Schmidt step is needed.
-                return flat_interaction(p, p_error, ng, e1, Vec2::new(b1, b2), wo, hit, flip);
+            let uv = match uvs {
+                Some(t) if reads.uv => b0 * t[i0] + b1 * t[i1] + b2 * t[i2],
+                _ => Vec2::new(b1, b2),
+            };
+            if normals.is_none() && (uvs.is_none() || !reads.tangent) {
+                // Flat mesh without uvs (the common case for OBJ/PLY without `vt`/`vn`), or
+                // one whose tangent does not matter: the shading frame is the geometric one,
+                // with `s` along the first edge, which is already orthogonal to `ng`, so no
+                // Gram–Schmidt step is needed.
+                return flat_interaction(p, p_error, ng, e1, uv, wo, hit, flip);
             }
-            let (uv, dpdu) = match uvs {
-                Some(uv) => {
-                    let (t0, t1, t2) = (uv[i0], uv[i1], uv[i2]);
-                    let uvp = b0 * t0 + b1 * t1 + b2 * t2;
+            let dpdu = match uvs {
+                Some(_) if !reads.tangent => e1,
+                Some(t) => {
+                    let (t0, t1, t2) = (t[i0], t[i1], t[i2]);
                     let du1 = t1 - t0;
                     let du2 = t2 - t0;
                     let det = du1.x * du2.y - du1.y * du2.x;
-                    let dpdu = if det.abs() > 1e-12 {
+                    if det.abs() > 1e-12 {
                         (e1 * du2.y - e2 * du1.y) / det
                     } else {
                         e1
-                    };
-                    (uvp, dpdu)
+                    }
                 }
-                None => (Vec2::new(b1, b2), e1),
+                None => e1,
             };
             let ns = match normals {
                 Some(n) => {
@@ -290,11 +316,15 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
             let dir = (raw - *center).normalize_or(Vec3::Z);
             let p = *center + dir * *radius;
             let p_error = gamma(5) * (p.abs() + center.abs());
-            // Mitsuba's sphere parameterisation: u = φ / 2π, v = θ / π (θ from +z).
-            let phi = dir.y.atan2(dir.x);
-            let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-            let theta = dir.z.clamp(-1.0, 1.0).acos();
-            let uv = Vec2::new(phi / (2.0 * PI), theta / PI);
+            let uv = if reads.uv {
+                // Mitsuba's sphere parameterisation: u = φ / 2π, v = θ / π (θ from +z).
+                let phi = dir.y.atan2(dir.x);
+                let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+                let theta = dir.z.clamp(-1.0, 1.0).acos();
+                Vec2::new(phi / (2.0 * PI), theta / PI)
+            } else {
+                Vec2::ZERO
+            };
             let dpdu = Vec3::new(-dir.y, dir.x, 0.0);
             (p, p_error, dir, dir, dpdu, uv)
         }
@@ -302,10 +332,14 @@ pub fn interaction(geom: &ShapeGeom, hit: &Hit, ray: &Ray, flip: bool) -> Surfac
             let local = Vec3::new(hit.u, hit.v, 0.0);
             let p = to_world.transform_point3a(local);
             let p_error = gamma(6) * (p.abs() + Vec3::from_vec4(to_world.w_axis).abs());
-            let r = (hit.u * hit.u + hit.v * hit.v).sqrt();
-            let phi = hit.v.atan2(hit.u);
-            let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-            let uv = Vec2::new(r, phi / (2.0 * PI));
+            let uv = if reads.uv {
+                let r = (hit.u * hit.u + hit.v * hit.v).sqrt();
+                let phi = hit.v.atan2(hit.u);
+                let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+                Vec2::new(r, phi / (2.0 * PI))
+            } else {
+                Vec2::ZERO
+            };
             let dpdu = Vec3::from_vec4(to_world.x_axis);
             (p, p_error, *normal, *normal, dpdu, uv)
         }
@@ -386,6 +420,83 @@ fn flat_interaction(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What `Reads` leaves out is skipped, and nothing else changes: the frame stays
+    /// orthonormal around the same normal, position and error bound are identical.
+    #[test]
+    fn interaction_skips_what_is_not_read() {
+        // A sheared uv parameterisation, so that ∂p/∂u is not along the first edge.
+        let geom = ShapeGeom::Mesh {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(0.5, 1.0, 0.0),
+            ]
+            .into(),
+            normals: None,
+            uvs: Some(vec![Vec2::ZERO, Vec2::new(1.0, 0.5), Vec2::new(0.0, 1.0)].into()),
+            indices: vec![[0, 1, 2]].into(),
+        };
+        let hit = Hit {
+            t: 1.0,
+            shape: 0,
+            prim: 0,
+            u: 0.25,
+            v: 0.5,
+        };
+        let ray = Ray::new(Vec3::new(0.75, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let read = |tangent, uv| interaction(&geom, &hit, &ray, false, Reads { tangent, uv });
+        let all = read(true, true);
+        let none = read(false, false);
+        assert!(
+            (all.uv - Vec2::new(0.25, 0.625)).length() < 1e-6,
+            "{:?}",
+            all.uv
+        );
+        assert_eq!(
+            none.uv,
+            Vec2::new(0.25, 0.5),
+            "barycentrics when uv is not read"
+        );
+        assert_eq!(read(false, true).uv, all.uv);
+        // ∂p/∂u = e₁ - e₂/2 = (1.75, -0.5, 0) here: not along the first edge (x).
+        let dpdu = Vec3::new(1.75, -0.5, 0.0).normalize();
+        assert!(
+            (all.shading.s - dpdu).length() < 1e-6,
+            "{:?}",
+            all.shading.s
+        );
+        assert!(
+            (none.shading.s - Vec3::X).length() < 1e-6,
+            "{:?}",
+            none.shading.s
+        );
+        assert_eq!(read(true, false).shading.s, all.shading.s);
+        for si in [all, none] {
+            let f = si.shading;
+            assert_eq!(
+                (si.p, si.p_error, si.ng, f.n),
+                (all.p, all.p_error, all.ng, all.shading.n)
+            );
+            assert!((f.s.length() - 1.0).abs() < 1e-6 && (f.t.length() - 1.0).abs() < 1e-6);
+            assert!(f.s.dot(f.n).abs() < 1e-6 && f.t.dot(f.n).abs() < 1e-6);
+            assert!((f.s.cross(f.t) - f.n).length() < 1e-6, "right-handed");
+        }
+        // Spheres skip their trigonometric uv.
+        let sphere = ShapeGeom::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        let ray = Ray::new(Vec3::new(0.0, 0.0, 3.0), Vec3::new(0.0, 0.0, -1.0));
+        let hit = Hit { t: 2.0, ..hit };
+        let uv = |uv| interaction(&sphere, &hit, &ray, false, Reads { tangent: true, uv }).uv;
+        assert_eq!(uv(false), Vec2::ZERO);
+        assert!(
+            (uv(true) - Vec2::new(0.0, 0.0)).length() < 1e-6,
+            "{:?}",
+            uv(true)
+        );
+    }
 
     #[test]
     fn offset_origin_clears_the_error_box() {

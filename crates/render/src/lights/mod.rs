@@ -503,6 +503,8 @@ impl Light {
             } => {
                 let info = &scene.shapes[*shape as usize];
                 let flip = if info.flip_normals { -1.0 } else { 1.0 };
+                // The sampled point's uv only feeds a radiance texture.
+                let textured = matches!(radiance, ColorParam::Texture(_));
                 let (p, p_error, n, uv, pdf) = match &info.geom {
                     ShapeGeom::Sphere { center, radius } => {
                         return sample_sphere(scene, *center, *radius, flip, radiance, r, u);
@@ -544,8 +546,8 @@ impl Light {
                             }
                         }
                         let uv = match uvs {
-                            Some(t) => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
-                            None => b,
+                            Some(t) if textured => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
+                            _ => b,
                         };
                         (p, err, n, uv, 1.0 / *area)
                     }
@@ -553,18 +555,16 @@ impl Light {
                         let d = warp::square_to_uniform_disk_concentric(u);
                         let p = to_world.transform_point3a(Vec3::new(d.x, d.y, 0.0));
                         let err = gamma(6) * (p.abs() + Vec3::from_vec4(to_world.w_axis).abs());
-                        let rr = d.length();
-                        let mut phi = d.y.atan2(d.x);
-                        if phi < 0.0 {
-                            phi += 2.0 * PI;
-                        }
-                        (
-                            p,
-                            err,
-                            *normal * flip,
-                            Vec2::new(rr, phi / (2.0 * PI)),
-                            1.0 / *area,
-                        )
+                        let uv = if textured {
+                            let mut phi = d.y.atan2(d.x);
+                            if phi < 0.0 {
+                                phi += 2.0 * PI;
+                            }
+                            Vec2::new(d.length(), phi / (2.0 * PI))
+                        } else {
+                            Vec2::ZERO
+                        };
+                        (p, err, *normal * flip, uv, 1.0 / *area)
                     }
                     ShapeGeom::Plane { .. } => return None,
                 };
@@ -695,11 +695,15 @@ fn sample_sphere(
         // Sampled the inside of the sphere from outside (or vice versa): no emission.
         return None;
     }
-    let mut phi = n_out.y.atan2(n_out.x);
-    if phi < 0.0 {
-        phi += 2.0 * PI;
-    }
-    let uv = Vec2::new(phi / (2.0 * PI), n_out.z.clamp(-1.0, 1.0).acos() * INV_PI);
+    let uv = if matches!(radiance, ColorParam::Texture(_)) {
+        let mut phi = n_out.y.atan2(n_out.x);
+        if phi < 0.0 {
+            phi += 2.0 * PI;
+        }
+        Vec2::new(phi / (2.0 * PI), n_out.z.clamp(-1.0, 1.0).acos() * INV_PI)
+    } else {
+        Vec2::ZERO
+    };
     Some(LightSample {
         wi,
         li: scene.color(radiance, uv),
