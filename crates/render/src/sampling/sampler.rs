@@ -376,10 +376,24 @@ impl Sampler {
     /// Independent uniform value of dimension `d` of the current sample.
     #[inline]
     fn independent(&self, d: u32) -> f32 {
+        u64_to_unit(self.independent_bits(d))
+    }
+
+    /// Dimensions `d` and `d + 1` from one hash: its top and its low 32 bits give two
+    /// disjoint 24-bit fields (one hash costs as much as the rest of a 2D draw).
+    #[inline(always)]
+    fn independent_2d(&self, d: u32) -> Vec2 {
+        let x = self.independent_bits(d);
+        Vec2::new(u64_to_unit(x), u32_to_unit(x as u32))
+    }
+
+    /// SplitMix64 (Steele et al. 2014) at position `d` of the stream of the current sample.
+    #[inline(always)]
+    fn independent_bits(&self, d: u32) -> u64 {
         let state = self
             .sample_key
             .wrapping_add((d as u64).wrapping_add(1).wrapping_mul(GOLDEN));
-        u64_to_unit(mix64(state))
+        mix64(state)
     }
 
     /// Per-(pixel, dimension) key (constant over the pixel's samples).
@@ -433,7 +447,7 @@ impl Sampler {
         let d = self.dim;
         self.dim = self.dim.wrapping_add(2);
         if self.kind == SamplerKind::Independent {
-            Vec2::new(self.independent(d), self.independent(d + 1))
+            self.independent_2d(d)
         } else {
             self.next_2d_other(d)
         }
@@ -442,10 +456,10 @@ impl Sampler {
     #[inline(never)]
     fn next_2d_other(&self, d: u32) -> Vec2 {
         match self.kind {
-            SamplerKind::Independent => Vec2::new(self.independent(d), self.independent(d + 1)),
+            SamplerKind::Independent => self.independent_2d(d),
             SamplerKind::Stratified => {
                 if self.index >= self.spp {
-                    return Vec2::new(self.independent(d), self.independent(d + 1));
+                    return self.independent_2d(d);
                 }
                 let k = self.dim_key(d);
                 let (m, n) = self.grid;
@@ -464,7 +478,7 @@ impl Sampler {
             }
             SamplerKind::Halton => {
                 if d as usize + 1 >= N_PRIMES {
-                    return Vec2::new(self.independent(d), self.independent(d + 1));
+                    return self.independent_2d(d);
                 }
                 Vec2::new(
                     scrambled_radical_inverse(d as usize, self.index, self.dim_key(d)),
