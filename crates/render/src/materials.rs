@@ -252,6 +252,11 @@ pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId
     let Some(id) = id else { return true };
     let mut todo = vec![id];
     let mut seen = vec![false; materials.len()];
+    let same = |a: &FloatParam, b: &FloatParam| match (a, b) {
+        (FloatParam::Const(a), FloatParam::Const(b)) => a == b,
+        (FloatParam::Texture(a), FloatParam::Texture(b)) => a == b,
+        _ => false,
+    };
     while let Some(id) = todo.pop() {
         let Some(m) = materials.get(id.0 as usize) else {
             return false;
@@ -259,11 +264,6 @@ pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId
         if std::mem::replace(&mut seen[id.0 as usize], true) {
             continue;
         }
-        let same = |a: &FloatParam, b: &FloatParam| match (a, b) {
-            (FloatParam::Const(a), FloatParam::Const(b)) => a == b,
-            (FloatParam::Texture(a), FloatParam::Texture(b)) => a == b,
-            _ => false,
-        };
         match &m.material {
             Material::TwoSided { front, back } => todo.extend(std::iter::once(*front).chain(*back)),
             Material::Mask { nested, .. } => todo.push(*nested),
