@@ -251,7 +251,9 @@ impl RtMaterial {
 pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId>) -> bool {
     let Some(id) = id else { return true };
     let mut todo = vec![id];
-    let mut seen = vec![false; materials.len()];
+    // The ids walked so far: chains are a few materials long, and a set sized by the material
+    // count would make the per-shape call quadratic over the scene.
+    let mut seen: Vec<u32> = Vec::new();
     let same = |a: &FloatParam, b: &FloatParam| match (a, b) {
         (FloatParam::Const(a), FloatParam::Const(b)) => a == b,
         (FloatParam::Texture(a), FloatParam::Texture(b)) => a == b,
@@ -261,9 +263,10 @@ pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId
         let Some(m) = materials.get(id.0 as usize) else {
             return false;
         };
-        if std::mem::replace(&mut seen[id.0 as usize], true) {
+        if seen.contains(&id.0) {
             continue;
         }
+        seen.push(id.0);
         match &m.material {
             Material::TwoSided { front, back } => todo.extend(std::iter::once(*front).chain(*back)),
             Material::Mask { nested, .. } => todo.push(*nested),

@@ -249,6 +249,22 @@ pub struct Reads {
     pub uv: bool,
 }
 
+/// Mitsuba's sphere parameterisation of the unit direction `dir` from the centre:
+/// u = φ / 2π, v = θ / π (θ from +z).
+pub fn sphere_uv(dir: Vec3) -> Vec2 {
+    let phi = dir.y.atan2(dir.x);
+    let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+    let theta = dir.z.clamp(-1.0, 1.0).acos();
+    Vec2::new(phi / (2.0 * PI), theta / PI)
+}
+
+/// Mitsuba's disk parameterisation of the point `d` of the unit disk: u = r, v = φ / 2π.
+pub fn disk_uv(d: Vec2) -> Vec2 {
+    let phi = d.y.atan2(d.x);
+    let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+    Vec2::new(d.length(), phi / (2.0 * PI))
+}
+
 /// Compute the surface interaction of `hit` on `geom`. `flip` flips both normals; `reads`
 /// says what the caller's shading reads (the rest is skipped).
 pub fn interaction(
@@ -287,8 +303,7 @@ pub fn interaction(
                 return flat_interaction(p, p_error, ng, e1, uv, wo, hit, flip);
             }
             let dpdu = match uvs {
-                Some(_) if !reads.tangent => e1,
-                Some(t) => {
+                Some(t) if reads.tangent => {
                     let (t0, t1, t2) = (t[i0], t[i1], t[i2]);
                     let du1 = t1 - t0;
                     let du2 = t2 - t0;
@@ -299,7 +314,7 @@ pub fn interaction(
                         e1
                     }
                 }
-                None => e1,
+                _ => e1,
             };
             let ns = match normals {
                 Some(n) => {
@@ -316,15 +331,7 @@ pub fn interaction(
             let dir = (raw - *center).normalize_or(Vec3::Z);
             let p = *center + dir * *radius;
             let p_error = gamma(5) * (p.abs() + center.abs());
-            let uv = if reads.uv {
-                // Mitsuba's sphere parameterisation: u = φ / 2π, v = θ / π (θ from +z).
-                let phi = dir.y.atan2(dir.x);
-                let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-                let theta = dir.z.clamp(-1.0, 1.0).acos();
-                Vec2::new(phi / (2.0 * PI), theta / PI)
-            } else {
-                Vec2::ZERO
-            };
+            let uv = if reads.uv { sphere_uv(dir) } else { Vec2::ZERO };
             let dpdu = Vec3::new(-dir.y, dir.x, 0.0);
             (p, p_error, dir, dir, dpdu, uv)
         }
@@ -333,10 +340,7 @@ pub fn interaction(
             let p = to_world.transform_point3a(local);
             let p_error = gamma(6) * (p.abs() + Vec3::from_vec4(to_world.w_axis).abs());
             let uv = if reads.uv {
-                let r = (hit.u * hit.u + hit.v * hit.v).sqrt();
-                let phi = hit.v.atan2(hit.u);
-                let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-                Vec2::new(r, phi / (2.0 * PI))
+                disk_uv(Vec2::new(hit.u, hit.v))
             } else {
                 Vec2::ZERO
             };

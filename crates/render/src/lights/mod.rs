@@ -27,7 +27,7 @@ use crate::geometry::Ray;
 use crate::math::{Frame, INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance, rsqrt};
 use crate::sampling::distrib::{Distribution1D, Distribution2D};
 use crate::sampling::warp;
-use crate::shapes::{ShapeGeom, SurfaceInteraction, gamma};
+use crate::shapes::{ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
 
 /// A point on an emitter with what it sends towards the receiver.
 #[derive(Clone, Copy, Debug)]
@@ -555,15 +555,7 @@ impl Light {
                         let d = warp::square_to_uniform_disk_concentric(u);
                         let p = to_world.transform_point3a(Vec3::new(d.x, d.y, 0.0));
                         let err = gamma(6) * (p.abs() + Vec3::from_vec4(to_world.w_axis).abs());
-                        let uv = if textured {
-                            let mut phi = d.y.atan2(d.x);
-                            if phi < 0.0 {
-                                phi += 2.0 * PI;
-                            }
-                            Vec2::new(d.length(), phi / (2.0 * PI))
-                        } else {
-                            Vec2::ZERO
-                        };
+                        let uv = if textured { disk_uv(d) } else { Vec2::ZERO };
                         (p, err, *normal * flip, uv, 1.0 / *area)
                     }
                     ShapeGeom::Plane { .. } => return None,
@@ -696,11 +688,7 @@ fn sample_sphere(
         return None;
     }
     let uv = if matches!(radiance, ColorParam::Texture(_)) {
-        let mut phi = n_out.y.atan2(n_out.x);
-        if phi < 0.0 {
-            phi += 2.0 * PI;
-        }
-        Vec2::new(phi / (2.0 * PI), n_out.z.clamp(-1.0, 1.0).acos() * INV_PI)
+        sphere_uv(n_out)
     } else {
         Vec2::ZERO
     };
