@@ -18,6 +18,7 @@ use std::sync::Arc;
 
 use crate::formats::ply::read_ply;
 use crate::model::*;
+use crate::textpos::TextIndex;
 use crate::{Document, LoadError, LoadOptions, Loc, Result, Warning};
 
 /// Whether an `.xml` file is a CENG795 scene (root element `<Scene>`), not Mitsuba/Nori.
@@ -172,10 +173,11 @@ fn parse_xml(text: &str, file: &Arc<PathBuf>) -> Result<Node> {
         let p = e.pos();
         LoadError::new(Loc::new(file, p.row, p.col), format!("invalid XML: {e}"))
     })?;
+    let index = TextIndex::new(text);
     let root = doc.root_element();
-    let line = doc.text_pos_at(root.range().start).row;
+    let line = index.pos(root.range().start).0;
     let name = root.tag_name().name().to_string();
-    let node = xml_node(&doc, root, name.clone());
+    let node = xml_node(&index, file, root, name.clone(), 0)?;
     Ok(Node {
         path: String::new(),
         line,
@@ -183,8 +185,24 @@ fn parse_xml(text: &str, file: &Arc<PathBuf>) -> Result<Node> {
     })
 }
 
-fn xml_node(doc: &roxmltree::Document, e: roxmltree::Node, path: String) -> Node {
-    let line = doc.text_pos_at(e.range().start).row;
+/// Deepest element nesting accepted, checked before recursing: a hostile file can neither
+/// overflow the stack nor make the per-node paths (which grow with depth) quadratic in memory.
+const MAX_XML_DEPTH: usize = 256;
+
+fn xml_node(
+    index: &TextIndex,
+    file: &Arc<PathBuf>,
+    e: roxmltree::Node,
+    path: String,
+    depth: usize,
+) -> Result<Node> {
+    let (line, col) = index.pos(e.range().start);
+    if depth >= MAX_XML_DEPTH {
+        return Err(LoadError::new(
+            Loc::new(file, line, col),
+            format!("elements nested more than {MAX_XML_DEPTH} deep"),
+        ));
+    }
     let elems: Vec<_> = e.children().filter(|c| c.is_element()).collect();
     let text: String = e
         .children()
@@ -193,11 +211,11 @@ fn xml_node(doc: &roxmltree::Document, e: roxmltree::Node, path: String) -> Node
         .collect();
     let has_attrs = e.attributes().len() > 0;
     if elems.is_empty() && !has_attrs {
-        return Node {
+        return Ok(Node {
             path,
             line,
             value: Value::Text(text),
-        };
+        });
     }
     let mut entries = Vec::new();
     for a in e.attributes() {
@@ -216,7 +234,7 @@ fn xml_node(doc: &roxmltree::Document, e: roxmltree::Node, path: String) -> Node
         let i = counts.entry(name).or_insert(0);
         let p = format!("{path}.{name}[{i}]");
         *i += 1;
-        entries.push((name.to_string(), xml_node(doc, *c, p)));
+        entries.push((name.to_string(), xml_node(index, file, *c, p, depth + 1)?));
     }
     if !text.trim().is_empty() {
         entries.push((
@@ -228,11 +246,11 @@ fn xml_node(doc: &roxmltree::Document, e: roxmltree::Node, path: String) -> Node
             },
         ));
     }
-    Node {
+    Ok(Node {
         path,
         line,
         value: Value::Map(entries),
-    }
+    })
 }
 
 // ---------------------------------------------------------------------------------------------

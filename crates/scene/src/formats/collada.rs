@@ -32,6 +32,7 @@ use glam::Vec4;
 use roxmltree::Node;
 
 use crate::model::*;
+use crate::textpos::TextIndex;
 use crate::{Document, LoadError, LoadOptions, Loc, Result, Warning};
 
 const MAX_NODES: u32 = 50_000_000;
@@ -59,6 +60,7 @@ pub fn load_str(text: &str, path: &Path) -> Result<SceneDesc> {
     })?;
     let mut cx = Ctx {
         doc: &doc,
+        index: TextIndex::new(text),
         file,
         ids: HashMap::new(),
         desc: SceneDesc {
@@ -90,6 +92,8 @@ struct Mat {
 
 struct Ctx<'a, 'input> {
     doc: &'a roxmltree::Document<'input>,
+    /// Line and column of element offsets (linear time; see `textpos`).
+    index: TextIndex<'input>,
     file: Arc<PathBuf>,
     ids: HashMap<&'a str, Node<'a, 'input>>,
     desc: SceneDesc,
@@ -123,8 +127,8 @@ fn cgl<'a, 'i>(n: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
 
 impl<'a, 'input> Ctx<'a, 'input> {
     fn loc(&self, n: Node) -> Loc {
-        let p = self.doc.text_pos_at(n.range().start);
-        Loc::new(&self.file, p.row, p.col)
+        let (line, col) = self.index.pos(n.range().start);
+        Loc::new(&self.file, line, col)
     }
 
     fn err(&self, n: Node, msg: impl Into<String>) -> LoadError {

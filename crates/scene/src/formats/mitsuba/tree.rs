@@ -5,12 +5,16 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::textpos::TextIndex;
 use crate::{LoadError, LoadOptions, Loc, Result, Warning};
 
 /// Mitsuba's limit on nested includes.
 const MAX_INCLUDE_DEPTH: usize = 15;
 /// Refuse absurdly large documents instead of exhausting memory.
 const MAX_NODES: u32 = 20_000_000;
+/// Deepest element nesting accepted (checked before recursing, so a hostile file cannot
+/// overflow the stack); real scenes nest fewer than ten levels.
+pub const MAX_ELEMENT_DEPTH: usize = 256;
 
 #[derive(Clone, Debug)]
 pub struct Attr {
@@ -55,15 +59,6 @@ pub fn err(loc: &Loc, msg: impl Into<String>) -> LoadError {
     LoadError::new(loc.clone(), msg)
 }
 
-/// 1-based line and column (in characters) of byte `pos` in `text`.
-fn line_col(text: &str, pos: usize) -> (u32, u32) {
-    let before = &text[..pos.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let col = before[line_start..].chars().count() + 1;
-    (line as u32, col as u32)
-}
-
 /// Read a file as UTF-8, locating the first invalid byte when it is not.
 pub fn read_text(path: &Path, at: &Loc) -> Result<String> {
     let bytes = std::fs::read(path)
@@ -75,7 +70,7 @@ pub fn read_text(path: &Path, at: &Loc) -> Result<String> {
             let bytes = e.into_bytes();
             // Valid prefix, so this cannot fail.
             let prefix = std::str::from_utf8(&bytes[..good]).unwrap_or("");
-            let (line, col) = line_col(prefix, prefix.len());
+            let (line, col) = TextIndex::new(prefix).pos(prefix.len());
             Err(LoadError::new(
                 Loc::new(&Arc::new(path.to_path_buf()), line, col),
                 format!(
@@ -179,7 +174,7 @@ impl Reader {
             match e {
                 // roxmltree reports these at 1:1; the problem is at the end of the text.
                 E::UnclosedRootNode | E::UnexpectedEndOfStream | E::NoRootNode => {
-                    let (line, col) = line_col(&text, text.len());
+                    let (line, col) = TextIndex::new(&text).pos(text.len());
                     LoadError::new(
                         Loc::new(&file, line, col),
                         format!("malformed XML: unexpected end of file ({e})"),
@@ -195,11 +190,11 @@ impl Reader {
         self.stack.push(canonical);
         self.via.push(at.clone());
         let ctx = FileCtx {
-            doc: &doc,
+            index: TextIndex::new(&text),
             file: &file,
             dir: &dir,
         };
-        let result = self.convert(&ctx, doc.root_element());
+        let result = self.convert(&ctx, doc.root_element(), 0);
         self.stack.pop();
         self.via.pop();
         match result? {
@@ -255,11 +250,18 @@ impl Reader {
 
     fn convert(
         &mut self,
-        ctx: &FileCtx<'_, '_>,
+        ctx: &FileCtx<'_>,
         node: roxmltree::Node<'_, '_>,
+        depth: usize,
     ) -> Result<Converted> {
         let tag = node.tag_name().name().to_string();
         let loc = ctx.loc(node.range().start);
+        if depth >= MAX_ELEMENT_DEPTH {
+            return Err(err(
+                &loc,
+                format!("elements nested more than {MAX_ELEMENT_DEPTH} deep (<{tag}>)"),
+            ));
+        }
         let mut attrs = Vec::new();
         for a in node.attributes() {
             let aloc = ctx.loc(a.range().start);
@@ -338,7 +340,7 @@ impl Reader {
         let mut elem = elem;
         for child in node.children() {
             if child.is_element() {
-                match self.convert(ctx, child)? {
+                match self.convert(ctx, child, depth + 1)? {
                     Converted::One(e) => elem.children.push(e),
                     Converted::Many(v) => elem.children.extend(v),
                     Converted::None => {}
@@ -364,16 +366,16 @@ enum Converted {
     None,
 }
 
-struct FileCtx<'a, 'input> {
-    doc: &'a roxmltree::Document<'input>,
+struct FileCtx<'a> {
+    index: TextIndex<'a>,
     file: &'a Arc<PathBuf>,
     dir: &'a Arc<PathBuf>,
 }
 
-impl FileCtx<'_, '_> {
+impl FileCtx<'_> {
     fn loc(&self, pos: usize) -> Loc {
-        let p = self.doc.text_pos_at(pos);
-        Loc::new(self.file, p.row, p.col)
+        let (line, col) = self.index.pos(pos);
+        Loc::new(self.file, line, col)
     }
 }
 
