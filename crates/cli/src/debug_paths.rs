@@ -64,6 +64,9 @@ struct Vertex {
     path: u32,
 }
 
+/// About what one vertex and its edge take in the written PLY or JSON text.
+const BYTES_OF_TEXT_PER_VERTEX: usize = 160;
+
 /// Collects the vertices and edges of every path.
 struct Collector {
     vertices: Vec<Vertex>,
@@ -161,6 +164,18 @@ fn trace(scene: &Scene, args: &Args) -> Result<Collector, Failure> {
             scene.film.width, scene.film.height
         )));
     }
+    // Every vertex is recorded (plus its edge) and written as text: budget for the depth
+    // limit (or 64 vertices when paths are unbounded and only roulette ends them).
+    let vertices = if cfg.max_depth == u32::MAX {
+        64
+    } else {
+        u64::from(cfg.max_depth).min(1 << 16) + 2
+    };
+    let per_vertex = (std::mem::size_of::<Vertex>() + 8 + BYTES_OF_TEXT_PER_VERTEX) as u64;
+    crate::memory::check(
+        &format!("recording {} paths", args.count),
+        u64::from(args.count) * vertices * per_vertex,
+    )?;
     let (lo, hi) = scene.bounds;
     let far = ((hi - lo).length() * 0.5).clamp(1e-3, 1e6);
     let mut rec = Collector {

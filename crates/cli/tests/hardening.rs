@@ -106,3 +106,226 @@ fn deeply_nested_collada_and_json_are_refused() {
     let out = penumbra().arg("info").arg(&json).output().unwrap();
     assert_located_failure(&out, &json, "recursion limit");
 }
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Exit 2 with a message containing every needle, and no panic.
+fn assert_input_failure(out: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "exit {:?}\n{stderr}",
+        out.status
+    );
+    assert!(!stderr.contains("panicked"), "panic\n{stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "expected '{n}' in\n{stderr}");
+    }
+}
+
+/// A 16384² film needs ~70 GB of sums and tiles: refused before allocating (it aborted).
+#[test]
+fn a_film_beyond_the_memory_budget_is_refused() {
+    let dir = temp_dir("film");
+    let out = penumbra()
+        .current_dir(repo_root())
+        .args([
+            "render",
+            "scenes/cornell-box.xml",
+            "--res",
+            "16384x16384",
+            "-q",
+            "-o",
+        ])
+        .arg(dir.join("big.exr"))
+        .output()
+        .unwrap();
+    assert_input_failure(&out, &["16384x16384 film", "GiB", "--memory-limit"]);
+    assert!(!dir.join("big.exr").exists());
+    // And the limit is the user's to set: 1 MiB refuses even a 64² film (≈ 0.8 MiB of sums
+    // plus tiles).
+    let out = penumbra()
+        .current_dir(repo_root())
+        .args([
+            "render",
+            "scenes/cornell-box.xml",
+            "--res",
+            "64x64",
+            "--spp",
+            "1",
+        ])
+        .args(["-q", "--memory-limit", "1M", "-o"])
+        .arg(dir.join("small.exr"))
+        .output()
+        .unwrap();
+    assert_input_failure(&out, &["64x64 film", "limit of 1.0 MiB"]);
+}
+
+#[test]
+fn debug_paths_beyond_the_memory_budget_is_refused() {
+    let dir = temp_dir("paths");
+    let out = penumbra()
+        .current_dir(repo_root())
+        .args(["debug-paths", "scenes/cornell-box.xml", "--pixel", "10,10"])
+        .args(["--count", "100000000", "-o"])
+        .arg(dir.join("p.ply"))
+        .output()
+        .unwrap();
+    assert_input_failure(&out, &["recording 100000000 paths", "GiB"]);
+}
+
+/// Devices and folders named as scene, mesh or texture files are refused at once (a
+/// `/dev/zero` mesh was read until memory ran out).
+#[cfg(unix)]
+#[test]
+fn non_regular_files_are_refused_at_once() {
+    let dir = temp_dir("devzero");
+    let ceng = dir.join("zero.json");
+    std::fs::write(
+        &ceng,
+        r#"{"Scene": {"Cameras": {"Camera": {"_id": "1", "Position": "0 0 10",
+            "Gaze": "0 0 -1", "Up": "0 1 0", "NearPlane": "-1 1 -1 1", "NearDistance": "1",
+            "ImageResolution": "8 8", "ImageName": "x.png"}},
+          "Materials": {"Material": {"_id": "1", "DiffuseReflectance": "1 1 1"}},
+          "Objects": {"Mesh": {"_id": "1", "Material": "1",
+            "Faces": {"_plyFile": "/dev/zero"}}}}}"#,
+    )
+    .unwrap();
+    let mitsuba = dir.join("zero.xml");
+    std::fs::write(
+        &mitsuba,
+        r#"<scene version="3.0.0"><shape type="ply"><string name="filename" value="/dev/zero"/></shape>
+           <shape type="obj"><string name="filename" value="/dev/zero"/></shape></scene>"#,
+    )
+    .unwrap();
+    for scene in [&ceng, &mitsuba] {
+        let out = penumbra().arg("info").arg(scene).output().unwrap();
+        assert_input_failure(&out, &["/dev/zero"]);
+    }
+    // The scene file itself.
+    let out = penumbra().args(["info", "/dev/zero"]).output().unwrap();
+    assert_input_failure(&out, &["not a regular file"]);
+    let out = penumbra().arg("info").arg(&dir).output().unwrap();
+    assert_input_failure(&out, &[]);
+}
+
+/// `compare`: below the calibrated batch count it refuses and says why; images that cannot
+/// be compared are bad input (2), a rejection is 1.
+#[test]
+fn compare_refuses_too_few_batches_and_mismatched_images() {
+    let dir = temp_dir("compare");
+    let render = |res: &str, spp: &str, seed: &str, out: &Path, stderr: Option<&Path>| {
+        let mut c = penumbra();
+        c.current_dir(repo_root())
+            .args([
+                "render",
+                "scenes/cornell-box.xml",
+                "--res",
+                res,
+                "--spp",
+                spp,
+            ])
+            .args(["--seed", seed, "-q", "-o"])
+            .arg(out);
+        if let Some(s) = stderr {
+            c.arg("--stderr").arg(s);
+        }
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let reference = dir.join("ref.exr");
+    render(
+        "16x16",
+        "64",
+        "1000",
+        &reference,
+        Some(&dir.join("ref.stderr.exr")),
+    );
+    let batches: Vec<PathBuf> = (0..8).map(|k| dir.join(format!("b{k}.exr"))).collect();
+    for (k, b) in batches.iter().enumerate() {
+        render("16x16", "4", &k.to_string(), b, None);
+    }
+    let out = penumbra()
+        .arg("compare")
+        .arg(&reference)
+        .args(&batches)
+        .output()
+        .unwrap();
+    assert_input_failure(&out, &["8 test image(s)", "at least 16", "--min-batches"]);
+    // Lowered knowingly, it runs the comparison (pass or reject, never 2).
+    let out = penumbra()
+        .arg("compare")
+        .arg(&reference)
+        .args(&batches)
+        .args(["--min-batches", "8"])
+        .output()
+        .unwrap();
+    assert!(matches!(out.status.code(), Some(0 | 1)), "{out:?}");
+    // A different size is bad input.
+    let small = dir.join("small.exr");
+    render("8x8", "4", "0", &small, Some(&dir.join("small.stderr.exr")));
+    let out = penumbra()
+        .arg("compare")
+        .arg(&reference)
+        .arg(&small)
+        .arg("--stderr")
+        .arg(dir.join("small.stderr.exr"))
+        .output()
+        .unwrap();
+    assert_input_failure(&out, &[]);
+}
+
+/// One Ctrl-C finishes the pass, writes the image and exits 130, so a script can tell an
+/// interrupted render from a finished one.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_render_writes_its_image_and_exits_130() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = temp_dir("sigint");
+    let out_file = dir.join("int.exr");
+    let mut child = penumbra()
+        .current_dir(repo_root())
+        .args([
+            "render",
+            "scenes/cornell-box.xml",
+            "--res",
+            "32x32",
+            "--spp",
+            "100000000",
+        ])
+        .arg("-o")
+        .arg(&out_file)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until rendering has started (the build line), then interrupt.
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut seen = String::new();
+    let mut line = String::new();
+    while stderr.read_line(&mut line).unwrap() > 0 {
+        seen.push_str(&line);
+        if line.starts_with("built the scene") {
+            break;
+        }
+        line.clear();
+    }
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{seen}{rest}");
+    assert!(rest.contains("interrupted after"), "{rest}");
+    assert!(
+        out_file.is_file(),
+        "the image of the finished passes is written"
+    );
+}

@@ -142,7 +142,7 @@ pub fn read_image_with(path: &Path, decode: Decode) -> Result<Image, ImageError>
 /// Reads an image and its alpha channel (1 where the file has none). Alpha is never decoded
 /// (it is linear coverage in every format).
 pub fn read_image_alpha(path: &Path, decode: Decode) -> Result<(Image, Vec<f32>), ImageError> {
-    let bytes = fs::read(path).map_err(|e| ImageError::io(path, e))?;
+    let bytes = scene::read_file(path).map_err(|e| ImageError::io(path, e))?;
     if bytes.starts_with(&EXR_MAGIC) {
         return read_exr(path, bytes);
     }

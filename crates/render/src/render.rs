@@ -115,6 +115,18 @@ fn render_tile(
     );
 }
 
+/// Peak bytes of the film state [`render`] allocates for `scene` (see [`Film::memory_needed`]).
+pub fn memory_needed(scene: &Scene, opts: &RenderOptions) -> u64 {
+    let f = &scene.film;
+    Film::memory_needed(
+        f.width,
+        f.height,
+        f.crop,
+        &Filter::new(&f.filter),
+        opts.tile_size,
+    )
+}
+
 /// Render `scene` with `integrator` on the current rayon pool.
 pub fn render(
     scene: &Scene,

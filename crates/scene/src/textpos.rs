@@ -8,6 +8,10 @@
 //! walk elements in document order) costs linear time even when it is all on one line.
 
 use std::cell::Cell;
+use std::path::Path;
+use std::sync::Arc;
+
+use crate::{LoadError, Loc, Result};
 
 /// 1-based line and column (in characters) of byte offsets in one text.
 pub struct TextIndex<'t> {
@@ -50,6 +54,30 @@ impl<'t> TextIndex<'t> {
         let col = col0 + self.text[from..byte].chars().count() as u32;
         self.last.set((byte, line, col));
         (line as u32 + 1, col)
+    }
+}
+
+/// Read a regular file as UTF-8, locating the first invalid byte when it is not.
+pub fn read_text(path: &Path, at: &Loc) -> Result<String> {
+    let bytes = crate::read_file(path).map_err(|e| {
+        LoadError::new(at.clone(), format!("cannot read '{}': {e}", path.display()))
+    })?;
+    match String::from_utf8(bytes) {
+        Ok(s) => Ok(s),
+        Err(e) => {
+            let good = e.utf8_error().valid_up_to();
+            let bytes = e.into_bytes();
+            // Valid prefix, so this cannot fail.
+            let prefix = std::str::from_utf8(&bytes[..good]).unwrap_or("");
+            let (line, col) = TextIndex::new(prefix).pos(prefix.len());
+            Err(LoadError::new(
+                Loc::new(&Arc::new(path.to_path_buf()), line, col),
+                format!(
+                    "not a text file: invalid UTF-8 byte 0x{:02x} (expected a scene in UTF-8 text)",
+                    bytes[good]
+                ),
+            ))
+        }
     }
 }
 

@@ -368,6 +368,35 @@ impl Film {
         }
     }
 
+    /// Bytes a render of a `width × height` film (`crop`, `filter`) in `tile_size²` tiles
+    /// holds at its peak, without allocating anything: the film's sums, one tile per region
+    /// with the filter's border (tiles live for the whole render), and the developed mean and
+    /// standard-error images. What a caller checks against its memory budget before [`Film::new`].
+    pub fn memory_needed(
+        width: u32,
+        height: u32,
+        crop: Option<CropWindow>,
+        filter: &Filter,
+        tile_size: u32,
+    ) -> u64 {
+        let (w, h) = match crop {
+            None => (width as u64, height as u64),
+            Some(c) => (
+                (c.width as u64).min(width as u64),
+                (c.height as u64).min(height as u64),
+            ),
+        };
+        let t = tile_size.max(1) as u64;
+        let b = border(filter.radius()) as u64;
+        let tiles = w.div_ceil(t) * h.div_ceil(t);
+        let tile_pixels = tiles.saturating_mul((t.min(w) + 2 * b) * (t.min(h) + 2 * b));
+        let sums = std::mem::size_of::<PixelSums>() as u64;
+        let image = std::mem::size_of::<Vec3>() as u64;
+        (w * h)
+            .saturating_mul(sums + 2 * image)
+            .saturating_add(tile_pixels.saturating_mul(sums))
+    }
+
     /// Splits the pixel bounds into `tile_size²` tiles (row-major, edge tiles smaller).
     pub fn tile_bounds(&self, tile_size: u32) -> Vec<(UVec2, UVec2)> {
         let t = tile_size.max(1);
@@ -509,6 +538,36 @@ mod tests {
         ] {
             let v = Vec2::new(x, -x);
             assert_eq!(floor_to_int(v), v.floor().as_ivec2(), "{x}");
+        }
+    }
+
+    /// The estimate bounds what a render really allocates (film, tiles, two images) and is
+    /// not wildly above it.
+    #[test]
+    fn memory_needed_bounds_the_real_allocation() {
+        for (w, h, desc) in [
+            (37, 23, FilterDesc::Box { radius: 0.5 }),
+            (
+                64,
+                48,
+                FilterDesc::Gaussian {
+                    stddev: 0.5,
+                    radius: 2.0,
+                },
+            ),
+            (100, 7, FilterDesc::Tent { radius: 1.5 }),
+        ] {
+            let filter = Filter::new(&desc);
+            let film = Film::new(w, h, None, filter);
+            let tiles: usize = film
+                .tile_bounds(16)
+                .iter()
+                .map(|&(lo, hi)| film.tile(lo, hi).pixels.len())
+                .sum();
+            let sums = size_of::<PixelSums>();
+            let real = (film.pixels.len() * (sums + 2 * size_of::<Vec3>()) + tiles * sums) as u64;
+            let est = Film::memory_needed(w, h, None, &filter, 16);
+            assert!(est >= real && est < 2 * real, "{w}x{h}: {est} vs {real}");
         }
     }
 

@@ -23,10 +23,16 @@ use crate::{Document, LoadError, LoadOptions, Loc, Result, Warning};
 
 /// Whether an `.xml` file is a CENG795 scene (root element `<Scene>`), not Mitsuba/Nori.
 pub fn is_ceng795_xml(path: &Path) -> bool {
-    let Ok(text) = std::fs::read(path) else {
+    use std::io::Read;
+    let mut text = Vec::new();
+    let Ok(file) = std::fs::File::open(path) else {
         return false;
     };
-    let head = String::from_utf8_lossy(&text[..text.len().min(4096)]);
+    // The head only: the file may be huge, or a device that never ends.
+    if file.take(4096).read_to_end(&mut text).is_err() {
+        return false;
+    }
+    let head = String::from_utf8_lossy(&text);
     // The first element that is not a declaration or comment.
     let mut rest: &str = &head;
     while let Some(i) = rest.find('<') {
@@ -41,8 +47,7 @@ pub fn is_ceng795_xml(path: &Path) -> bool {
 
 /// Load a CENG795 scene from a `.json` or `.xml` file.
 pub fn load(path: &Path, _opts: &LoadOptions) -> Result<Document> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| LoadError::new(Loc::file(path), format!("cannot read scene file: {e}")))?;
+    let text = crate::textpos::read_text(path, &Loc::file(path))?;
     let file = Arc::new(path.to_path_buf());
     let is_xml = path
         .extension()

@@ -40,8 +40,7 @@ const MAX_NODES: u32 = 50_000_000;
 pub const DEFAULT_WIDTH: u32 = 800;
 
 pub fn load(path: &Path, _opts: &LoadOptions) -> Result<Document> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| LoadError::new(Loc::file(path), format!("cannot read the file: {e}")))?;
+    let text = crate::textpos::read_text(path, &Loc::file(path))?;
     let desc = load_str(&text, path)?;
     Ok(Document::Scene(Box::new(desc)))
 }

@@ -19,6 +19,16 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => {}
+        Ok(_) => {
+            return Err(LoadError::new(
+                Loc::file(path),
+                "not a regular file (expected a scene file)",
+            ));
+        }
+        Err(e) => return Err(LoadError::new(Loc::file(path), format!("cannot read: {e}"))),
+    }
     match ext.as_str() {
         "xml" if ceng795::is_ceng795_xml(path) => ceng795::load(path, opts),
         "xml" => mitsuba::load(path, opts),

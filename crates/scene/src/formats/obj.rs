@@ -29,7 +29,7 @@ pub fn read_obj(path: &Path) -> Result<TriMesh> {
 
 /// Read an OBJ file into one triangle mesh plus its material assignment.
 pub fn read_obj_groups(path: &Path) -> Result<ObjMesh> {
-    let bytes = std::fs::read(path)
+    let bytes = crate::read_file(path)
         .map_err(|e| LoadError::new(Loc::file(path), format!("cannot read OBJ file: {e}")))?;
     // Geometry is ASCII; comments and names in legacy encodings must not make the file fail.
     let text = match std::str::from_utf8(&bytes) {

@@ -394,7 +394,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
     let mut mtls: Vec<MtlMaterial> = Vec::new();
     for lib in &objm.mtllibs {
         let p = dir.join(lib.name.replace('\\', "/"));
-        match std::fs::read(&p) {
+        match crate::read_file(&p) {
             Ok(bytes) => {
                 let text = String::from_utf8_lossy(&bytes);
                 for m in parse_mtl(&text, &p, &mut desc.warnings) {

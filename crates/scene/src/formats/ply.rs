@@ -22,7 +22,7 @@ use crate::{LoadError, Loc, Result, TriMesh, Vec2, Vec3};
 ///
 /// A file without a `face` element yields a mesh without triangles (it is not malformed).
 pub fn read_ply(path: &Path) -> Result<TriMesh> {
-    let data = std::fs::read(path)
+    let data = crate::read_file(path)
         .map_err(|e| LoadError::new(Loc::file(path), format!("cannot read PLY file: {e}")))?;
     parse_ply(&data, path)
 }

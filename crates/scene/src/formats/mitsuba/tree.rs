@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::textpos::TextIndex;
+pub use crate::textpos::read_text;
 use crate::{LoadError, LoadOptions, Loc, Result, Warning};
 
 /// Mitsuba's limit on nested includes.
@@ -57,29 +58,6 @@ pub struct Source {
 
 pub fn err(loc: &Loc, msg: impl Into<String>) -> LoadError {
     LoadError::new(loc.clone(), msg)
-}
-
-/// Read a file as UTF-8, locating the first invalid byte when it is not.
-pub fn read_text(path: &Path, at: &Loc) -> Result<String> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| err(at, format!("cannot read '{}': {e}", path.display())))?;
-    match String::from_utf8(bytes) {
-        Ok(s) => Ok(s),
-        Err(e) => {
-            let good = e.utf8_error().valid_up_to();
-            let bytes = e.into_bytes();
-            // Valid prefix, so this cannot fail.
-            let prefix = std::str::from_utf8(&bytes[..good]).unwrap_or("");
-            let (line, col) = TextIndex::new(prefix).pos(prefix.len());
-            Err(LoadError::new(
-                Loc::new(&Arc::new(path.to_path_buf()), line, col),
-                format!(
-                    "not a text file: invalid UTF-8 byte 0x{:02x} (expected an XML scene)",
-                    bytes[good]
-                ),
-            ))
-        }
-    }
 }
 
 struct Param {
