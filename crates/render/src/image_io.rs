@@ -237,6 +237,7 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
     })();
     match result {
         Ok(()) => {
+            remove_stale_temporaries(path, name);
             // Make the rename itself durable; failure here loses nothing already written.
             #[cfg(unix)]
             if let Some(dir) = path.parent() {
@@ -254,6 +255,41 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
         Err(e) => {
             let _ = fs::remove_file(&tmp);
             Err(ImageError::io(path, e))
+        }
+    }
+}
+
+/// Remove the temporaries `.NAME.tmp-PID-N` of earlier writes to `path` whose process is
+/// gone (a `kill -9` between create and rename left them for ever). Our own process's are
+/// left alone (another thread may be writing), and so is everything where liveness cannot be
+/// told (no `/proc`).
+fn remove_stale_temporaries(path: &Path, name: &std::ffi::OsStr) {
+    let proc = Path::new("/proc");
+    if !proc.join("self").exists() {
+        return;
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let prefix = format!(".{}.tmp-", name.to_string_lossy());
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    let me = std::process::id();
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(rest) = file_name.to_str().and_then(|f| f.strip_prefix(&prefix)) else {
+            continue;
+        };
+        let Some((pid, counter)) = rest.split_once('-') else {
+            continue;
+        };
+        let (Ok(pid), Ok(_)) = (pid.parse::<u32>(), counter.parse::<u64>()) else {
+            continue;
+        };
+        if pid != me && !proc.join(pid.to_string()).exists() {
+            let _ = fs::remove_file(entry.path());
         }
     }
 }

@@ -218,6 +218,37 @@ fn writes_replace_the_target_and_leave_no_temporary() {
     assert_eq!(read_image(&path).unwrap().width, 2);
 }
 
+/// A run killed between creating its temporary and renaming it left `.NAME.tmp-PID-N` for
+/// ever; the next write to the same path removes it when that process is gone, and leaves
+/// live processes' temporaries and other files alone.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_writer_s_temporary_is_removed_by_the_next_write() {
+    let dir = scratch("stale");
+    let path = dir.join("out.exr");
+    // No process has this id (Linux pids stay below 2^22).
+    let stale = ".out.exr.tmp-999999999-0";
+    let live = format!(".out.exr.tmp-{}-7", std::process::id());
+    for f in [
+        stale,
+        &live,
+        ".other.exr.tmp-999999999-0",
+        ".out.exr.tmp-x-1",
+    ] {
+        fs::write(dir.join(f), b"partial").unwrap();
+    }
+    write_image(&path, &pattern(false)).unwrap();
+    assert_eq!(
+        entries(&dir),
+        [
+            ".other.exr.tmp-999999999-0",
+            live.as_str(),
+            ".out.exr.tmp-x-1",
+            "out.exr"
+        ]
+    );
+}
+
 #[test]
 fn failed_writes_leave_nothing() {
     let dir = scratch("atomic-fail");
