@@ -149,6 +149,19 @@ pub fn cie_d65(lambda: f64) -> f64 {
     lookup(&D65, lambda) * D65_NORMALIZATION
 }
 
+/// Planck's law: the spectral radiance of a black body at `kelvin`, in W/(m²·sr·nm) at
+/// `lambda` nm (Mitsuba's `blackbody` units).
+pub fn planck(lambda: f64, kelvin: f64) -> f64 {
+    const H: f64 = 6.626_070_15e-34;
+    const C: f64 = 2.997_924_58e8;
+    const K: f64 = 1.380_649e-23;
+    let l = lambda * 1e-9;
+    let c0 = 2.0 * H * C * C;
+    let c1 = H * C / K;
+    // Per metre of wavelength → per nanometre.
+    1e-9 * c0 / (l.powi(5) * ((c1 / (l * kelvin)).exp_m1()))
+}
+
 /// CIE XYZ → linear Rec.709 RGB (D65 white), Mitsuba's matrix.
 pub fn xyz_to_linear_srgb(xyz: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = xyz;
@@ -258,6 +271,26 @@ pub fn sampled_to_rgb(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Planck's law integrates to σT⁴/π (Stefan–Boltzmann) and peaks at Wien's wavelength.
+    #[test]
+    fn planck_obeys_stefan_boltzmann_and_wien() {
+        let t = 3000.0;
+        let sigma = 5.670_374_419e-8;
+        let mut total = 0.0;
+        let mut lambda = 10.0;
+        while lambda < 200_000.0 {
+            total += planck(lambda + 0.05, t) * 0.1;
+            lambda += 0.1;
+        }
+        let expected = sigma * t.powi(4) / std::f64::consts::PI;
+        assert!(
+            (total / expected - 1.0).abs() < 1e-3,
+            "{total} vs {expected}"
+        );
+        let peak = 2.897_771_955e6 / t;
+        assert!(planck(peak, t) > planck(peak - 5.0, t) && planck(peak, t) > planck(peak + 5.0, t));
+    }
 
     fn flat(v: f64) -> (Vec<f64>, Vec<f64>) {
         (vec![CIE_MIN, CIE_MAX], vec![v, v])

@@ -581,6 +581,59 @@ fn emitter_spectra_skip_d65() {
     );
 }
 
+/// Mitsuba's spectrum plugins: D65 of unit luminance is the RGB white point, so `d65` with
+/// `scale` s is (s, s, s); a blackbody's RGB has the luminance ∫ B(λ) ȳ(λ) dλ / ∫ ȳ and a
+/// red-to-blue ratio that falls with temperature.
+#[test]
+fn spectrum_plugins_d65_and_blackbody() {
+    let emitter = |spectrum: &str| {
+        let s = scene_of(&format!(
+            r#"<scene version="3.0.0"><emitter type="constant">{spectrum}</emitter></scene>"#
+        ));
+        let Emitter::Constant { radiance } = s.emitters[0].emitter else {
+            panic!()
+        };
+        radiance
+    };
+    let d65 = emitter(
+        r#"<spectrum name="radiance" type="d65"><float name="scale" value="0.3"/></spectrum>"#,
+    );
+    assert!(
+        (d65 - Vec3::splat(0.3)).abs().max_element() < 0.3 * 0.01,
+        "{d65}"
+    );
+    let bb = |t: f64| {
+        emitter(&format!(
+            r#"<spectrum name="radiance" type="blackbody"><float name="temperature" value="{t}"/></spectrum>"#
+        ))
+    };
+    let (warm, hot) = (bb(3000.0), bb(6500.0));
+    assert!(warm.x / warm.z > 3.0 * hot.x / hot.z, "{warm} {hot}");
+    // Luminance against the Planck curve integrated with the CIE ȳ directly (1 nm steps).
+    let (mut y, mut ybar) = (0.0, 0.0);
+    for w in 360..=830 {
+        let c = scene::spectra::cie1931_xyz(w as f64)[1];
+        y += scene::spectra::planck(w as f64, 3000.0) * c;
+        ybar += c;
+    }
+    let lum = 0.2126 * warm.x + 0.7152 * warm.y + 0.0722 * warm.z;
+    assert!(
+        ((lum as f64) / (y / ybar) - 1.0).abs() < 0.01,
+        "{lum} vs {}",
+        y / ybar
+    );
+    for bad in [
+        r#"<spectrum name="radiance" type="blackbody"/>"#,
+        r#"<spectrum name="radiance" type="blackbody"><float name="temperature" value="-5"/></spectrum>"#,
+        r#"<spectrum name="radiance" type="d65"><float name="sclae" value="1"/></spectrum>"#,
+        r#"<spectrum name="radiance" type="cie_a"/>"#,
+    ] {
+        let text =
+            format!(r#"<scene version="3.0.0"><emitter type="constant">{bad}</emitter></scene>"#);
+        assert!(load_with(&text, &[]).is_err(), "{bad}");
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Errors
 

@@ -59,9 +59,20 @@ impl<'s> Plugin<'s> {
     ) -> Result<Self> {
         let ty = elem.value("type").unwrap_or("").trim().to_string();
         let mut props = Vec::new();
+        let mut seen: HashMap<String, Loc> = HashMap::new();
         let mut children = Vec::new();
         for c in &elem.children {
             if let Some(p) = parse_property(c, warnings)? {
+                // As Mitsuba 3: a property given twice is an error, not a silent override.
+                if let Some(first) = seen.insert(p.name.clone(), p.loc.clone()) {
+                    return Err(err(
+                        &p.loc,
+                        format!(
+                            "parameter '{}' of <{} type=\"{ty}\"> is given twice (first at {})",
+                            p.name, elem.tag, first
+                        ),
+                    ));
+                }
                 props.push(p);
                 continue;
             }

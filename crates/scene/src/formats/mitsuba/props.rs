@@ -5,7 +5,7 @@ use std::cell::Cell;
 
 use glam::{Mat4, Vec3};
 
-use super::tree::{Elem, err};
+use super::tree::{Attr, Elem, err};
 use crate::{Loc, Result};
 
 /// A colour-like value before conversion (its meaning depends on where it is used).
@@ -330,8 +330,11 @@ pub fn parse_property(e: &Elem, warnings: &mut Vec<crate::Warning>) -> Result<Op
             }
         }
         "spectrum" => {
-            check_attrs(e, &["name", "value", "filename"], warnings);
-            Value::Color(parse_spectrum(e)?)
+            check_attrs(e, &["name", "value", "filename", "type"], warnings);
+            Value::Color(match e.attr("type") {
+                Some(t) => parse_spectrum_plugin(e, t)?,
+                None => parse_spectrum(e)?,
+            })
         }
         "transform" => {
             check_attrs(e, &["name"], warnings);
@@ -348,6 +351,71 @@ pub fn parse_property(e: &Elem, warnings: &mut Vec<crate::Warning>) -> Result<Op
         loc: e.loc.clone(),
         used: Cell::new(false),
     }))
+}
+
+/// Mitsuba 3's spectrum plugins `<spectrum type="d65|blackbody|uniform">` with their `<float>`
+/// parameters, tabulated at 1 nm over the visible range (Mitsuba's units: `blackbody` is
+/// Planck's spectral radiance in W/(m²·sr·nm), `d65` has unit luminance), so the RGB
+/// conversion treats them as any sampled spectrum.
+fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
+    let mut params: Vec<(&str, f64, &Loc)> = Vec::new();
+    for c in &e.children {
+        let (Some(name), Some(value)) = (c.attr("name"), c.attr("value")) else {
+            return Err(err(
+                &c.loc,
+                "expected <float name=\"...\" value=\"...\"/> inside a spectrum plugin",
+            ));
+        };
+        if c.tag != "float" {
+            return Err(err(&c.loc, format!("expected <float>, found <{}>", c.tag)));
+        }
+        params.push((&name.value, parse_float(&value.value, &value.loc)?, &c.loc));
+    }
+    let known: &[&str] = match ty.value.as_str() {
+        "d65" => &["scale"],
+        "blackbody" => &["temperature", "scale"],
+        "uniform" => &["value"],
+        other => {
+            return Err(err(
+                &ty.loc,
+                format!("unknown spectrum type '{other}' (d65, blackbody, uniform)"),
+            ));
+        }
+    };
+    if let Some((n, _, l)) = params.iter().find(|(n, _, _)| !known.contains(n)) {
+        return Err(err(
+            l,
+            format!("unknown parameter '{n}' of spectrum '{}'", ty.value),
+        ));
+    }
+    let get = |n: &str| params.iter().find(|p| p.0 == n).map(|p| p.1);
+    let scale = get("scale").unwrap_or(1.0);
+    let visible = || (360..=830).map(f64::from);
+    match ty.value.as_str() {
+        "uniform" => Ok(ColorSpec::Uniform(get("value").unwrap_or(1.0))),
+        "d65" => Ok(ColorSpec::Sampled(
+            visible().collect(),
+            visible()
+                .map(|w| crate::spectra::cie_d65(w) * scale)
+                .collect(),
+        )),
+        _ => {
+            let t = get("temperature")
+                .ok_or_else(|| err(&e.loc, "a blackbody spectrum needs a 'temperature'"))?;
+            if !(t > 0.0) {
+                return Err(err(
+                    &e.loc,
+                    "blackbody temperature must be positive (kelvin)",
+                ));
+            }
+            Ok(ColorSpec::Sampled(
+                visible().collect(),
+                visible()
+                    .map(|w| crate::spectra::planck(w, t) * scale)
+                    .collect(),
+            ))
+        }
+    }
 }
 
 fn parse_spectrum(e: &Elem) -> Result<ColorSpec> {
