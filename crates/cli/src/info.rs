@@ -4,7 +4,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use glam::Vec3;
-use scene::{Document, Projection, SceneDesc, Shape, TestKind};
+use scene::{
+    DirectionSampling, Document, FilterDesc, FovAxis, IntegratorDesc, MisHeuristic, NoriIntegrator,
+    PathDesc, Projection, RussianRoulette, SamplerKind, SceneDesc, Shape, TestKind,
+};
 
 use crate::Failure;
 
@@ -63,6 +66,120 @@ fn bounds(desc: &SceneDesc) -> Option<(Vec3, Vec3)> {
     (lo.x <= hi.x).then_some((lo, hi))
 }
 
+fn axis_name(a: FovAxis) -> &'static str {
+    match a {
+        FovAxis::X => "horizontal",
+        FovAxis::Y => "vertical",
+        FovAxis::Diagonal => "diagonal",
+        FovAxis::Smaller => "smaller side",
+        FovAxis::Larger => "larger side",
+    }
+}
+
+fn sampler(k: SamplerKind) -> &'static str {
+    match k {
+        SamplerKind::Independent => "independent",
+        SamplerKind::Stratified => "stratified",
+        SamplerKind::Halton => "halton",
+        SamplerKind::Sobol => "sobol",
+    }
+}
+
+fn filter(f: &FilterDesc) -> String {
+    match *f {
+        FilterDesc::Box { radius } => format!("box (radius {radius})"),
+        FilterDesc::Tent { radius } => format!("tent (radius {radius})"),
+        FilterDesc::Gaussian { stddev, radius } => {
+            format!("gaussian (stddev {stddev}, radius {radius})")
+        }
+        FilterDesc::Mitchell { b, c, radius } => {
+            format!("mitchell (B {b}, C {c}, radius {radius})")
+        }
+    }
+}
+
+fn depth(d: i64) -> String {
+    if d < 0 {
+        "unbounded".into()
+    } else {
+        d.to_string()
+    }
+}
+
+fn path(p: &PathDesc) -> String {
+    let mut parts = vec![format!("max depth {}", depth(p.max_depth.into()))];
+    parts.push(match p.rr {
+        RussianRoulette::Off => "no Russian roulette".into(),
+        RussianRoulette::Throughput { from_depth } => {
+            format!("Russian roulette by throughput from depth {from_depth}")
+        }
+        RussianRoulette::Fixed { after, q } => {
+            format!("Russian roulette with q = {q} after {after} segments")
+        }
+    });
+    if p.nee {
+        let mis = match p.mis {
+            MisHeuristic::Balance => "balance",
+            MisHeuristic::Power => "power",
+        };
+        let lights = if p.all_lights {
+            "every emitter"
+        } else {
+            "one emitter"
+        };
+        parts.push(format!(
+            "next-event estimation ({} sample(s) of {lights}, {mis} heuristic)",
+            p.light_samples
+        ));
+    } else {
+        parts.push("no next-event estimation".into());
+    }
+    if p.directions == DirectionSampling::UniformHemisphere {
+        parts.push("uniform hemisphere directions".into());
+    }
+    if p.splitting > 1 {
+        parts.push(format!("splitting {}× at the first vertex", p.splitting));
+    }
+    if p.hide_emitters {
+        parts.push("emitters hidden from the camera".into());
+    }
+    format!("path tracer: {}", parts.join(", "))
+}
+
+fn integrator(i: &IntegratorDesc) -> String {
+    match i {
+        IntegratorDesc::Normals => "normals (AOV)".into(),
+        IntegratorDesc::Albedo => "albedo (AOV)".into(),
+        IntegratorDesc::Depth => "depth (AOV)".into(),
+        IntegratorDesc::AmbientOcclusion { samples, length } => format!(
+            "ambient occlusion, {samples} ray(s){}",
+            length
+                .map(|l| format!(" of length {l}"))
+                .unwrap_or_default()
+        ),
+        IntegratorDesc::Direct {
+            emitter_samples,
+            bsdf_samples,
+        } => {
+            format!("direct illumination ({emitter_samples} emitter, {bsdf_samples} BSDF samples)")
+        }
+        IntegratorDesc::Path(p) => path(p),
+        IntegratorDesc::Whitted { max_depth } => format!("Whitted, max depth {max_depth}"),
+        IntegratorDesc::NoriSimple => "Nori simple".into(),
+        IntegratorDesc::Nori(n) => format!(
+            "Nori {}",
+            match n {
+                NoriIntegrator::DirectEms => "direct_ems",
+                NoriIntegrator::DirectMats => "direct_mats",
+                NoriIntegrator::DirectMis => "direct_mis",
+                NoriIntegrator::PathMats => "path_mats",
+                NoriIntegrator::PathEms => "path_ems",
+                NoriIntegrator::PathMis => "path_mis",
+            }
+        ),
+    }
+}
+
 fn print_scene(desc: &SceneDesc, indent: &str) {
     let tris: usize = desc
         .shapes
@@ -98,7 +215,7 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
         let cam = &s.camera;
         let kind = match cam.projection {
             Projection::Perspective { fov, fov_axis } => {
-                format!("perspective, fov {fov}° ({fov_axis:?})")
+                format!("perspective, fov {fov}° ({})", axis_name(fov_axis))
             }
             Projection::ThinLens {
                 fov,
@@ -106,12 +223,13 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
                 aperture_radius,
                 focus_distance,
             } => format!(
-                "thin lens, fov {fov}° ({fov_axis:?}), aperture {aperture_radius}, focus {focus_distance}"
+                "thin lens, fov {fov}° ({}), aperture radius {aperture_radius}, focus distance {focus_distance}",
+                axis_name(fov_axis)
             ),
             Projection::Orthographic => "orthographic".into(),
         };
         println!(
-            "{indent}sensor {i}:   {kind}, at {}, {}x{}{}, {:?} {} spp, filter {:?}",
+            "{indent}sensor {i}:   {kind}, at {}, {}x{}{}, {} sampler, {} spp, {} filter",
             cam.to_world.w_axis.truncate(),
             s.film.width,
             s.film.height,
@@ -122,16 +240,19 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
                     c.width, c.height, c.offset_x, c.offset_y
                 ))
                 .unwrap_or_default(),
-            s.sampler.kind,
+            sampler(s.sampler.kind),
             s.sampler.spp,
-            s.film.filter,
+            filter(&s.film.filter),
         );
         // A sensor's own integrator (CENG795 cameras) replaces the scene's.
-        if let Some(integrator) = &s.integrator {
-            println!("{indent}  integrator: {integrator:?}");
+        if let Some(i) = &s.integrator {
+            println!("{indent}  integrator: {}", integrator(i));
         }
     }
-    println!("{indent}integrator: {:?}", desc.integrator);
+    // The scene's integrator only matters to sensors without their own.
+    if desc.sensors.is_empty() || desc.sensors.iter().any(|s| s.integrator.is_none()) {
+        println!("{indent}integrator: {}", integrator(&desc.integrator));
+    }
     for w in &desc.warnings {
         println!("{indent}{w}");
     }

@@ -86,7 +86,14 @@ impl RenderObserver for Reporter {
                 return;
             };
             let now = Instant::now();
-            if last.is_none_or(|t| now - t >= PLAIN_INTERVAL) {
+            // The first line comes one interval in: the first callbacks see a few finished
+            // tiles while every thread is still inside its own, and an ETA from them was
+            // off by 30×.
+            let Some(t) = *last else {
+                *last = Some(now);
+                return;
+            };
+            if now - t >= PLAIN_INTERVAL {
                 *last = Some(now);
                 let frac = p.samples_done as f64 / p.samples_total.max(1) as f64;
                 let eta = if frac > 0.0 {
