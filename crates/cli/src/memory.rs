@@ -69,11 +69,11 @@ pub(crate) fn human(bytes: u64) -> String {
 /// 1024, an optional trailing `B` or `iB`).
 pub(crate) fn parse_size(s: &str) -> Result<u64, String> {
     let err = || format!("expected a size such as 512M or 4G, found '{s}'");
-    let t = s.trim();
-    let t = t
-        .strip_suffix("iB")
-        .or_else(|| t.strip_suffix('B'))
-        .unwrap_or(t);
+    let lower = s.trim().to_ascii_lowercase();
+    let t = lower
+        .strip_suffix("ib")
+        .or_else(|| lower.strip_suffix('b'))
+        .unwrap_or(&lower);
     let (num, shift) = match t.char_indices().last() {
         Some((i, c)) if c.is_ascii_alphabetic() => {
             let shift = match c.to_ascii_uppercase() {

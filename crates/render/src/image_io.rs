@@ -305,8 +305,45 @@ fn extension(path: &Path) -> String {
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
+/// Largest decoded image accepted (16384² pixels): a corrupt header must not make us
+/// allocate what it claims.
+const MAX_IMAGE_PIXELS: usize = 1 << 28;
+/// Above this many decoded bytes, an image must not claim more than this many times its file
+/// size (real compressed EXRs stay far below; a damaged header claiming gigapixels does not).
+const MAX_EXPANSION: usize = 256;
+
+/// Refuse a claimed `w × h` image of `bytes_per_pixel` decoded bytes before allocating it.
+fn check_claimed_size(
+    path: &Path,
+    w: usize,
+    h: usize,
+    bytes_per_pixel: usize,
+    file_len: usize,
+) -> Result<(), ImageError> {
+    let pixels = w.checked_mul(h).unwrap_or(usize::MAX);
+    let decoded = pixels.saturating_mul(bytes_per_pixel);
+    if pixels > MAX_IMAGE_PIXELS || (decoded > 64 << 20 && decoded / MAX_EXPANSION > file_len) {
+        return Err(ImageError::decode(
+            path,
+            format!(
+                "the header claims a {w}x{h} image ({decoded} bytes decoded) in a file of \
+                 {file_len} bytes: refused as corrupt or too large"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn read_exr(path: &Path, bytes: Vec<u8>) -> Result<(Image, Vec<f32>), ImageError> {
     use exr::prelude::*;
+    // The headers first: the decoder below allocates what the largest layer claims.
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes[..]), false)
+        .map_err(|e| ImageError::decode(path, e))?;
+    for h in &meta.headers {
+        let size = h.layer_size;
+        let channels = h.channels.list.len().max(4);
+        check_claimed_size(path, size.width(), size.height(), channels * 4, bytes.len())?;
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -308,3 +308,16 @@ fn reads_the_shared_references() {
             .all(|p| p.is_finite() && p.min_element() >= 0.0)
     );
 }
+
+/// A fuzzed EXR (494 bytes) whose header claims ~805M pixels: the decoder allocated 12.9 GB
+/// and the process aborted. The header is checked first now.
+#[test]
+fn an_exr_claiming_a_huge_size_is_an_error_not_an_abort() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-exr-claims-gigapixels.exr");
+    let err = read_image(&path).expect_err("a corrupt header is refused");
+    assert!(
+        err.to_string().contains("refused as corrupt or too large"),
+        "{err}"
+    );
+}
