@@ -101,7 +101,7 @@ struct RenderArgs {
     #[arg(short, long = "output", value_name = "FILE")]
     output: Vec<PathBuf>,
     /// Samples per pixel (default: the scene's).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     spp: Option<u32>,
     /// Resolution WxH (default: the scene's film; drops its crop window).
     #[arg(long, value_name = "WxH", value_parser = parse_res)]
@@ -411,9 +411,35 @@ fn default_outputs(scene: &Path) -> Vec<PathBuf> {
     vec![scene.with_extension("exr"), scene.with_extension("png")]
 }
 
+/// A file name the scene chose (CENG795 `ImageName`), under the scene's folder `dir`: a name
+/// that is absolute or climbs out with `..` is refused (a scene must not write anywhere it
+/// likes); `-o` writes elsewhere on the user's say.
+fn confined_output(dir: &Path, name: &Path) -> Result<PathBuf, Failure> {
+    use std::path::Component;
+    if name
+        .components()
+        .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+    {
+        return Err(Failure::input(format!(
+            "the scene's image name '{}' would be written outside the scene's folder {}; \
+             give -o FILE to choose where the image goes",
+            name.display(),
+            dir.display()
+        )));
+    }
+    Ok(dir.join(name))
+}
+
 /// Fail before rendering when an output cannot be written (unknown format, missing folder).
 pub(crate) fn check_outputs(outputs: &[PathBuf]) -> Result<(), Failure> {
     for o in outputs {
+        if o.is_dir() {
+            return Err(Failure::input(format!(
+                "{} is a folder: give a file name such as {}",
+                o.display(),
+                o.join("image.exr").display()
+            )));
+        }
         let ext = o
             .extension()
             .and_then(|e| e.to_str())
@@ -483,7 +509,7 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
         for i in named {
             let out = desc.sensors[i].film.output.clone();
             let outputs = match out {
-                Some(o) => vec![dir.join(o)],
+                Some(o) => vec![confined_output(dir, &o)?],
                 None => default_outputs(&args.scene),
             };
             let job = render_job(&args, outputs, i);
@@ -683,7 +709,33 @@ pub(crate) fn render_scene_with(
     if let Some(f) = extras.develop {
         f(&mut image);
     }
+    // A depth AOV holds distances: as 8-bit PNG anything beyond 1 was white. PNGs get the
+    // depths divided by the largest one (said once); EXR, PFM and HDR keep the distances.
+    let depth_png = matches!(scene.integrator, IntegratorDesc::Depth).then(|| {
+        let far = image
+            .pixels
+            .iter()
+            .map(|p| p.x)
+            .filter(|d| d.is_finite())
+            .fold(0.0f32, f32::max);
+        let mut scaled = image.clone();
+        if far > 0.0 {
+            scaled.pixels.iter_mut().for_each(|p| *p /= far);
+        }
+        (scaled, far)
+    });
     for o in &job.outputs {
+        let is_png = o.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        if let (true, Some((scaled, far))) = (is_png, &depth_png) {
+            write_image(o, scaled).map_err(Failure::other)?;
+            if !job.quiet {
+                eprintln!(
+                    "wrote {} (depth / {far}: black at the camera, white at the farthest hit)",
+                    o.display()
+                );
+            }
+            continue;
+        }
         write_image_tonemapped(o, &image, scene.film.tonemap.as_ref()).map_err(Failure::other)?;
         if !job.quiet {
             eprintln!("wrote {}", o.display());

@@ -329,3 +329,101 @@ fn an_interrupted_render_writes_its_image_and_exits_130() {
         "the image of the finished passes is written"
     );
 }
+
+/// A CENG795 `ImageName` must not write outside the scene's folder (`-o` may).
+#[test]
+fn a_scene_cannot_write_outside_its_folder() {
+    let dir = temp_dir("imagename");
+    for name in [
+        "../escape.png",
+        "/tmp/penumbra-escape.png",
+        "sub/../../x.png",
+    ] {
+        let scene = dir.join("s.json");
+        std::fs::write(
+            &scene,
+            format!(
+                r#"{{"Scene": {{"Cameras": {{"Camera": {{"_id": "1", "Position": "0 0 10",
+                "Gaze": "0 0 -1", "Up": "0 1 0", "NearPlane": "-1 1 -1 1", "NearDistance": "1",
+                "ImageResolution": "4 4", "ImageName": "{name}"}}}},
+                "Materials": {{"Material": {{"_id": "1", "DiffuseReflectance": "1 1 1"}}}},
+                "VertexData": {{"_data": "0 0 0"}},
+                "Objects": {{"Sphere": {{"_id": "1", "Material": "1", "Center": "1",
+                "Radius": "1"}}}}}}}}"#
+            ),
+        )
+        .unwrap();
+        let out = penumbra()
+            .arg("render")
+            .arg(&scene)
+            .arg("-q")
+            .output()
+            .unwrap();
+        assert_input_failure(&out, &["outside the scene's folder", "-o FILE"]);
+        // With -o the user decides.
+        let out = penumbra()
+            .arg("render")
+            .arg(&scene)
+            .args(["-q", "-o"])
+            .arg(dir.join("mine.png"))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(!dir.parent().unwrap().join("escape.png").exists());
+}
+
+#[test]
+fn usage_errors_say_what_is_wrong() {
+    let dir = temp_dir("usage");
+    let out = penumbra()
+        .current_dir(repo_root())
+        .args(["render", "scenes/cornell-box.xml", "-q", "-o"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_input_failure(&out, &["is a folder", "image.exr"]);
+    let out = penumbra()
+        .current_dir(repo_root())
+        .args(["render", "scenes/cornell-box.xml", "--spp", "0", "-o"])
+        .arg(dir.join("x.exr"))
+        .output()
+        .unwrap();
+    assert_input_failure(&out, &["--spp"]);
+}
+
+/// A depth AOV as PNG is scaled by the farthest hit (it was solid white); EXR keeps metres.
+#[test]
+fn a_depth_png_is_normalised() {
+    let dir = temp_dir("depth");
+    let (png, exr) = (dir.join("d.png"), dir.join("d.exr"));
+    let out = penumbra()
+        .current_dir(repo_root())
+        .args(["render", "scenes/cornell-box.xml", "--integrator", "depth"])
+        .args(["--res", "32x32", "--spp", "1", "-q", "-o"])
+        .arg(&png)
+        .arg("-o")
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = render::image_io::read_image_with(&png, render::image_io::Decode::Srgb).unwrap();
+    let exr = render::image_io::read_image(&exr).unwrap();
+    let max = |i: &render::film::Image| i.pixels.iter().map(|p| p.x).fold(0.0f32, f32::max);
+    assert!(max(&exr) > 2.0, "the EXR keeps distances: {}", max(&exr));
+    assert!((max(&png) - 1.0).abs() < 0.01, "{}", max(&png));
+    let white = png.pixels.iter().filter(|p| p.x > 0.99).count();
+    assert!(
+        white < png.pixels.len() / 10,
+        "{white} of {} pixels white",
+        png.pixels.len()
+    );
+}
