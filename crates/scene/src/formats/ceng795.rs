@@ -77,8 +77,9 @@ pub fn load(path: &Path, _opts: &LoadOptions) -> Result<Document> {
 pub struct Node {
     /// JSON-style path, e.g. `Scene.Objects.Mesh[3].Faces`.
     pub path: String,
-    /// 1-based XML line (0 for JSON).
+    /// 1-based XML line and column (0 for JSON).
     pub line: u32,
+    pub col: u32,
     pub value: Value,
 }
 
@@ -169,6 +170,7 @@ fn json_node(v: &serde_json::Value, path: String) -> Node {
     Node {
         path,
         line: 0,
+        col: 0,
         value,
     }
 }
@@ -180,12 +182,13 @@ fn parse_xml(text: &str, file: &Arc<PathBuf>) -> Result<Node> {
     })?;
     let index = TextIndex::new(text);
     let root = doc.root_element();
-    let line = index.pos(root.range().start).0;
+    let (line, col) = index.pos(root.range().start);
     let name = root.tag_name().name().to_string();
     let node = xml_node(&index, file, root, name.clone(), 0)?;
     Ok(Node {
         path: String::new(),
         line,
+        col,
         value: Value::Map(vec![(name, node)]),
     })
 }
@@ -219,6 +222,7 @@ fn xml_node(
         return Ok(Node {
             path,
             line,
+            col,
             value: Value::Text(text),
         });
     }
@@ -229,6 +233,7 @@ fn xml_node(
             Node {
                 path: format!("{path}._{}", a.name()),
                 line,
+                col,
                 value: Value::Text(a.value().to_string()),
             },
         ));
@@ -247,6 +252,7 @@ fn xml_node(
             Node {
                 path: format!("{path}._data"),
                 line,
+                col,
                 value: Value::Text(text),
             },
         ));
@@ -254,6 +260,7 @@ fn xml_node(
     Ok(Node {
         path,
         line,
+        col,
         value: Value::Map(entries),
     })
 }
@@ -267,7 +274,7 @@ struct Ctx {
 
 impl Ctx {
     fn loc(&self, n: &Node) -> Loc {
-        Loc::new(&self.file, n.line, 0)
+        Loc::new(&self.file, n.line, n.col)
     }
     fn err(&self, n: &Node, msg: impl std::fmt::Display) -> LoadError {
         LoadError::new(self.loc(n), format!("{}: {msg}", n.path))
@@ -1033,7 +1040,7 @@ impl Builder {
                 .ctx
                 .uints(faces)?
                 .into_iter()
-                .map(|i| i + offset)
+                .map(|i| i.saturating_add(offset)) // overflow → out of range below
                 .collect();
             self.mesh_from_ids(faces, &ids, smooth)?
         };
@@ -1378,6 +1385,7 @@ mod tests {
         let list = Node {
             path: "x".into(),
             line: 0,
+            col: 0,
             value: Value::Text("t1 s1".into()),
         };
         let m = b.transform_list(Some(&list)).unwrap();
