@@ -173,9 +173,9 @@ pub(crate) fn apply(
                 _ => (t * a, t),
             }
         }
-        Projection::Orthographic => {
+        Projection::Orthographic | Projection::Window { .. } => {
             return Err(Failure::input(
-                "orthographic cameras are not supported by cs184",
+                "only perspective cameras are supported by cs184",
             ));
         }
     };

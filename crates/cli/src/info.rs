@@ -227,6 +227,14 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
                 axis_name(fov_axis)
             ),
             Projection::Orthographic => "orthographic".into(),
+            Projection::Window {
+                left,
+                right,
+                bottom,
+                top,
+            } => format!(
+                "perspective through the window [{left}, {right}] x [{bottom}, {top}] at distance 1"
+            ),
         };
         println!(
             "{indent}sensor {i}:   {kind}, at {}, {}x{}{}, {} sampler, {} spp, {} filter",

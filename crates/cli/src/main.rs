@@ -271,6 +271,13 @@ impl ViewArgs {
             match &mut s.camera.projection {
                 scene::Projection::Perspective { fov, .. }
                 | scene::Projection::ThinLens { fov, .. } => *fov = f,
+                // A window camera (CENG795 NearPlane) becomes a centred one of that fov.
+                p @ scene::Projection::Window { .. } => {
+                    *p = scene::Projection::Perspective {
+                        fov: f,
+                        fov_axis: scene::FovAxis::Y,
+                    }
+                }
                 scene::Projection::Orthographic => {
                     return Err(Failure::input(
                         "--fov does not apply to an orthographic camera",

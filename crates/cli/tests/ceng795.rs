@@ -296,3 +296,98 @@ fn russian_roulette_leaves_the_mean_unchanged() {
     eprintln!("depth 3 vs 6 (must fail): {text}");
     assert!(!ok, "a missing bounce was not detected: {text}");
 }
+
+/// Scenes without a `Tonemap` hold radiance in 0–255 display units: their PNG is
+/// clamp(round(L), 0, 255) per channel of the EXR (no gamma), no PNG is more than 5 %
+/// saturated (with 1.0 as white, hw1's Cornell box was white walls and solid red and blue),
+/// and the box seen through its front wall from behind the image plane is not black.
+#[test]
+fn display_unit_scenes_write_rounded_pngs() {
+    let Some(dir) = shared() else { return };
+    let mut files = Vec::new();
+    scenes(&dir, &mut files);
+    files.sort();
+    let tmp = temp_dir("display");
+    let mut checked = 0;
+    let mut report = Vec::new();
+    for (i, f) in files.iter().enumerate() {
+        let Ok(Document::Scene(desc)) = scene::load(f, &LoadOptions::default()) else {
+            continue; // the scene with a missing PLY (see every_shared_scene_renders_tiny)
+        };
+        let Some(sensor) = desc.sensors.first() else {
+            continue;
+        };
+        if !matches!(sensor.film.tonemap, Some(scene::Tonemap::DisplayUnits)) {
+            continue;
+        }
+        // A tenth of the resolution keeps the aspect (and any off-axis window) of the scene.
+        let (w, h) = (
+            (sensor.film.width / 10).max(8),
+            (sensor.film.height / 10).max(8),
+        );
+        let (png, exr) = (tmp.join(format!("{i}.png")), tmp.join(format!("{i}.exr")));
+        let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .arg("render")
+            .arg(f)
+            .args(["--res", &format!("{w}x{h}"), "--spp", "4", "-q", "-o"])
+            .arg(&png)
+            .arg("-o")
+            .arg(&exr)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{}: {}",
+            f.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let radiance = read_image(&exr).unwrap();
+        let bytes = render::image_io::read_image_with(&png, render::image_io::Decode::Raw).unwrap();
+        // Saturated where the radiance is not: what 1.0-as-white did. Pixels whose radiance
+        // exceeds 255 (bright highlights, hw1's fully lit red and blue walls) are counted
+        // apart: the EXR says they are saturated.
+        let (mut saturated, mut bright) = (0, 0);
+        for (l, b) in radiance.pixels.iter().zip(&bytes.pixels) {
+            for c in 0..3 {
+                let expected = l[c].clamp(0.0, 255.0).round();
+                let got = (b[c] * 255.0).round();
+                assert!(
+                    (got - expected).abs() <= 1.0,
+                    "{}: PNG {got} for radiance {}",
+                    f.display(),
+                    l[c]
+                );
+            }
+            let clipped = (0..3).any(|c| b[c] >= 1.0 && l[c] < 254.5);
+            saturated += usize::from(clipped);
+            bright += usize::from(l.max_element() >= 254.5);
+        }
+        let share = saturated as f64 / bytes.pixels.len() as f64;
+        let bright = bright as f64 / bytes.pixels.len() as f64;
+        let mean = radiance
+            .pixels
+            .iter()
+            .map(|p| p.element_sum() as f64)
+            .sum::<f64>()
+            / (3 * radiance.pixels.len()) as f64;
+        report.push(format!(
+            "{}: mean {mean:.1}, {:.1} % saturated below 255, {:.1} % at or above 255",
+            f.strip_prefix(&dir).unwrap_or(f).display(),
+            100.0 * share,
+            100.0 * bright
+        ));
+        assert!(
+            share <= 0.05,
+            "{}: {:.1} % of pixels saturated",
+            f.display(),
+            100.0 * share
+        );
+        if f.ends_with("hw3/cornellbox_boxes_dynamic.json") {
+            assert!(mean > 10.0, "{}: black (mean {mean})", f.display());
+        }
+        checked += 1;
+    }
+    eprintln!("{}", report.join("\n"));
+    assert!(checked >= 20, "only {checked} display-unit scenes");
+    std::fs::remove_dir_all(&tmp).ok();
+}

@@ -13,6 +13,8 @@
 //!   `focus_distance` along +z.
 //! - `Orthographic`: the image covers [-1,1] × [-1/aspect, 1/aspect] of the camera plane (scale
 //!   it with `to_world`), rays along +z.
+//! - `Window`: a pinhole whose image is a given window [l, r] × [b, t] of the z = 1 plane
+//!   (right and up in image terms, so x_cam = −(l + s_x (r − l)), y_cam = t − s_y (t − b)).
 
 use scene::{FovAxis, Projection};
 
@@ -28,6 +30,10 @@ pub struct Camera {
     resolution: Vec2,
     /// tan(fov_x / 2) and tan(fov_x / 2) / aspect: the half extents of the z = 1 image plane.
     half_extent: Vec2,
+    /// The z = 1 plane point of film position (0, 0) (the image's top left corner), as a
+    /// negated offset: x_cam = −(2 s_x − 1)·half_extent.x + centre.x, likewise y. Zero for a
+    /// centred image; the window of `Window` cameras.
+    centre: Vec2,
     near_clip: f32,
     far_clip: f32,
 }
@@ -91,6 +97,23 @@ impl Camera {
                 Some(fov_x_degrees(fov, fov_axis, aspect)),
             ),
             Projection::Orthographic => (Kind::Orthographic, None),
+            Projection::Window {
+                left,
+                right,
+                bottom,
+                top,
+            } => {
+                // Camera x points to the image's left: the window's right is −x.
+                return Camera {
+                    kind: Kind::Perspective,
+                    to_world: desc.to_world,
+                    resolution: Vec2::new(width as f32, height as f32),
+                    half_extent: Vec2::new(0.5 * (right - left), 0.5 * (top - bottom)),
+                    centre: Vec2::new(-0.5 * (left + right), 0.5 * (bottom + top)),
+                    near_clip: desc.near_clip,
+                    far_clip: desc.far_clip,
+                };
+            }
         };
         let tan_x = match fov_x {
             Some(f) => (0.5 * f).to_radians().tan(),
@@ -101,6 +124,7 @@ impl Camera {
             to_world: desc.to_world,
             resolution: Vec2::new(width as f32, height as f32),
             half_extent: Vec2::new(tan_x, tan_x / aspect),
+            centre: Vec2::ZERO,
             near_clip: desc.near_clip,
             far_clip: desc.far_clip,
         }
@@ -115,8 +139,8 @@ impl Camera {
     fn film_to_camera(&self, p_film: Vec2) -> Vec3 {
         let s = p_film / self.resolution;
         Vec3::new(
-            -(2.0 * s.x - 1.0) * self.half_extent.x,
-            -(2.0 * s.y - 1.0) * self.half_extent.y,
+            -(2.0 * s.x - 1.0) * self.half_extent.x + self.centre.x,
+            -(2.0 * s.y - 1.0) * self.half_extent.y + self.centre.y,
             1.0,
         )
     }
@@ -260,5 +284,42 @@ mod tests {
         let cr = cam.generate_ray(Vec2::new(3.0, 7.0), Vec2::ZERO);
         assert!((cr.ray.o.z - 2.0).abs() < 1e-5);
         assert!((cr.ray.at(cr.t_max).z - 10.0).abs() < 1e-4);
+    }
+
+    /// An off-axis window with non-square pixels (the CENG795 NearPlane): the ray through the
+    /// film position of a camera-space point passes through that point, and the near clip is
+    /// the window's plane along the axis.
+    #[test]
+    fn window_rays_pass_through_their_points() {
+        let (l, r, b, t) = (-0.7f32, 0.3, -0.2, 0.6);
+        let mut d = desc(Projection::Window {
+            left: l,
+            right: r,
+            bottom: b,
+            top: t,
+        });
+        d.near_clip = 1.5;
+        let (w, h) = (40u32, 25u32);
+        let cam = Camera::new(&d, w, h);
+        for p in [
+            Vec3::new(0.1, 0.2, 3.0),
+            Vec3::new(-1.2, -0.3, 5.0),
+            Vec3::new(0.6, 1.7, 4.0),
+        ] {
+            // Image right is camera −x.
+            let (u, v) = (-p.x / p.z, p.y / p.z);
+            let film = Vec2::new((u - l) / (r - l) * w as f32, (t - v) / (t - b) * h as f32);
+            let cr = cam.generate_ray(film, Vec2::ZERO);
+            assert!(
+                (cr.ray.o.z - 1.5).abs() < 1e-5,
+                "near clip at {}",
+                cr.ray.o.z
+            );
+            let q = cr.ray.at((p.z - cr.ray.o.z) / cr.ray.d.z);
+            assert!((q - p).length() < 1e-4, "{q} vs {p}");
+        }
+        // The window's corners are the film's corners.
+        let corner = cam.generate_ray(Vec2::ZERO, Vec2::ZERO).ray.d;
+        assert!((corner.x / corner.z + l).abs() < 1e-5 && (corner.y / corner.z - t).abs() < 1e-5);
     }
 }

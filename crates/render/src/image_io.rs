@@ -166,6 +166,14 @@ pub fn write_image_tonemapped(
     tonemap: Option<&scene::Tonemap>,
 ) -> Result<(), ImageError> {
     match tonemap {
+        Some(scene::Tonemap::DisplayUnits)
+            if extension(path) == "png" && !img.pixels.is_empty() =>
+        {
+            // The radiance already is the 8-bit value: round and clamp it, nothing else.
+            let quantize = |v: f32| (v.clamp(0.0, 255.0) + 0.5) as u8;
+            let bytes = encode_png_with(img, quantize).map_err(|e| ImageError::encode(path, e))?;
+            write_atomically(path, &bytes)
+        }
         Some(tm) if extension(path) == "png" && !img.pixels.is_empty() => {
             let display = crate::film::tonemap::apply(img, tm);
             let quantize = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
@@ -320,7 +328,7 @@ fn check_claimed_size(
     bytes_per_pixel: usize,
     file_len: usize,
 ) -> Result<(), ImageError> {
-    let pixels = w.checked_mul(h).unwrap_or(usize::MAX);
+    let pixels = w.saturating_mul(h);
     let decoded = pixels.saturating_mul(bytes_per_pixel);
     if pixels > MAX_IMAGE_PIXELS || (decoded > 64 << 20 && decoded / MAX_EXPANSION > file_len) {
         return Err(ImageError::decode(

@@ -475,6 +475,16 @@ pub enum Projection {
     /// Mitsuba's orthographic camera: the image covers [-1,1]² of the camera plane (scaled
     /// by `to_world`).
     Orthographic,
+    /// A pinhole whose image is the window [left, right] × [bottom, top] of the plane one
+    /// unit in front of the eye, in the image's own right/up coordinates (CENG795
+    /// `NearPlane` / `NearDistance`): off-axis when the window is not centred, non-square
+    /// pixels when its aspect differs from the film's.
+    Window {
+        left: f32,
+        right: f32,
+        bottom: f32,
+        top: f32,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -522,6 +532,9 @@ pub enum Tonemap {
         saturation: f32,
         gamma: f32,
     },
+    /// The radiance is in display units 0–255 (CENG795 scenes without a `Tonemap`): an 8-bit
+    /// pixel is clamp(round(L), 0, 255) per channel, with no gamma.
+    DisplayUnits,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

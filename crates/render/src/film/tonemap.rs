@@ -17,12 +17,21 @@ const LUM: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
 /// Apply `tm` to a linear image; the result is display-encoded in [0, 1].
 pub fn apply(img: &Image, tm: &Tonemap) -> Image {
-    let Tonemap::Photographic {
-        key,
-        burn_percent,
-        saturation,
-        gamma,
-    } = *tm;
+    let (key, burn_percent, saturation, gamma) = match *tm {
+        Tonemap::Photographic {
+            key,
+            burn_percent,
+            saturation,
+            gamma,
+        } => (key, burn_percent, saturation, gamma),
+        Tonemap::DisplayUnits => {
+            let mut out = img.clone();
+            for p in &mut out.pixels {
+                *p = (*p / 255.0).clamp(Vec3::ZERO, Vec3::ONE);
+            }
+            return out;
+        }
+    };
     let lum: Vec<f32> = img
         .pixels
         .iter()

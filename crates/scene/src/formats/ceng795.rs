@@ -8,9 +8,20 @@
 //!
 //! Conventions of the format carried over: ids are 1-based, vertex ids in `Faces`,
 //! `Indices`, `Center` and `Point` index `VertexData`; transformations are applied in the
-//! order listed (`"t1 s2 r1"` = r1 · s2 · t1); cameras look along `Gaze` with `Up`, and an
-//! asymmetric `NearPlane` is approximated by a symmetric frustum aimed at the window centre
-//! (with a warning).
+//! order listed (`"t1 s2 r1"` = r1 · s2 · t1).
+//!
+//! Cameras, as the course's ray generation: the eye e looks along `Gaze` with `Up`; the image
+//! is the `NearPlane` window (l r b t) at `NearDistance` (exactly, off-axis and with
+//! non-square pixels where the window says so: `Projection::Window`), and a primary ray
+//! e + t(s − e) through the image-plane point s counts hits from t = 1 on, i.e. geometry
+//! between the eye and the image plane is not seen (a planar near clip at `NearDistance`;
+//! `hw3/cornellbox_boxes_dynamic` looks through its box's front wall that way). Only a
+//! thin-lens camera (`FocusDistance` + `ApertureSize`) with an off-centre window is
+//! approximated by a centred frustum aimed at the window centre (with a warning).
+//!
+//! Output: a camera without `Tonemap` holds radiance in 0–255 display units, so its 8-bit
+//! image is clamp(round(L), 0, 255) per channel with no gamma (`Tonemap::DisplayUnits`); with
+//! a `Tonemap`, Reinhard's photographic operator. EXR output keeps the radiance either way.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -1117,14 +1128,19 @@ impl Builder {
             Some(t) => c.text(t)?.trim() == "lookAt",
             None => false,
         };
-        let (dir, fov_y) = if is_look_at {
+        if near <= 0.0 {
+            return Err(c.err(n, "NearDistance must be positive"));
+        }
+        let thin_lens = n.child("FocusDistance").is_some() && n.child("ApertureSize").is_some();
+        // `window`: the exact NearPlane window scaled to distance 1, for the pinhole.
+        let (dir, fov_y, window) = if is_look_at {
             let fov = c.float(c.req(n, "FovY")?)?;
             // Some files give `Gaze` (a direction) instead of `GazePoint`.
             let dir = match n.child("GazePoint") {
                 Some(g) => c.vec3(g)? - pos,
                 None => c.vec3(c.req(n, "Gaze")?)?,
             };
-            (dir, fov)
+            (dir, fov, None)
         } else {
             let gaze = c.vec3(c.req(n, "Gaze")?)?.normalize_or_zero();
             let np = c.req(n, "NearPlane")?;
@@ -1132,9 +1148,10 @@ impl Builder {
             let [l, r, b, t] = v[..] else {
                 return Err(c.err(np, "expected 'left right bottom top'"));
             };
-            if r <= l || t <= b || near <= 0.0 {
+            if r <= l || t <= b {
                 return Err(c.err(np, "empty near plane window"));
             }
+            let window = [l / near, r / near, b / near, t / near];
             // The course's frame: w = -gaze, u = up × w (right), v = w × u.
             let wv = -gaze;
             let u = up.cross(wv).normalize_or_zero();
@@ -1143,13 +1160,14 @@ impl Builder {
             let asym = (cx.abs() > 1e-4 * (r - l)) || (cy.abs() > 1e-4 * (t - b));
             let win_aspect = (r - l) / (t - b);
             let mut msgs = Vec::new();
-            if asym {
+            // Only the thin lens approximates: the pinhole uses the window exactly.
+            if thin_lens && asym {
                 msgs.push(
                     "asymmetric NearPlane approximated by a symmetric frustum aimed at the \
                      window centre",
                 );
             }
-            if (win_aspect / aspect - 1.0).abs() > 1e-3 {
+            if thin_lens && (win_aspect / aspect - 1.0).abs() > 1e-3 {
                 msgs.push(
                     "NearPlane aspect differs from ImageResolution (non-square pixels): the \
                      vertical extent is kept",
@@ -1158,10 +1176,14 @@ impl Builder {
             for m in msgs {
                 self.warn(np, m);
             }
-            let dir = gaze * near + u * cx + vv * cy;
-            let half_h = (t - b) * 0.5;
-            let fov = 2.0 * (half_h / dir.length()).atan().to_degrees();
-            (dir, fov)
+            if thin_lens {
+                let dir = gaze * near + u * cx + vv * cy;
+                let half_h = (t - b) * 0.5;
+                let fov = 2.0 * (half_h / dir.length()).atan().to_degrees();
+                (dir, fov, None)
+            } else {
+                (gaze, 0.0, Some(window))
+            }
         };
         let c = &self.ctx;
         let to_world = camera_frame(pos, dir, up)
@@ -1175,9 +1197,17 @@ impl Builder {
                 aperture_radius: c.float(a)? * 0.5,
                 focus_distance: c.float(f)?,
             },
-            _ => Projection::Perspective {
-                fov: fov_y,
-                fov_axis: FovAxis::Y,
+            _ => match window {
+                Some([left, right, bottom, top]) => Projection::Window {
+                    left,
+                    right,
+                    bottom,
+                    top,
+                },
+                None => Projection::Perspective {
+                    fov: fov_y,
+                    fov_axis: FovAxis::Y,
+                },
             },
         };
         let spp = match n.child("NumSamples") {
@@ -1188,7 +1218,11 @@ impl Builder {
             .child("ImageName")
             .map(|i| c.text(i).map(|t| PathBuf::from(t.trim())))
             .transpose()?;
-        let tonemap = n.child("Tonemap").map(|t| self.tonemap(t)).transpose()?;
+        // Without a Tonemap the course's radiance is in 0–255 display units (FORMATS.md §2).
+        let tonemap = match n.child("Tonemap") {
+            Some(t) => self.tonemap(t)?,
+            None => Tonemap::DisplayUnits,
+        };
         let integrator = self.renderer(n)?;
         let name = match n.child("_id") {
             Some(i) => Some(self.ctx.text(i)?.trim().to_string()),
@@ -1199,7 +1233,9 @@ impl Builder {
             camera: Camera {
                 projection,
                 to_world,
-                near_clip: 1e-4,
+                // The course's primary rays e + t(s − e) count hits from the image plane on
+                // (t ≥ 1): a planar clip at NearDistance along the gaze.
+                near_clip: near,
                 far_clip: 1e30,
             },
             film: Film {
@@ -1208,7 +1244,7 @@ impl Builder {
                 crop: None,
                 filter: FilterDesc::Box { radius: 0.5 },
                 output,
-                tonemap,
+                tonemap: Some(tonemap),
             },
             sampler: SamplerDesc {
                 kind: SamplerKind::Independent,

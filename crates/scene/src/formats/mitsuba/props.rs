@@ -402,7 +402,7 @@ fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
         _ => {
             let t = get("temperature")
                 .ok_or_else(|| err(&e.loc, "a blackbody spectrum needs a 'temperature'"))?;
-            if !(t > 0.0) {
+            if t <= 0.0 {
                 return Err(err(
                     &e.loc,
                     "blackbody temperature must be positive (kelvin)",
