@@ -20,7 +20,7 @@ use crate::lights::{EnvMap, Light, MeshSampling, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
-use crate::shapes::{Reads, ShapeGeom, SurfaceInteraction, interaction};
+use crate::shapes::{Ellipsoid, Reads, ShapeGeom, SurfaceInteraction, interaction};
 use crate::textures::Texture;
 
 /// A problem found while building (unreadable texture, unsupported feature).
@@ -599,8 +599,8 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
             Shape::Mesh(m) => mesh_geom(m, &s.to_world),
             Shape::Rectangle => mesh_geom(&rectangle_mesh(), &s.to_world),
             Shape::Cube => mesh_geom(&cube_mesh(), &s.to_world),
-            Shape::Sphere { center, radius } => {
-                // Mitsuba: the sphere's to_world may hold a uniform scale and translation.
+            Shape::Sphere { center, radius } if scene::is_similarity(&s.to_world) => {
+                // A rotation, uniform scale and translation keep it a sphere.
                 let c = s.to_world.transform_point3(*center);
                 let r = s
                     .to_world
@@ -609,6 +609,21 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                 ShapeGeom::Sphere {
                     center: c.into(),
                     radius: r,
+                }
+            }
+            Shape::Sphere { center, radius } => {
+                // Non-uniform scale or shear: an ellipsoid, the unit sphere of this frame.
+                let frame = s.to_world
+                    * Mat4::from_translation(*center)
+                    * Mat4::from_scale(PVec3::splat(*radius));
+                match Ellipsoid::new(frame) {
+                    Some(e) => ShapeGeom::Ellipsoid(Box::new(e)),
+                    None => {
+                        return Err(BuildError {
+                            loc: s.loc.clone(),
+                            message: "sphere with a singular or non-finite transformation".into(),
+                        });
+                    }
                 }
             }
             Shape::Disk => {

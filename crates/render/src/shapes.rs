@@ -14,6 +14,8 @@ use std::sync::Arc;
 
 use crate::accel::{AccelShape, Hit};
 use crate::geometry::Ray;
+use glam::Mat3A;
+
 use crate::math::{Frame, Mat4, PI, Vec2, Vec3, normalize_or_zero_fast, rsqrt};
 
 /// γ(n) of Higham / pbrt: a bound on the relative error of n floating-point operations.
@@ -40,6 +42,10 @@ pub enum ShapeGeom {
         to_world: Mat4,
         normal: Vec3,
     },
+    /// The unit sphere at the origin of `to_world`'s object space: an ellipsoid under a
+    /// non-uniform scale or a shear (CENG795 spheres with transformations). Hits are found in
+    /// object space; normals go to world space by the inverse transpose.
+    Ellipsoid(Box<Ellipsoid>),
     Plane {
         point: Vec3,
         normal: Vec3,
@@ -61,6 +67,9 @@ impl ShapeGeom {
             },
             ShapeGeom::Disk { to_world, .. } => AccelShape::Disk {
                 to_world: *to_world,
+            },
+            ShapeGeom::Ellipsoid(e) => AccelShape::Ellipsoid {
+                to_world: e.to_world,
             },
             ShapeGeom::Plane { point, normal } => AccelShape::Plane {
                 point: *point,
@@ -87,6 +96,7 @@ impl ShapeGeom {
                 let ey = to_world.y_axis.truncate();
                 PI * ex.cross(ey).length()
             }
+            ShapeGeom::Ellipsoid(e) => e.area,
             ShapeGeom::Plane { .. } => f32::INFINITY,
         }
     }
@@ -96,6 +106,80 @@ impl ShapeGeom {
             ShapeGeom::Mesh { indices, .. } => indices.len(),
             _ => 0,
         }
+    }
+}
+
+/// An affinely transformed unit sphere (see [`ShapeGeom::Ellipsoid`]).
+#[derive(Clone, Debug)]
+pub struct Ellipsoid {
+    pub to_world: Mat4,
+    pub to_object: Mat4,
+    /// The inverse transpose of the linear part, as columns (object normal → world normal).
+    pub normal_matrix: Mat3A,
+    /// |det| of the linear part.
+    pub det: f32,
+    /// World surface area (numerical: ellipsoids have no closed form).
+    pub area: f32,
+}
+
+impl Ellipsoid {
+    /// `None` for a singular or non-finite transform.
+    pub fn new(to_world: Mat4) -> Option<Ellipsoid> {
+        let to_object = to_world.inverse();
+        let det = to_world.determinant().abs();
+        if det == 0.0 || !det.is_finite() || !to_object.is_finite() || !to_world.is_finite() {
+            return None;
+        }
+        let normal_matrix = Mat3A::from_mat4(to_object).transpose();
+        let mut e = Ellipsoid {
+            to_world,
+            to_object,
+            normal_matrix,
+            det,
+            area: 0.0,
+        };
+        // ∫ over the unit sphere of the area element ratio, midpoint rule in (cos θ, φ) — an
+        // equal-area grid, so each cell is 4π/(N·M) of the sphere.
+        let (n, m) = (256, 512);
+        let mut sum = 0.0f64;
+        for i in 0..n {
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            for j in 0..m {
+                let phi = 2.0 * PI * (j as f32 + 0.5) / m as f32;
+                let dir = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                sum += e.area_scale(dir) as f64;
+            }
+        }
+        e.area = (sum * 4.0 * std::f64::consts::PI / (n * m) as f64) as f32;
+        Some(e)
+    }
+
+    /// World area per object area at the unit-sphere point `dir`: |det M| · |M⁻ᵀ n| (the
+    /// object normal is `dir`).
+    #[inline]
+    pub fn area_scale(&self, dir: Vec3) -> f32 {
+        self.det * (self.normal_matrix * dir).length()
+    }
+
+    /// World normal at the unit-sphere point `dir`.
+    #[inline]
+    pub fn normal(&self, dir: Vec3) -> Vec3 {
+        (self.normal_matrix * dir).normalize_or(Vec3::Z)
+    }
+
+    /// World point and conservative error bound for the unit-sphere point `dir`: the object
+    /// point's own error (γ₅ per unit coordinate, pbrt-v4's sphere bound) carried through the
+    /// affine map with its rounding (pbrt-v4's `Transform` of an interval point).
+    #[inline]
+    pub fn point(&self, dir: Vec3) -> (Vec3, Vec3) {
+        let p = self.to_world.transform_point3a(dir);
+        let m = Mat3A::from_mat4(self.to_world);
+        let abs_m = Mat3A::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+        let obj_err = dir.abs() * gamma(5);
+        let t = Vec3::from_vec4(self.to_world.w_axis).abs();
+        let err = abs_m * obj_err + gamma(3) * (abs_m * dir.abs() + t);
+        (p, err)
     }
 }
 
@@ -346,6 +430,16 @@ pub fn interaction(
             };
             let dpdu = Vec3::from_vec4(to_world.x_axis);
             (p, p_error, *normal, *normal, dpdu, uv)
+        }
+        ShapeGeom::Ellipsoid(e) => {
+            // Re-project the object-space hit onto the unit sphere, as for spheres.
+            let local = e.to_object.transform_point3a(ray.at(hit.t));
+            let dir = local.normalize_or(Vec3::Z);
+            let (p, p_error) = e.point(dir);
+            let n = e.normal(dir);
+            let uv = if reads.uv { sphere_uv(dir) } else { Vec2::ZERO };
+            let dpdu = e.to_world.transform_vector3a(Vec3::new(-dir.y, dir.x, 0.0));
+            (p, p_error, n, n, dpdu, uv)
         }
         ShapeGeom::Plane { point, normal } => {
             let raw = ray.at(hit.t);

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use render::accel::prim::{intersect_disk, intersect_plane, intersect_sphere, intersect_triangle};
+use render::accel::prim::{
+    intersect_disk, intersect_ellipsoid, intersect_plane, intersect_sphere, intersect_triangle,
+};
 use render::accel::{Accel, AccelShape, Hit};
 use render::geometry::Ray;
 use render::math::{Mat4, Vec3};
@@ -629,6 +631,18 @@ fn brute(shapes: &[AccelShape], ray: &Ray, mut t_max: f32) -> Option<Hit> {
                     });
                 }
             }
+            AccelShape::Ellipsoid { to_world } => {
+                if let Some(t) = intersect_ellipsoid(ray, &to_world.inverse(), t_max) {
+                    t_max = t;
+                    best = Some(Hit {
+                        t,
+                        shape: s,
+                        prim: 0,
+                        u: 0.0,
+                        v: 0.0,
+                    });
+                }
+            }
             &AccelShape::Plane { point, normal } => {
                 if let Some(t) = intersect_plane(ray, point, normal, t_max) {
                     t_max = t;
@@ -669,9 +683,21 @@ fn random_scene(rng: &mut Rng, n_shapes: usize, tris_per_mesh: usize) -> Vec<Acc
                     indices: indices.into(),
                 }
             }
-            4 | 5 => AccelShape::Sphere {
+            4 => AccelShape::Sphere {
                 center: rng.vec(-5.0, 5.0),
                 radius: rng.range(0.05, 1.5),
+            },
+            5 => AccelShape::Ellipsoid {
+                to_world: Mat4::from_translation(rng.vec(-5.0, 5.0).into())
+                    * Mat4::from_axis_angle(rng.dir().into(), rng.range(0.0, 6.0))
+                    * Mat4::from_scale(
+                        Vec3::new(
+                            rng.range(0.05, 1.5),
+                            rng.range(0.05, 1.5),
+                            rng.range(0.05, 1.5),
+                        )
+                        .into(),
+                    ),
             },
             6 => AccelShape::Disk {
                 to_world: Mat4::from_translation(rng.vec(-5.0, 5.0).into())

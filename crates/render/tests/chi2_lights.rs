@@ -1,6 +1,6 @@
 //! χ² tests of emitter sampling against its density: for every light type that is sampled by
 //! solid angle (spheres by cone, triangles / rectangles / disks by area converted to solid
-//! angle, environment maps by their 2D distribution), the directions produced by
+//! angle, ellipsoids by their object sphere, environment maps by their 2D distribution), the directions produced by
 //! `Light::sample_li` from a receiver must follow `Light::pdf_li` (evaluated on the point the
 //! direction reaches). Several receivers per light, including one inside a sphere light and
 //! grazing configurations. α = 0.01 with the Šidák correction over all cases; fixed seeds.
@@ -234,6 +234,25 @@ fn emitter_sampling_matches_its_pdf() {
             ],
         ),
         ("envmap", env_scene(), vec![Vec3::ZERO]),
+        (
+            // A sphere under a non-uniform scale and rotation: an ellipsoid, sampled
+            // uniformly on its object sphere (not by area) with the matching density.
+            "ellipsoid",
+            emitting(
+                Shape::Sphere {
+                    center: Vec3::new(0.2, 0.0, 0.0),
+                    radius: 1.0,
+                },
+                Mat4::from_translation(Vec3::new(0.0, 0.0, 3.0))
+                    * Mat4::from_rotation_y(0.6)
+                    * Mat4::from_scale(Vec3::new(1.5, 0.5, 0.8)),
+            ),
+            vec![
+                Vec3::ZERO,
+                Vec3::new(2.0, 1.0, 0.5),
+                Vec3::new(0.0, 0.3, 1.9),
+            ],
+        ),
     ];
     let n: usize = cases.iter().map(|c| c.2.len()).sum();
     let level = sidak(0.01, n);

@@ -137,6 +137,26 @@ impl Shape {
     }
 }
 
+/// Whether the linear part of `m` is a rotation (or reflection) times a uniform scale, so a
+/// sphere stays a sphere under `m` (columns orthogonal and of equal length, to 1e-5).
+pub fn is_similarity(m: &Mat4) -> bool {
+    let c = [
+        m.x_axis.truncate(),
+        m.y_axis.truncate(),
+        m.z_axis.truncate(),
+    ];
+    let l2 = c.map(|v| v.length_squared());
+    let s2 = l2[0].max(l2[1]).max(l2[2]);
+    if !(s2 > 0.0 && s2.is_finite()) {
+        return false;
+    }
+    let tol = 1e-5 * s2;
+    l2.iter().all(|&l| (l - s2).abs() <= 2.0 * tol)
+        && c[0].dot(c[1]).abs() <= tol
+        && c[0].dot(c[2]).abs() <= tol
+        && c[1].dot(c[2]).abs() <= tol
+}
+
 /// An indexed triangle mesh. `normals` and `uvs` are either empty or one per position.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {

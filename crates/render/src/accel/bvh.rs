@@ -27,7 +27,8 @@ use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 
 use super::prim::{
-    Tri4, WoopRay, WoopRay4, intersect_disk, intersect_sphere, tri4_any, tri4_closest,
+    Tri4, WoopRay, WoopRay4, intersect_disk, intersect_ellipsoid, intersect_sphere, tri4_any,
+    tri4_closest,
 };
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3, Vec4};
@@ -64,6 +65,7 @@ pub(crate) enum Prim {
     Tri([Vec3; 3]),
     Sphere { center: Vec3, radius: f32 },
     Disk { to_object: Mat4 },
+    Ellipsoid { to_object: Mat4 },
 }
 
 /// What a leaf stores: triangles four at a time, analytic shapes one at a time.
@@ -72,6 +74,7 @@ pub(crate) enum Packet {
     Tri4(Tri4),
     Sphere { center: Vec3, radius: f32 },
     Disk { to_object: Mat4 },
+    Ellipsoid { to_object: Mat4 },
 }
 
 /// Children per node.
@@ -364,6 +367,11 @@ impl WideBvh {
                     self.ids
                         .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
                 }
+                Prim::Ellipsoid { to_object } => {
+                    self.packets.push(Packet::Ellipsoid { to_object });
+                    self.ids
+                        .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
+                }
             }
         }
         for (c, ci) in tris[..nt].chunks(4).zip(tri_ids[..nt].chunks(4)) {
@@ -527,6 +535,13 @@ impl WideBvh {
                                 best_lane = 0;
                             }
                         }
+                        Packet::Ellipsoid { to_object } => {
+                            if let Some(t) = ellipsoid_packet(ray, to_object, t_max) {
+                                t_max = t;
+                                best = Some(((first + pi) as u32, t, 0.0, 0.0));
+                                best_lane = 0;
+                            }
+                        }
                     }
                 }
             }
@@ -602,6 +617,9 @@ impl WideBvh {
                             sphere_packet(ray, *center, *radius, t_max).is_some()
                         }
                         Packet::Disk { to_object } => disk_packet(ray, to_object, t_max).is_some(),
+                        Packet::Ellipsoid { to_object } => {
+                            ellipsoid_packet(ray, to_object, t_max).is_some()
+                        }
                     };
                     if hit {
                         return true;
@@ -629,6 +647,12 @@ fn sphere_packet(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Option<f32
 #[inline(never)]
 fn disk_packet(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<(f32, f32, f32)> {
     intersect_disk(ray, to_object, t_max)
+}
+
+/// The ellipsoid test, out of line for the same reason as [`sphere_packet`].
+#[inline(never)]
+fn ellipsoid_packet(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<f32> {
+    intersect_ellipsoid(ray, to_object, t_max)
 }
 
 /// A binary tree in obvhs's layout (children of an inner node at `first_index` and

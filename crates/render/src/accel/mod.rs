@@ -76,7 +76,7 @@ use std::sync::Arc;
 use obvhs::aabb::Aabb;
 
 use crate::geometry::Ray;
-use crate::math::{Mat4, Vec3, Vec3A};
+use crate::math::{Mat3, Mat4, Vec3, Vec3A};
 use bvh::{Prim, WideBvh};
 
 /// A shape as the acceleration structure sees it.
@@ -93,6 +93,11 @@ pub enum AccelShape {
     },
     /// Unit disk in the z=0 plane of its object space, placed by `to_world` (may scale non-uniformly).
     Disk {
+        to_world: Mat4,
+    },
+    /// Unit sphere at the origin of its object space, placed by an affine `to_world` (an
+    /// ellipsoid when it scales non-uniformly).
+    Ellipsoid {
         to_world: Mat4,
     },
     /// Infinite plane (not bounded: kept out of the BVH, tested separately).
@@ -189,6 +194,21 @@ impl Accel {
                     ids.push([s, 0]);
                     aabbs.push(bb);
                 }
+                &AccelShape::Ellipsoid { to_world } => {
+                    let to_object = to_world.inverse();
+                    let det = to_world.determinant();
+                    if det == 0.0
+                        || !det.is_finite()
+                        || !to_object.is_finite()
+                        || !to_world.is_finite()
+                    {
+                        continue;
+                    }
+                    prims.push(Prim::Ellipsoid { to_object });
+                    ids.push([s, 0]);
+                    let (lo, hi) = ellipsoid_bounds(&to_world);
+                    aabbs.push(Aabb::new(lo, hi));
+                }
                 &AccelShape::Plane { point, normal } => {
                     if normal.is_finite() && point.is_finite() && normal != Vec3::ZERO {
                         planes.push((point, normal, s));
@@ -263,6 +283,18 @@ fn ray_ok(ray: &Ray, t_max: f32) -> bool {
     let z = (ray.o - ray.o) + (ray.d - ray.d);
     // `cmpne(..).any()`: one mask test, where `!=` would branch on each component.
     t_max > 0.0 && z.x + z.y + z.z == 0.0 && ray.d.cmpne(Vec3::ZERO).any()
+}
+
+/// The exact world bounds of the unit sphere under `to_world`: along axis i the extent is
+/// the length of the i-th row of the linear part (max of e_i · M x over |x| = 1), rounded
+/// outwards so the box contains every hit the robust test can report.
+pub fn ellipsoid_bounds(to_world: &Mat4) -> (Vec3, Vec3) {
+    let m = Mat3::from_mat4(*to_world).transpose();
+    let half = Vec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length())
+        * (1.0 + 4.0 * f32::EPSILON);
+    let c = Vec3::from_vec4(to_world.w_axis);
+    let pad = c.abs() * (2.0 * f32::EPSILON);
+    (c - half - pad, c + half + pad)
 }
 
 #[cfg(test)]

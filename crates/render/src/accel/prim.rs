@@ -433,6 +433,18 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
     }
 }
 
+/// Ray–ellipsoid intersection: the unit sphere at the origin of the object space that
+/// `to_object` (the inverse of the ellipsoid's `to_world`) maps into. The ray goes to object
+/// space unnormalised, so the affine map preserves `t` and the robust sphere test applies.
+#[inline]
+pub fn intersect_ellipsoid(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<f32> {
+    let local = Ray::new(
+        to_object.transform_point3a(ray.o),
+        to_object.transform_vector3a(ray.d),
+    );
+    intersect_sphere(&local, Vec3::ZERO, 1.0, t_max)
+}
+
 /// Ray–disk intersection. `to_object` is the inverse of the disk's `to_world`; the disk is the
 /// unit disk in the object-space `z = 0` plane. Returns `(t, x, y)` with object-space `x, y`.
 /// `t` is preserved by the affine map, so it is in the caller's ray-parameter units.

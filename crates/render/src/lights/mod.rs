@@ -27,7 +27,8 @@ use crate::geometry::Ray;
 use crate::math::{Frame, INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance, rsqrt};
 use crate::sampling::distrib::{Distribution1D, Distribution2D};
 use crate::sampling::warp;
-use crate::shapes::{ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
+use crate::shapes::{Ellipsoid, ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
+use glam::Mat3A;
 
 /// A point on an emitter with what it sends towards the receiver.
 #[derive(Clone, Copy, Debug)]
@@ -558,6 +559,28 @@ impl Light {
                         let uv = if textured { disk_uv(d) } else { Vec2::ZERO };
                         (p, err, *normal * flip, uv, 1.0 / *area)
                     }
+                    ShapeGeom::Ellipsoid(e) => {
+                        let (dir, pdf_solid) = sample_ellipsoid(e, r.p, u)?;
+                        let (p, p_error) = e.point(dir);
+                        let n = e.normal(dir) * flip;
+                        let to = p - r.p;
+                        let d2 = to.length_squared();
+                        if d2 <= 0.0 || !pdf_solid.is_finite() {
+                            return None;
+                        }
+                        let wi = to / d2.sqrt();
+                        if n.dot(-wi) <= 0.0 && !*two_sided {
+                            return None;
+                        }
+                        let uv = if textured { sphere_uv(dir) } else { Vec2::ZERO };
+                        return Some(LightSample {
+                            wi,
+                            li: scene.color(radiance, uv),
+                            pdf: pdf_solid,
+                            delta: false,
+                            target: ShadowTarget::Surface { p, p_error, n },
+                        });
+                    }
                     ShapeGeom::Plane { .. } => return None,
                 };
                 let to = p - r.p;
@@ -613,7 +636,10 @@ impl Light {
                 if cos_l == 0.0 || (!*two_sided && si.shading.n.dot(-wi) < 0.0) {
                     return 0.0;
                 }
-                d2 / (cos_l.abs() * *area)
+                match &info.geom {
+                    ShapeGeom::Ellipsoid(e) => ellipsoid_pdf(e, r.p, wi, si.p, cos_l.abs()),
+                    _ => d2 / (cos_l.abs() * *area),
+                }
             }
             _ => 0.0,
         }
@@ -703,6 +729,62 @@ fn sample_sphere(
             n,
         },
     })
+}
+
+/// An ellipsoid light seen from `from`: the unit-sphere point (object space) and the
+/// solid-angle density of the world direction towards it. Outside, the cone of directions
+/// the object sphere subtends from the object-space receiver is sampled uniformly (as for
+/// spheres) and carried to world directions by the Jacobian of the linear map A = M⁻¹ on
+/// directions, dω_obj/dω = |det A| / |A w|³; inside, uniformly on the object sphere by area.
+fn sample_ellipsoid(e: &Ellipsoid, from: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
+    let o = e.to_object.transform_point3a(from);
+    let dc2 = o.length_squared();
+    if dc2 > 1.0 + 1e-4 {
+        let dc = dc2.sqrt();
+        let cos_max = (1.0 - 1.0 / dc2).max(0.0).sqrt();
+        let axis = -o / dc;
+        let w = Frame::from_normal(axis).to_world(warp::square_to_uniform_cone(u, cos_max));
+        // Nearest intersection with the unit sphere (clamped for grazing directions).
+        let b = w.dot(-o);
+        let disc = (1.0 - (-o - b * w).length_squared()).max(0.0);
+        let q = (o + w * (b - disc.sqrt())).normalize_or(axis);
+        let (p, _) = e.point(q);
+        let wi = (p - from).normalize_or_zero();
+        let a = Mat3A::from_mat4(e.to_object);
+        let aw = (a * wi).length();
+        Some((q, warp::uniform_cone_pdf(cos_max) / (e.det * aw * aw * aw)))
+    } else {
+        let q = warp::square_to_uniform_sphere(u);
+        let (p, _) = e.point(q);
+        let to = p - from;
+        let cos_l = e.normal(q).dot(to.normalize_or_zero()).abs();
+        if cos_l == 0.0 {
+            return None;
+        }
+        Some((
+            q,
+            to.length_squared() / (cos_l * 4.0 * PI * e.area_scale(q)),
+        ))
+    }
+}
+
+/// The density [`sample_ellipsoid`] gives the direction `wi` from `from` towards the point
+/// `on` of the ellipsoid (`cos_l`: |cosine| at `on`).
+fn ellipsoid_pdf(e: &Ellipsoid, from: Vec3, wi: Vec3, on: Vec3, cos_l: f32) -> f32 {
+    let o = e.to_object.transform_point3a(from);
+    let dc2 = o.length_squared();
+    if dc2 > 1.0 + 1e-4 {
+        let cos_max = (1.0 - 1.0 / dc2).max(0.0).sqrt();
+        let a = Mat3A::from_mat4(e.to_object);
+        let aw = (a * wi).length();
+        warp::uniform_cone_pdf(cos_max) / (e.det * aw * aw * aw)
+    } else {
+        if cos_l == 0.0 {
+            return 0.0;
+        }
+        let q = e.to_object.transform_point3a(on).normalize_or(Vec3::Z);
+        (on - from).length_squared() / (cos_l * 4.0 * PI * e.area_scale(q))
+    }
 }
 
 fn sphere_pdf(center: Vec3, radius: f32, from: Vec3, on: Vec3) -> f32 {

@@ -163,6 +163,13 @@ pub fn light_bounds(scene: &Scene, light: &Light) -> Option<LightBounds> {
                         ..any(*center - r, *center + r)
                     })
                 }
+                ShapeGeom::Ellipsoid(e) => {
+                    let (lo, hi) = crate::accel::ellipsoid_bounds(&e.to_world);
+                    Some(LightBounds {
+                        two_sided: *two_sided,
+                        ..any(lo, hi)
+                    })
+                }
                 ShapeGeom::Disk { to_world, normal } => {
                     let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
                         .map(|(x, y)| to_world.transform_point3a(Vec3::new(x, y, 0.0)));

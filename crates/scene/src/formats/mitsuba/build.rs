@@ -827,6 +827,13 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         if !to_world.is_finite() {
             to_world = Mat4::IDENTITY;
         }
+        if matches!(shape, Shape::Sphere { .. }) && !crate::model::is_similarity(&to_world) {
+            self.ctx.warn(
+                pl.loc(),
+                "sphere with a non-uniform scale or shear in to_world (Mitsuba 3 rejects it): \
+                 rendered as the ellipsoid it describes",
+            );
+        }
         let flip_normals = pl.props.bool("flip_normals", false)?;
         let mut material = None;
         let mut emission = None;
