@@ -5,18 +5,19 @@
 //! - default: Whitted ray tracing (every point light and area emitter sampled at the first
 //!   non-delta surface, mirror/glass chains followed up to `-d` segments), `-x N` → N×N
 //!   stratified samples per pixel;
-//! - `-l` (ambient lighting) and `-c` (caustics): unidirectional path tracing with next-event
-//!   estimation and MIS, N×N×`-q` samples per pixel. Caustics of *area* emitters (Emissive
-//!   shapes, PlaneLight) through mirrors and glass appear; caustics of point lights cannot be
-//!   found by a unidirectional tracer (a delta light seen through a delta chain) and stay dark;
-//! - `-g`: linear workflow — radiance is encoded with the sRGB curve when written (PNG);
-//!   without `-g` the image holds the original's raw values (the linear value becomes the
-//!   8-bit display value, as the C# program wrote it), i.e. it looks darker-midtoned;
+//! - `-l` (ambient lighting): unidirectional path tracing with next-event estimation and
+//!   MIS, N×N×`-q` samples per pixel, without caustic paths (emission reached through
+//!   specular bounces after a diffuse one), as the write-up describes; `-c` (caustics) counts
+//!   them too. Caustics of point lights cannot be found by a unidirectional tracer either way;
+//! - `-g`: the write-up's linear workflow: input colours are linearised with the power 2.2
+//!   when the scene is read, and the output is encoded with the inverse power 1/2.2; without
+//!   `-g` the image holds the original's raw values (the linear value becomes the 8-bit
+//!   display value, as the C# program wrote it);
 //! - `-m`: use every core; without it one thread, like the original;
 //! - `-s`: also write render layers `OUT_emission.png`, `_direct`, `_indirect`, `_reflection`,
 //!   `_refraction` (they sum to the beauty image, see `render::layers`);
-//! - `--scale F` multiplies the resolution; `--post` adds a bloom; `--prog` rewrites the
-//!   output after every pass; `--dof` uses a `DofCamera`'s lens (without it the scene's
+//! - `--scale F` multiplies the resolution; `--post` adds a bloom; `--prog` renders passes of
+//!   one sample per pixel placed by the 2D Halton sequence and rewrites the output after each; `--dof` uses a `DofCamera`'s lens (without it the scene's
 //!   DofCamera is a pinhole); `-r`/`-t` always turn on the thin lens.
 
 use std::path::PathBuf;
@@ -29,9 +30,9 @@ use render::integrators::Integrator;
 use render::layers::{Layer, render_layers};
 use render::post::{Bloom, bloom};
 use scene::formats::comp30019::{DEFAULT_DEPTH, camera_to_world};
-use scene::{Document, IntegratorDesc, Mat4, PathDesc, Projection, SamplerKind, SceneDesc, Vec3};
+use scene::{IntegratorDesc, Mat4, PathDesc, Projection, SamplerKind, SceneDesc, Vec3};
 
-use crate::{Extras, Failure, RenderJob, load_scene, print_warnings, render_scene_with};
+use crate::{Extras, Failure, RenderJob, print_warnings, render_scene_with};
 
 /// Render a COMP30019 scene. Default camera: at the origin looking along +z, y up, 60°
 /// horizontal field of view (a scene's `Camera`/`DofCamera` line replaces it).
@@ -134,13 +135,10 @@ pub(crate) struct Plan {
 
 /// Apply the flags to a loaded scene.
 pub(crate) fn plan(args: &Args) -> Result<Plan, Failure> {
-    let Document::Scene(desc) = load_scene(&args.file, &[])? else {
-        return Err(Failure::input(format!(
-            "{}: not a COMP30019 scene",
-            args.file.display()
-        )));
-    };
-    let mut desc = *desc;
+    // `-g`: the scene's colours are gamma-encoded; linearise them (power 2.2).
+    let mut desc =
+        scene::formats::comp30019::load_with_gamma(&args.file, args.gamma.then_some(GAMMA))
+            .map_err(Failure::input)?;
     if args.width == 0 || args.height == 0 {
         return Err(Failure::input("--width and --height must be positive"));
     }
@@ -220,13 +218,20 @@ pub(crate) fn plan(args: &Args) -> Result<Plan, Failure> {
         },
         _ => Projection::Perspective { fov, fov_axis },
     };
-    sensor.sampler.kind = SamplerKind::Stratified;
+    // --prog: one sample per pixel a pass, placed by the 2D Halton sequence (the write-up).
+    sensor.sampler.kind = if args.prog {
+        SamplerKind::Halton
+    } else {
+        SamplerKind::Stratified
+    };
 
     // Integrator and samples.
     let path_traced = args.ambient || args.caustics;
     let integrator = if path_traced {
         IntegratorDesc::Path(PathDesc {
             max_depth: args.depth.map_or(-1, |d| d.min(i32::MAX as u32) as i32),
+            // Without -c, diffuse → specular → light paths are not counted (the write-up).
+            caustics: args.caustics,
             ..PathDesc::default()
         })
     } else {
@@ -256,21 +261,23 @@ pub(crate) fn plan(args: &Args) -> Result<Plan, Failure> {
     })
 }
 
+/// The display gamma of `-g` (input colours are raised to it, output to its inverse).
+const GAMMA: f32 = 2.2;
+
 /// The develop step: bloom (on linear radiance), then the display convention.
 fn develop(post: bool, gamma: bool) -> impl Fn(&mut Image) + Sync {
     move |img: &mut Image| {
         if post {
             bloom(img, &Bloom::default());
         }
-        if !gamma {
-            // The writer encodes with the sRGB curve; pre-decode so the file holds raw values.
-            for p in &mut img.pixels {
-                *p = render::math::Vec3::new(
-                    srgb_to_linear(p.x.clamp(0.0, 1.0)),
-                    srgb_to_linear(p.y.clamp(0.0, 1.0)),
-                    srgb_to_linear(p.z.clamp(0.0, 1.0)),
-                );
-            }
+        // The writer encodes with the sRGB curve; pre-decode so that the file holds the raw
+        // values (without -g) or the inverse-gamma-encoded ones, v^(1/2.2) (with -g).
+        let encode = |v: f32| {
+            let v = v.clamp(0.0, 1.0);
+            srgb_to_linear(if gamma { v.powf(1.0 / GAMMA) } else { v })
+        };
+        for p in &mut img.pixels {
+            *p = render::math::Vec3::new(encode(p.x), encode(p.y), encode(p.z));
         }
     }
 }

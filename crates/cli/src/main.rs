@@ -659,6 +659,12 @@ pub(crate) fn render_scene_with(
         },
         time_budget: job.time.map(Duration::from_secs_f64),
         cancel,
+        // Progressive output: one sample per pixel a pass, the image rewritten after each.
+        pass_duration: if extras.progressive {
+            Duration::ZERO
+        } else {
+            RenderOptions::default().pass_duration
+        },
         ..RenderOptions::default()
     };
     memory::check(

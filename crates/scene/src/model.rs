@@ -656,6 +656,10 @@ pub struct PathDesc {
     /// Directions traced from the first vertex, each carrying 1/N of the throughput
     /// (CENG795 `SplittingFactor`).
     pub splitting: u32,
+    /// Count caustic paths: emission reached through a chain of specular (delta) bounces
+    /// after a diffuse (non-delta) one. COMP30019 without `-c` drops them, as its write-up
+    /// does; everything else keeps them.
+    pub caustics: bool,
 }
 
 impl Default for PathDesc {
@@ -670,6 +674,7 @@ impl Default for PathDesc {
             light_samples: 1,
             all_lights: false,
             splitting: 1,
+            caustics: true,
         }
     }
 }

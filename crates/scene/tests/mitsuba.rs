@@ -174,6 +174,7 @@ fn mitsuba_defaults() {
             light_samples: 1,
             all_lights: false,
             splitting: 1,
+            caustics: true,
         })
     );
     assert_eq!(s.sensors.len(), 1);

@@ -58,6 +58,8 @@ pub struct PathConfig {
     pub all_lights: bool,
     /// Continuations traced from the first vertex, each with 1/N of the throughput.
     pub splitting: u32,
+    /// Count emission reached through delta bounces after a non-delta one (caustics).
+    pub caustics: bool,
 }
 
 impl PathConfig {
@@ -78,6 +80,7 @@ impl PathConfig {
             light_samples: 1,
             all_lights: false,
             splitting: 1,
+            caustics: true,
         }
     }
 
@@ -94,6 +97,7 @@ impl PathConfig {
             light_samples: d.light_samples.max(1),
             all_lights: d.all_lights,
             splitting: d.splitting.max(1),
+            caustics: d.caustics,
             ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
         }
     }
@@ -111,6 +115,7 @@ impl PathConfig {
             light_samples: 1,
             all_lights: true,
             splitting: 1,
+            caustics: true,
         }
     }
 }
@@ -235,6 +240,8 @@ struct PathState {
     split: bool,
     /// Beer–Lambert absorption coefficient of the dielectric the path is inside, if any.
     absorption: Option<Vec3>,
+    /// A non-delta bounce happened: emission found after delta bounces from here is caustic.
+    diffuse_seen: bool,
 }
 
 impl PathState {
@@ -249,7 +256,14 @@ impl PathState {
             first: None,
             split: cfg.splitting > 1,
             absorption: None,
+            diffuse_seen: false,
         }
+    }
+
+    /// The segment just traced follows a delta bounce that follows a non-delta one.
+    #[inline]
+    fn caustic(&self) -> bool {
+        self.diffuse_seen && self.prev.is_some_and(|p| p.delta)
     }
 }
 
@@ -532,6 +546,7 @@ fn vertex(
 
     if let Some(li) = scene.shape_light(si)
         && !(st.depth == 0 && cfg.hide_emitters)
+        && (cfg.caustics || !st.caustic())
     {
         let light = &scene.lights[li as usize];
         let le = light.le(scene, si);
@@ -796,6 +811,7 @@ fn scatter(
     }
     next.throughput *= bs.weight;
     next.eta *= bs.eta;
+    next.diffuse_seen |= !bs.delta;
     if bs.transmission {
         // Entering through the front (the side the normal points to) or leaving.
         next.absorption = if wo.z > 0.0 {

@@ -508,7 +508,9 @@ impl Light {
                 let textured = matches!(radiance, ColorParam::Texture(_));
                 let (p, p_error, n, uv, pdf) = match &info.geom {
                     ShapeGeom::Sphere { center, radius } => {
-                        return sample_sphere(scene, *center, *radius, flip, radiance, r, u);
+                        return sample_sphere(
+                            scene, *center, *radius, flip, *two_sided, radiance, r, u,
+                        );
                     }
                     ShapeGeom::Mesh {
                         positions,
@@ -665,11 +667,13 @@ impl Light {
 }
 
 /// Mitsuba's sphere emitter sampling: uniform cone from outside, uniform area from inside.
+#[allow(clippy::too_many_arguments)]
 fn sample_sphere(
     scene: &Scene,
     center: Vec3,
     radius: f32,
     flip: f32,
+    two_sided: bool,
     radiance: &ColorParam,
     r: &Receiver,
     u: Vec2,
@@ -709,7 +713,7 @@ fn sample_sphere(
     }
     let wi = to / d2.sqrt();
     let n = n_out * flip;
-    if n.dot(-wi) <= 0.0 {
+    if n.dot(-wi) <= 0.0 && !two_sided {
         // Sampled the inside of the sphere from outside (or vice versa): no emission.
         return None;
     }

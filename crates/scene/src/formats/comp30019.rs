@@ -15,8 +15,9 @@
 //! - `Refractive` → smooth dielectric with the given IOR. The colour is Beer's-law
 //!   transmittance per unit length: absorption σ = −ln(colour); all-zero (the templates' unused
 //!   value) or all-one means clear glass.
-//! - `Emissive` → the colour is the radiance of an area emitter on every shape using it
-//!   (two-sided on triangles, planes and meshes, outward on spheres); the surface itself is black.
+//! - `Emissive` → the colour is the radiance of an area emitter on every shape using it,
+//!   emitting on both sides (the write-up's furnace test sees an emissive sphere from inside);
+//!   the surface itself is black.
 //! - `Glossy` → GGX rough conductor with α = 0.15 tinted by the colour, i.e. a blurry mirror
 //!   (the original's glossy stage perturbs mirror directions).
 //! - `PointLight` → isotropic point light of intensity π·colour: the original shades
@@ -25,14 +26,21 @@
 //! - `Plane` → infinite plane; `Sphere`, `Triangle` → themselves; `ObjModel` → the OBJ mesh
 //!   scaled uniformly and offset. Model paths resolve against the working directory first (the
 //!   original ran from its project root), then against the scene file's folder.
-//! - Extensions (the extended submission): `PhysicalMaterial "id" (r,g,b) roughness metallic
-//!   [ior]` (GGX: rough conductor if metallic ≥ 0.5, else rough plastic; α = roughness²),
-//!   `PlaneLight ["id"] (pos) (w,h) (rx,ry,rz) (r,g,b) multiplier` (a w×h rectangle facing −y
-//!   before rotation, radiance colour × multiplier, one-sided),
+//! - Extensions, in the write-up's grammar (`seeds/comp30019-ray-tracer.txt`):
+//!   `PhysicalMaterial "id" TYPE (r,g,b) ior (er,eg,eb) emission_multiplier, roughness,
+//!   specular_value`: TYPE as for `Material`; roughness is the GGX α (Reflective → rough
+//!   conductor, Refractive → rough dielectric when > 0); specular_value is a glossy coat over
+//!   a Diffuse colour (rough plastic) and the coat weight of Glossy (whose α is the core
+//!   Glossy's when roughness is 0); emission colour × multiplier makes any type an emitter.
+//!   `PlaneLight ["id"] (pos) (w,h) (rx,ry,rz) (r,g,b) multiplier`: a w×h rectangle facing −y
+//!   before rotation, one-sided, radiance colour × multiplier / (w·h) (the write-up divides
+//!   the multiplier by the area so that a light's power does not depend on its size).
 //!   `BlenderObjModel ["id"] "path" (offset) scale (rx,ry,rz) "material"`,
 //!   `Camera fovH (pos) (rx,ry,rz)`, `DofCamera fovH (pos) (rx,ry,rz) focus_distance
-//!   aperture_radius`. Rotations are Euler angles in degrees applied Z, then X, then Y (Unity's
-//!   order): R = Ry·Rx·Rz.
+//!   aperture_radius`. Rotations are Euler angles in degrees in the write-up's order XYZ:
+//!   about x, then y, then z (fixed axes), R = Rz·Ry·Rx.
+//! - `-g` (the `comp30019` command): input colours are gamma-encoded and linearised with the
+//!   power 2.2 ([`load_with_gamma`]); the output is encoded with the inverse power.
 //! - Default camera: at the origin looking along +z, y up, 60° horizontal field of view,
 //!   400×400, one stratified sample per pixel, Whitted integrator (depth [`DEFAULT_DEPTH`]).
 
@@ -159,6 +167,8 @@ impl<'a> Line<'a> {
 struct Parser<'a> {
     file: Arc<PathBuf>,
     cwd: Option<&'a Path>,
+    /// `-g`: input colours are gamma-encoded; linearise them with this power (2.2).
+    gamma: Option<f32>,
     desc: SceneDesc,
     /// Material id → (index, line).
     materials: HashMap<String, (MaterialId, u32)>,
@@ -175,10 +185,31 @@ struct Parser<'a> {
 /// Parse scene text; `file` names error locations and the folder model paths fall back to,
 /// `cwd` is tried first for model paths.
 pub fn parse(text: &str, file: &Path, cwd: Option<&Path>) -> Result<SceneDesc> {
+    parse_with(text, file, cwd, None)
+}
+
+/// Load a COMP30019 scene as the course's `-g` reads it: every input colour (materials,
+/// emission, lights) raised to the power `gamma` (2.2), i.e. linearised.
+pub fn load_with_gamma(path: &Path, gamma: Option<f32>) -> Result<SceneDesc> {
+    let bytes = crate::read_file(path)
+        .map_err(|e| LoadError::new(Loc::file(path), format!("cannot read scene file: {e}")))?;
+    let text = String::from_utf8_lossy(&bytes);
+    let cwd = std::env::current_dir().ok();
+    parse_with(&text, path, cwd.as_deref(), gamma)
+}
+
+/// [`parse`], linearising input colours with the power `gamma` when given (`-g`).
+pub fn parse_with(
+    text: &str,
+    file: &Path,
+    cwd: Option<&Path>,
+    gamma: Option<f32>,
+) -> Result<SceneDesc> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut p = Parser {
         file: Arc::new(file.to_path_buf()),
         cwd,
+        gamma,
         desc: SceneDesc {
             source: file.to_path_buf(),
             ..SceneDesc::default()
@@ -218,7 +249,8 @@ pub fn parse(text: &str, file: &Path, cwd: Option<&Path>) -> Result<SceneDesc> {
 }
 
 const F_MATERIAL: &str = "Material \"id\" TYPE (r, g, b) ior";
-const F_PHYSICAL: &str = "PhysicalMaterial \"id\" (r, g, b) roughness metallic [ior]";
+const F_PHYSICAL: &str = "PhysicalMaterial \"id\" TYPE (r, g, b) ior (er, eg, eb) \
+                          emission_multiplier, roughness, specular_value";
 const F_POINT: &str = "PointLight \"id\" (x, y, z) (r, g, b)";
 const F_PLANE_LIGHT: &str =
     "PlaneLight [\"id\"] (x, y, z) (w, h) (rx, ry, rz) (r, g, b) multiplier";
@@ -231,11 +263,12 @@ const F_BLENDER: &str =
 const F_CAMERA: &str = "Camera fovH (x, y, z) (rx, ry, rz)";
 const F_DOF: &str = "DofCamera fovH (x, y, z) (rx, ry, rz) focus_distance aperture_radius";
 
-/// Unity's Euler order: rotate about z, then x, then y (degrees).
-pub fn euler_zxy(r: Vec3) -> Mat4 {
-    Mat4::from_rotation_y(r.y.to_radians())
+/// The write-up's Euler order XYZ (degrees): rotate about x, then y, then z (fixed axes),
+/// R = Rz·Ry·Rx.
+pub fn euler_xyz(r: Vec3) -> Mat4 {
+    Mat4::from_rotation_z(r.z.to_radians())
+        * Mat4::from_rotation_y(r.y.to_radians())
         * Mat4::from_rotation_x(r.x.to_radians())
-        * Mat4::from_rotation_z(r.z.to_radians())
 }
 
 /// Camera-to-world for a COMP30019 camera at `pos` with rotation `rot` (its view is +z, up
@@ -245,6 +278,14 @@ pub fn camera_to_world(pos: Vec3, rot: Mat4) -> Mat4 {
 }
 
 impl Parser<'_> {
+    /// A colour as the renderer uses it: linearised under `-g`.
+    fn color(&self, c: Rgb) -> Rgb {
+        match self.gamma {
+            Some(g) => c.powf(g),
+            None => c,
+        }
+    }
+
     fn line(&mut self, toks: Vec<Tok<'_>>, line: u32, end_col: u32) -> Result<()> {
         let cmd = toks[0].text;
         let form = match cmd {
@@ -307,13 +348,15 @@ impl Parser<'_> {
                 }
                 let m = self.material_ref(&l, 6)?;
                 self.entity(&l, id)?;
+                // Emissive spheres emit on both sides like every emissive shape of the
+                // course (the write-up's furnace test looks at one from inside).
                 self.shape(
                     &l,
                     id,
                     Shape::Sphere { center, radius },
                     Mat4::IDENTITY,
                     m,
-                    false,
+                    true,
                 );
                 Ok(())
             }
@@ -368,7 +411,7 @@ impl Parser<'_> {
                 }
                 let mesh = self.mesh(&l, first, path)?;
                 let to_world = Mat4::from_translation(offset)
-                    * euler_zxy(rot)
+                    * euler_xyz(rot)
                     * Mat4::from_scale(Vec3::splat(scale));
                 self.shape(&l, id, Shape::Mesh(mesh), to_world, m, true);
                 Ok(())
@@ -476,6 +519,7 @@ impl Parser<'_> {
         if color.min_element() < 0.0 {
             return Err(l.err_at(3, "a non-negative colour"));
         }
+        let color = self.color(color);
         let mut emission = None;
         let material = match kind {
             "Diffuse" => Material::Diffuse {
@@ -521,50 +565,106 @@ impl Parser<'_> {
         Ok(())
     }
 
+    /// `PhysicalMaterial "id" TYPE (r, g, b) ior (er, eg, eb) emission_multiplier, roughness,
+    /// specular_value`: the core types with a roughness (GGX α) and a specular coat, and an
+    /// emission of its own (see the module docs).
     fn physical_material(&mut self, l: &Line) -> Result<()> {
         let name = l.str(1, "a material id")?;
-        let color = l.vec3(2, "the colour (r, g, b)")?;
-        let roughness = l.num(5, "the roughness in [0, 1]")?;
-        let metallic = l.num(6, "the metallic factor in [0, 1]")?;
-        let ior = if l.is_num(7) {
-            l.num(7, "the IOR")?
-        } else {
-            1.5
-        };
+        let kind = l.str(2, "a material type")?;
+        let color = l.vec3(3, "the colour (r, g, b)")?;
+        let ior = l.num(6, "the index of refraction")?;
+        let emission_color = l.vec3(7, "the emission colour (r, g, b)")?;
+        let multiplier = l.num(10, "the emission multiplier")?;
+        let roughness = l.num(11, "the roughness in [0, 1]")?;
+        let specular = l.num(12, "the specular value in [0, 1]")?;
         if color.min_element() < 0.0 {
-            return Err(l.err_at(2, "a non-negative colour"));
+            return Err(l.err_at(3, "a non-negative colour"));
+        }
+        if emission_color.min_element() < 0.0 || multiplier < 0.0 {
+            return Err(l.err_at(7, "a non-negative emission colour and multiplier"));
         }
         if !(0.0..=1.0).contains(&roughness) {
-            return Err(l.err_at(5, "a roughness in [0, 1]"));
+            return Err(l.err_at(11, "a roughness in [0, 1]"));
         }
-        if !(0.0..=1.0).contains(&metallic) {
-            return Err(l.err_at(6, "a metallic factor in [0, 1]"));
+        if !(0.0..=1.0).contains(&specular) {
+            return Err(l.err_at(12, "a specular value in [0, 1]"));
         }
-        if ior <= 0.0 {
-            return Err(l.err_at(7, "a positive IOR"));
-        }
-        let alpha = (roughness * roughness).max(1e-3);
-        let material = if metallic >= 0.5 {
-            Material::RoughConductor {
+        let (color, emission_color) = (self.color(color), self.color(emission_color));
+        let alpha = roughness.max(1e-3);
+        let rough = roughness > 0.0;
+        let coat = |diffuse: Rgb, specular: f32, alpha: f32| Material::RoughPlastic {
+            distribution: MicrofacetDistribution::Ggx,
+            alpha,
+            diffuse_reflectance: ColorParam::Const(diffuse),
+            specular_reflectance: ColorParam::constant(specular),
+            int_ior: if ior > 1.0 { ior } else { 1.5 },
+            ext_ior: 1.0,
+            nonlinear: false,
+        };
+        let mut emission = emission_color * multiplier;
+        let material = match kind {
+            "Diffuse" if specular > 0.0 => coat(color, specular, alpha),
+            "Diffuse" => Material::Diffuse {
+                reflectance: ColorParam::Const(color),
+            },
+            "Reflective" if rough => Material::RoughConductor {
                 distribution: MicrofacetDistribution::Ggx,
                 alpha_u: FloatParam::Const(alpha),
                 alpha_v: FloatParam::Const(alpha),
                 eta: Vec3::ZERO,
                 k: Vec3::ZERO,
-                specular_reflectance: ColorParam::Const(color),
+                specular_reflectance: ColorParam::Const(unused_is_white(color)),
+            },
+            "Reflective" => Material::Mirror {
+                reflectance: ColorParam::Const(unused_is_white(color)),
+            },
+            "Refractive" => {
+                if ior <= 0.0 {
+                    return Err(l.err_at(6, "a positive index of refraction"));
+                }
+                if rough {
+                    Material::RoughDielectric {
+                        distribution: MicrofacetDistribution::Ggx,
+                        alpha_u: FloatParam::Const(alpha),
+                        alpha_v: FloatParam::Const(alpha),
+                        int_ior: ior,
+                        ext_ior: 1.0,
+                        specular_reflectance: ColorParam::constant(1.0),
+                        specular_transmittance: ColorParam::Const(unused_is_white(color)),
+                    }
+                } else {
+                    Material::Dielectric {
+                        int_ior: ior,
+                        ext_ior: 1.0,
+                        specular_reflectance: ColorParam::constant(1.0),
+                        specular_transmittance: ColorParam::constant(1.0),
+                        absorption: beer_absorption(color),
+                    }
+                }
             }
-        } else {
-            Material::RoughPlastic {
-                distribution: MicrofacetDistribution::Ggx,
-                alpha,
-                diffuse_reflectance: ColorParam::Const(color),
-                specular_reflectance: ColorParam::constant(1.0),
-                int_ior: ior,
-                ext_ior: 1.0,
-                nonlinear: false,
+            "Emissive" => {
+                if emission == Vec3::ZERO {
+                    emission = color;
+                }
+                Material::Diffuse {
+                    reflectance: ColorParam::constant(0.0),
+                }
+            }
+            // Glossy: a diffuse base under a glossy coat of weight `specular_value` (1 when
+            // given as 0) and roughness α (the core Glossy's when 0).
+            "Glossy" => coat(
+                color,
+                if specular > 0.0 { specular } else { 1.0 },
+                if rough { alpha } else { GLOSSY_ALPHA },
+            ),
+            _ => {
+                return Err(l.err_at(2, &format!("a material type: one of {MATERIAL_TYPES}")));
             }
         };
-        self.add_material(l, name, material)?;
+        let id = self.add_material(l, name, material)?;
+        if emission != Vec3::ZERO {
+            self.emissive.insert(id.0, emission);
+        }
         Ok(())
     }
 
@@ -585,6 +685,7 @@ impl Parser<'_> {
         if color.min_element() < 0.0 {
             return Err(l.err_at(5, "a non-negative colour"));
         }
+        let color = self.color(color);
         self.light_id(l, id)?;
         self.desc.emitters.push(EmitterDesc {
             emitter: crate::Emitter::Point {
@@ -614,9 +715,12 @@ impl Parser<'_> {
         if color.min_element() < 0.0 || mult < 0.0 {
             return Err(l.err_at(first + 8, "a non-negative colour and multiplier"));
         }
+        // The write-up: the multiplier is divided by the light's area, so a light emits the
+        // same power whatever its size.
+        let radiance = self.color(color) * (mult / (w * h));
         // Rectangle: [-1,1]² in z = 0 facing +z; turned to face −y (a ceiling light).
         let to_world = Mat4::from_translation(pos)
-            * euler_zxy(rot)
+            * euler_xyz(rot)
             * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2)
             * Mat4::from_scale(Vec3::new(0.5 * w, 0.5 * h, 1.0));
         let black = self.desc.add_material(MaterialDesc {
@@ -632,7 +736,7 @@ impl Parser<'_> {
             to_world,
             material: Some(black),
             emission: Some(AreaEmission {
-                radiance: ColorParam::Const(color * mult),
+                radiance: ColorParam::Const(radiance),
                 two_sided: false,
                 loc: l.loc(l.toks[0].col),
             }),
@@ -680,7 +784,7 @@ impl Parser<'_> {
         self.camera = Some((
             Camera {
                 projection,
-                to_world: camera_to_world(pos, euler_zxy(rot)),
+                to_world: camera_to_world(pos, euler_xyz(rot)),
                 near_clip: 1e-4,
                 far_clip: 1e6,
             },
@@ -807,6 +911,96 @@ mod tests {
         assert_eq!(t[0].col, 3);
     }
 
+    /// The write-up's `PhysicalMaterial` form loads, each field doing what it says.
+    #[test]
+    fn physical_material_in_the_write_up_form() {
+        let s = scene(
+            "PhysicalMaterial \"Coat\" Diffuse (.8, .2, .2) 1.5 (0, 0, 0) 0, 0.3, 0.5\n\
+             PhysicalMaterial \"Matte\" Diffuse (.5, .5, .5) 1 (0, 0, 0) 0, 0, 0\n\
+             PhysicalMaterial \"Brushed\" Reflective (1, .8, .4) 1 (0, 0, 0) 0, 0.2, 1\n\
+             PhysicalMaterial \"Frosted\" Refractive (1, 1, 1) 1.5 (0, 0, 0) 0, 0.1, 0\n\
+             PhysicalMaterial \"Glow\" Diffuse (.5, .5, .5) 1 (1, .5, .25) 4, 0, 0\n\
+             Sphere \"S\" (0, 0, 3) 1 \"Glow\"\n",
+        )
+        .unwrap();
+        let m = |i: usize| &s.materials[i].material;
+        assert!(
+            matches!(m(0), Material::RoughPlastic { alpha, .. } if (*alpha - 0.3).abs() < 1e-6)
+        );
+        assert!(matches!(m(1), Material::Diffuse { .. }));
+        assert!(matches!(m(2), Material::RoughConductor { .. }));
+        assert!(matches!(m(3), Material::RoughDielectric { int_ior, .. } if *int_ior == 1.5));
+        let e = s.shapes[0]
+            .emission
+            .as_ref()
+            .expect("emission colour × multiplier");
+        assert_eq!(e.radiance, ColorParam::Const(Vec3::new(4.0, 2.0, 1.0)));
+        assert!(e.two_sided);
+        // The invented syntax of before is refused with the write-up's form in the message.
+        let msg = err("PhysicalMaterial \"P\" (.8, .2, .2) 0.4 0 1.5\n");
+        assert!(msg.contains("PhysicalMaterial \"id\" TYPE"), "{msg}");
+    }
+
+    /// The write-up divides a PlaneLight's multiplier by its area: its power (radiance ×
+    /// area) does not depend on its size.
+    #[test]
+    fn plane_light_power_is_independent_of_size() {
+        let power = |w: f32, h: f32| {
+            let s = scene(&format!(
+                "PlaneLight \"L\" (0, 1, 0) ({w}, {h}) (0, 0, 0) (1, .5, .5) 6\n"
+            ))
+            .unwrap();
+            let ColorParam::Const(l) = s.shapes[0].emission.as_ref().unwrap().radiance else {
+                panic!("constant radiance")
+            };
+            let m = s.shapes[0].to_world;
+            let area = 4.0 * m.x_axis.truncate().cross(m.y_axis.truncate()).length();
+            l * area
+        };
+        let (a, b) = (power(0.5, 0.5), power(2.0, 3.0));
+        assert!((a - b).abs().max_element() < 1e-5, "{a} vs {b}");
+        assert!(
+            (a - Vec3::new(6.0, 3.0, 3.0)).abs().max_element() < 1e-5,
+            "{a}"
+        );
+    }
+
+    /// Euler angles in the write-up's order XYZ: about x first, then y, then z.
+    #[test]
+    fn euler_order_is_xyz() {
+        let r = Vec3::new(30.0, 40.0, 50.0);
+        let expected = Mat4::from_rotation_z(50f32.to_radians())
+            * Mat4::from_rotation_y(40f32.to_radians())
+            * Mat4::from_rotation_x(30f32.to_radians());
+        assert!(euler_xyz(r).abs_diff_eq(expected, 1e-6));
+        // X then Y sends +y to +z and then to +x; Unity's ZXY order would not.
+        let v = euler_xyz(Vec3::new(90.0, 90.0, 0.0)).transform_vector3(Vec3::Y);
+        assert!((v - Vec3::X).length() < 1e-6, "{v}");
+    }
+
+    /// `-g` linearises every input colour with the power 2.2.
+    #[test]
+    fn gamma_linearises_input_colours() {
+        let text = "Material \"M\" Diffuse (.5, .5, .5) 1\n\
+                    PointLight \"P\" (0, 1, 0) (.5, .5, .5)\n\
+                    Sphere \"S\" (0, 0, 3) 1 \"M\"\n";
+        let plain = parse_with(text, Path::new("t.txt"), None, None).unwrap();
+        let lin = parse_with(text, Path::new("t.txt"), None, Some(2.2)).unwrap();
+        let albedo = |d: &SceneDesc| match &d.materials[0].material {
+            Material::Diffuse {
+                reflectance: ColorParam::Const(c),
+            } => c.x,
+            _ => panic!(),
+        };
+        assert_eq!(albedo(&plain), 0.5);
+        assert!((albedo(&lin) - 0.5f32.powf(2.2)).abs() < 1e-6);
+        let intensity = |d: &SceneDesc| match d.emitters[0].emitter {
+            crate::Emitter::Point { intensity, .. } => intensity.x,
+            _ => panic!(),
+        };
+        assert!((intensity(&lin) / intensity(&plain) - 0.5f32.powf(1.2)).abs() < 1e-6);
+    }
+
     #[test]
     fn sample_scene_parses() {
         let s = scene(
@@ -835,7 +1029,8 @@ mod tests {
         let s = scene(
             "Material \"a\" Reflective (0,0,0) 1\nMaterial \"b\" Refractive (1,1,1) 1.4\n\
              Material \"c\" Refractive (0.5,1,1) 1.4\nMaterial \"d\" Emissive (2,2,2) 1\n\
-             Material \"e\" Glossy (1,1,1) 1\nPhysicalMaterial \"f\" (1,0,0) 0.5 0\n\
+             Material \"e\" Glossy (1,1,1) 1\n\
+             PhysicalMaterial \"f\" Glossy (1,0,0) 1.5 (0,0,0) 0, 0.5, 0.5\n\
              Sphere \"s\" (0,0,3) 1 \"d\"\n",
         )
         .unwrap();
