@@ -72,9 +72,23 @@ pub(crate) enum Prim {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Packet {
     Tri4(Tri4),
-    Sphere { center: Vec3, radius: f32 },
-    Disk { to_object: Mat4 },
-    Ellipsoid { to_object: Mat4 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+    /// A disk or an ellipsoid: a unit shape seen through `to_object`. One variant for both
+    /// keeps the leaf loop's dispatch as small as it was with disks alone.
+    Transformed {
+        to_object: Mat4,
+        kind: Unit,
+    },
+}
+
+/// The unit shape of a [`Packet::Transformed`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Unit {
+    Disk,
+    Sphere,
 }
 
 /// Children per node.
@@ -363,12 +377,18 @@ impl WideBvh {
                         .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
                 }
                 Prim::Disk { to_object } => {
-                    self.packets.push(Packet::Disk { to_object });
+                    self.packets.push(Packet::Transformed {
+                        to_object,
+                        kind: Unit::Disk,
+                    });
                     self.ids
                         .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
                 }
                 Prim::Ellipsoid { to_object } => {
-                    self.packets.push(Packet::Ellipsoid { to_object });
+                    self.packets.push(Packet::Transformed {
+                        to_object,
+                        kind: Unit::Sphere,
+                    });
                     self.ids
                         .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
                 }
@@ -528,17 +548,12 @@ impl WideBvh {
                                 best_lane = 0;
                             }
                         }
-                        Packet::Disk { to_object } => {
-                            if let Some((t, x, y)) = disk_packet(ray, to_object, t_max) {
+                        Packet::Transformed { to_object, kind } => {
+                            if let Some((t, x, y)) =
+                                transformed_packet(ray, to_object, *kind, t_max)
+                            {
                                 t_max = t;
                                 best = Some(((first + pi) as u32, t, x, y));
-                                best_lane = 0;
-                            }
-                        }
-                        Packet::Ellipsoid { to_object } => {
-                            if let Some(t) = ellipsoid_packet(ray, to_object, t_max) {
-                                t_max = t;
-                                best = Some(((first + pi) as u32, t, 0.0, 0.0));
                                 best_lane = 0;
                             }
                         }
@@ -616,9 +631,8 @@ impl WideBvh {
                         Packet::Sphere { center, radius } => {
                             sphere_packet(ray, *center, *radius, t_max).is_some()
                         }
-                        Packet::Disk { to_object } => disk_packet(ray, to_object, t_max).is_some(),
-                        Packet::Ellipsoid { to_object } => {
-                            ellipsoid_packet(ray, to_object, t_max).is_some()
+                        Packet::Transformed { to_object, kind } => {
+                            transformed_packet(ray, to_object, *kind, t_max).is_some()
                         }
                     };
                     if hit {
@@ -643,16 +657,19 @@ fn sphere_packet(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Option<f32
     intersect_sphere(ray, center, radius, t_max)
 }
 
-/// The disk test, out of line for the same reason as [`sphere_packet`].
+/// The disk and ellipsoid tests, out of line for the same reason as [`sphere_packet`]:
+/// `(t, x, y)` with the disk's object-space hit `x, y` (0 for ellipsoids).
 #[inline(never)]
-fn disk_packet(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<(f32, f32, f32)> {
-    intersect_disk(ray, to_object, t_max)
-}
-
-/// The ellipsoid test, out of line for the same reason as [`sphere_packet`].
-#[inline(never)]
-fn ellipsoid_packet(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<f32> {
-    intersect_ellipsoid(ray, to_object, t_max)
+fn transformed_packet(
+    ray: &Ray,
+    to_object: &Mat4,
+    kind: Unit,
+    t_max: f32,
+) -> Option<(f32, f32, f32)> {
+    match kind {
+        Unit::Disk => intersect_disk(ray, to_object, t_max),
+        Unit::Sphere => intersect_ellipsoid(ray, to_object, t_max).map(|t| (t, 0.0, 0.0)),
+    }
 }
 
 /// A binary tree in obvhs's layout (children of an inner node at `first_index` and
