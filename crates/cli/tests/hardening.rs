@@ -427,3 +427,69 @@ fn a_depth_png_is_normalised() {
         png.pixels.len()
     );
 }
+
+/// Exit 1: the comparison ran and rejects (16 batches of the albedo AOV against a path-traced
+/// reference); exit 3: an output that cannot be written (a file inside /proc, whose folder
+/// exists, so the check before rendering passes and the write fails).
+#[test]
+fn a_rejected_comparison_exits_1_and_an_unwritable_output_3() {
+    let dir = temp_dir("exit13");
+    let render = |extra: &[&str], seed: usize, out: &Path, stderr: Option<&Path>| {
+        let mut c = penumbra();
+        c.current_dir(repo_root())
+            .args(["render", "scenes/cornell-box.xml", "--res", "16x16"])
+            .args(["--seed", &seed.to_string(), "-q", "-o"])
+            .arg(out)
+            .args(extra);
+        if let Some(s) = stderr {
+            c.arg("--stderr").arg(s);
+        }
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let reference = dir.join("ref.exr");
+    render(
+        &["--spp", "64"],
+        1000,
+        &reference,
+        Some(&dir.join("ref.stderr.exr")),
+    );
+    // The test side: 16 batches of 4 spp of the albedo AOV (a different image).
+    let batches: Vec<PathBuf> = (0..16).map(|k| dir.join(format!("b{k}.exr"))).collect();
+    for (k, b) in batches.iter().enumerate() {
+        render(&["--integrator", "albedo", "--spp", "4"], k, b, None);
+    }
+    let out = penumbra()
+        .arg("compare")
+        .arg(&reference)
+        .args(&batches)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let out = penumbra()
+        .current_dir(repo_root())
+        .args([
+            "render",
+            "scenes/cornell-box.xml",
+            "--res",
+            "8x8",
+            "--spp",
+            "1",
+            "-q",
+        ])
+        .args(["-o", "/proc/penumbra-cannot-write.exr"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("/proc/penumbra-cannot-write.exr"),
+        "{stderr}"
+    );
+}
