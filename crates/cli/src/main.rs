@@ -143,6 +143,138 @@ struct RenderArgs {
     quiet: bool,
     #[command(flatten)]
     view: ViewArgs,
+    #[command(flatten)]
+    transport: TransportArgs,
+}
+
+/// Light-transport and sampling overrides any format's scene takes (Mitsuba's names).
+#[derive(clap::Args, Debug, Default)]
+pub(crate) struct TransportArgs {
+    /// Longest path, in segments (Mitsuba `max_depth`; -1: unbounded); Whitted: recursion
+    /// depth.
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    max_depth: Option<i32>,
+    /// Russian roulette from this many segments on (Mitsuba `rr_depth`).
+    #[arg(long, value_name = "N")]
+    rr_depth: Option<u32>,
+    /// Sample generator: independent, stratified, halton or sobol.
+    #[arg(long, value_name = "KIND", value_parser = parse_sampler)]
+    sampler: Option<scene::SamplerKind>,
+    /// Reconstruction filter with Mitsuba's defaults: box, tent, gaussian or mitchell.
+    #[arg(long, value_name = "KIND", value_parser = parse_filter)]
+    filter: Option<scene::FilterDesc>,
+    /// Clamp every camera sample to this largest component (removes fireflies; biased).
+    #[arg(long, value_name = "X")]
+    clamp: Option<f32>,
+    /// Next-event estimation: on (default) or off (brute force: emitters only when hit).
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    nee: Option<bool>,
+}
+
+fn parse_sampler(s: &str) -> Result<scene::SamplerKind, String> {
+    use scene::SamplerKind as K;
+    match s {
+        "independent" => Ok(K::Independent),
+        "stratified" => Ok(K::Stratified),
+        "halton" => Ok(K::Halton),
+        "sobol" => Ok(K::Sobol),
+        _ => Err(format!(
+            "expected independent, stratified, halton or sobol, found '{s}'"
+        )),
+    }
+}
+
+fn parse_filter(s: &str) -> Result<scene::FilterDesc, String> {
+    use scene::FilterDesc as F;
+    match s {
+        "box" => Ok(F::Box { radius: 0.5 }),
+        "tent" => Ok(F::Tent { radius: 1.0 }),
+        "gaussian" => Ok(F::Gaussian {
+            stddev: 0.5,
+            radius: 2.0,
+        }),
+        "mitchell" => Ok(F::Mitchell {
+            b: 1.0 / 3.0,
+            c: 1.0 / 3.0,
+            radius: 2.0,
+        }),
+        _ => Err(format!(
+            "expected box, tent, gaussian or mitchell, found '{s}'"
+        )),
+    }
+}
+
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("expected on or off, found '{s}'")),
+    }
+}
+
+impl TransportArgs {
+    /// Apply the overrides to every integrator the scene may use (the scene's, each
+    /// sensor's, and `--integrator`'s) and to every sensor's sampler and film.
+    pub(crate) fn apply(
+        &self,
+        desc: &mut SceneDesc,
+        integrator: &mut Option<IntegratorDesc>,
+    ) -> Result<(), Failure> {
+        if let Some(c) = self.clamp
+            && !(c > 0.0 && c.is_finite())
+        {
+            return Err(Failure::input(format!(
+                "--clamp expects a positive number, found {c}"
+            )));
+        }
+        for s in &mut desc.sensors {
+            if let Some(k) = self.sampler {
+                s.sampler.kind = k;
+            }
+            if let Some(f) = self.filter {
+                s.film.filter = f;
+            }
+        }
+        let path_only = self.rr_depth.is_some() || self.clamp.is_some() || self.nee.is_some();
+        let targets = std::iter::once(&mut desc.integrator)
+            .chain(
+                desc.sensors
+                    .iter_mut()
+                    .filter_map(|s| s.integrator.as_mut()),
+            )
+            .chain(integrator.as_mut());
+        for i in targets {
+            match i {
+                IntegratorDesc::Path(p) => {
+                    if let Some(d) = self.max_depth {
+                        p.max_depth = d.max(-1);
+                    }
+                    if let Some(d) = self.rr_depth {
+                        p.rr = scene::RussianRoulette::Throughput { from_depth: d };
+                    }
+                    if let Some(c) = self.clamp {
+                        p.clamp = Some(c);
+                    }
+                    if let Some(n) = self.nee {
+                        p.nee = n;
+                    }
+                }
+                IntegratorDesc::Whitted { max_depth } if !path_only => {
+                    if let Some(d) = self.max_depth {
+                        *max_depth = d.max(0) as u32;
+                    }
+                }
+                _ if self.max_depth.is_some() || path_only => {
+                    return Err(Failure::input(
+                        "--max-depth, --rr-depth, --clamp and --nee apply to the path tracer \
+                         (and --max-depth to Whitted); this scene or --integrator uses another",
+                    ));
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Camera and light overrides (the CS-E5520 application's controls), applied to the scene
@@ -366,6 +498,7 @@ const MIN_BATCHES: usize = 16;
 
 /// An error for the user, with its exit code (see `Cli`'s after-help: 1 a test failed, 2 bad
 /// input or usage, 3 an output could not be written or another failure, 130 interrupted).
+#[derive(Debug)]
 pub(crate) struct Failure {
     message: String,
     code: u8,
@@ -401,6 +534,15 @@ impl Failure {
 }
 
 pub(crate) fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<Document, Failure> {
+    let xml = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    if !defines.is_empty() && (!xml || scene::formats::ceng795::is_ceng795_xml(path)) {
+        return Err(Failure::input(format!(
+            "{}: -D sets Mitsuba/Nori XML <default> parameters; this scene format has none",
+            path.display()
+        )));
+    }
     let opts = LoadOptions {
         defines: defines.to_vec(),
     };
@@ -491,6 +633,8 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
     };
     print_warnings(&desc);
     args.view.apply(&mut desc, args.sensor)?;
+    let mut args = args;
+    args.transport.apply(&mut desc, &mut args.integrator)?;
     // CENG795: without -o, every camera (or --camera NAME) renders to its own ImageName,
     // relative to the scene's folder.
     let named: Vec<usize> = match &args.camera {
@@ -882,5 +1026,94 @@ fn main() -> ExitCode {
             eprintln!("error: {}", f.message);
             ExitCode::from(f.code)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn transport(flags: &[&str]) -> TransportArgs {
+        #[derive(clap::Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            t: TransportArgs,
+        }
+        Wrap::try_parse_from(std::iter::once("x").chain(flags.iter().copied()))
+            .unwrap()
+            .t
+    }
+
+    fn scene_with(integrator: IntegratorDesc) -> SceneDesc {
+        let mut d = SceneDesc {
+            integrator,
+            ..SceneDesc::default()
+        };
+        d.sensors.push(scene::Sensor {
+            camera: scene::Camera {
+                projection: scene::Projection::Orthographic,
+                to_world: scene::Mat4::IDENTITY,
+                near_clip: 0.0,
+                far_clip: 1.0,
+            },
+            film: scene::Film {
+                width: 1,
+                height: 1,
+                crop: None,
+                filter: scene::FilterDesc::Box { radius: 0.5 },
+                output: None,
+                tonemap: None,
+            },
+            sampler: scene::SamplerDesc::default(),
+            integrator: None,
+            name: None,
+            loc: Default::default(),
+        });
+        d
+    }
+
+    /// Every flag lands in the scene description the renderer builds from.
+    #[test]
+    fn transport_flags_reach_the_scene() {
+        let t = transport(&[
+            "--max-depth",
+            "4",
+            "--rr-depth",
+            "2",
+            "--sampler",
+            "sobol",
+            "--filter",
+            "tent",
+            "--clamp",
+            "10",
+            "--nee",
+            "off",
+        ]);
+        let mut d = scene_with(IntegratorDesc::Path(scene::PathDesc::default()));
+        let mut cli = None;
+        t.apply(&mut d, &mut cli).unwrap();
+        let IntegratorDesc::Path(p) = &d.integrator else {
+            panic!()
+        };
+        assert_eq!(p.max_depth, 4);
+        assert_eq!(p.rr, scene::RussianRoulette::Throughput { from_depth: 2 });
+        assert_eq!(p.clamp, Some(10.0));
+        assert!(!p.nee);
+        assert_eq!(d.sensors[0].sampler.kind, scene::SamplerKind::Sobol);
+        assert_eq!(
+            d.sensors[0].film.filter,
+            scene::FilterDesc::Tent { radius: 1.0 }
+        );
+        // Whitted takes --max-depth, and refuses path-tracer-only flags.
+        let mut w = scene_with(IntegratorDesc::Whitted { max_depth: 8 });
+        transport(&["--max-depth", "3"])
+            .apply(&mut w, &mut None)
+            .unwrap();
+        assert_eq!(w.integrator, IntegratorDesc::Whitted { max_depth: 3 });
+        assert!(
+            transport(&["--clamp", "1"])
+                .apply(&mut w, &mut None)
+                .is_err()
+        );
     }
 }

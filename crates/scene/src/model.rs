@@ -660,6 +660,9 @@ pub struct PathDesc {
     /// after a diffuse (non-delta) one. COMP30019 without `-c` drops them, as its write-up
     /// does; everything else keeps them.
     pub caustics: bool,
+    /// Clamp every camera sample's radiance to this maximum component (scaled down as a
+    /// whole, pbrt-v4's `maxcomponentvalue`): biased, removes fireflies.
+    pub clamp: Option<f32>,
 }
 
 impl Default for PathDesc {
@@ -675,6 +678,7 @@ impl Default for PathDesc {
             all_lights: false,
             splitting: 1,
             caustics: true,
+            clamp: None,
         }
     }
 }

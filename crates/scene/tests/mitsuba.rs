@@ -175,6 +175,7 @@ fn mitsuba_defaults() {
             all_lights: false,
             splitting: 1,
             caustics: true,
+            clamp: None,
         })
     );
     assert_eq!(s.sensors.len(), 1);

@@ -115,6 +115,11 @@ impl Integrator {
         mut done: impl FnMut(T, Vec3),
     ) {
         if let Integrator::Path(cfg) = self {
+            // A separate instantiation for clamping: the default loop is untouched.
+            if let Some(max) = cfg.clamp {
+                let clamped = |tag, l| done(tag, path::clamp_sample(l, max));
+                return path::li_batched(scene, cfg, template, next, clamped);
+            }
             return path::li_batched(scene, cfg, template, next, done);
         }
         let mut sampler = template.clone();

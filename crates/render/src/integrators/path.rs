@@ -60,6 +60,8 @@ pub struct PathConfig {
     pub splitting: u32,
     /// Count emission reached through delta bounces after a non-delta one (caustics).
     pub caustics: bool,
+    /// Largest component a camera sample may have (scaled down as a whole above it).
+    pub clamp: Option<f32>,
 }
 
 impl PathConfig {
@@ -81,6 +83,7 @@ impl PathConfig {
             all_lights: false,
             splitting: 1,
             caustics: true,
+            clamp: None,
         }
     }
 
@@ -98,6 +101,7 @@ impl PathConfig {
             all_lights: d.all_lights,
             splitting: d.splitting.max(1),
             caustics: d.caustics,
+            clamp: d.clamp,
             ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
         }
     }
@@ -116,6 +120,7 @@ impl PathConfig {
             all_lights: true,
             splitting: 1,
             caustics: true,
+            clamp: None,
         }
     }
 }
@@ -223,6 +228,14 @@ struct Previous {
     /// always 1 here).
     dir_pdf: f32,
     delta: bool,
+}
+
+/// `l` scaled down so that its largest component is at most `max` (pbrt-v4's
+/// `maxcomponentvalue`).
+#[inline]
+pub fn clamp_sample(l: Vec3, max: f32) -> Vec3 {
+    let m = l.max_element();
+    if m > max { l * (max / m) } else { l }
 }
 
 /// The state of a path between two segments.
