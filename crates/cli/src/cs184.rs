@@ -86,6 +86,10 @@ pub struct Args {
     /// Uniform hemisphere sampling instead of light sampling.
     #[arg(short = 'H')]
     pub hemisphere: bool,
+    /// Accumulate bounces (CS184's isAccumBounces): 1 sums every bounce up to -m, 0 keeps
+    /// only light that bounced exactly -m times.
+    #[arg(short = 'o', default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=1))]
+    pub accumulate: u8,
     /// Seed of the sample streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -145,11 +149,12 @@ pub(crate) fn apply(
     if args.threads == Some(0) {
         return Err(Failure::input("-t expects at least 1 thread"));
     }
-    desc.integrator = IntegratorDesc::Path(cs184_path(
-        args.max_depth,
-        args.light_samples,
-        args.hemisphere,
-    ));
+    let mut path = cs184_path(args.max_depth, args.light_samples, args.hemisphere);
+    if args.accumulate == 0 {
+        // Bounce m: the camera segment plus m more.
+        path.only_depth = Some(args.max_depth.saturating_add(1));
+    }
+    desc.integrator = IntegratorDesc::Path(path);
     if let Some(env) = &args.envmap {
         desc.emitters.push(EmitterDesc {
             emitter: envmap_emitter(env),

@@ -365,3 +365,43 @@ fn every_shared_dae_renders_with_its_own_camera() {
         assert!(mean > 0.0, "{}: black image", f.display());
     }
 }
+
+/// CS184's `-o 0` (isAccumBounces off) keeps only light of exactly the m-th bounce: the
+/// images of bounces 0, 1 and 2 add up to the accumulated image of depth 2 (block t-test),
+/// (if `-o 0` were ignored the sum would be three times it), and each bounce carries light.
+#[test]
+fn single_bounce_images_add_up_to_the_accumulated_one() {
+    let dae = load("scenes/cs184/floor_sphere.dae");
+    let accumulated = reference(&batches(&dae, &integrator(false), 16, 16, 700));
+    let bounce = |m: u32| {
+        let mut p = cs184_path(2, 1, false);
+        p.only_depth = Some(m + 1);
+        IntegratorDesc::Path(p)
+    };
+    let parts: Vec<Vec<Image>> = (0..3)
+        .map(|m| batches(&dae, &bounce(m), 16, 16, 800 + 100 * m as u64))
+        .collect();
+    let sums: Vec<Image> = (0..16)
+        .map(|k| {
+            let mut s = parts[0][k].clone();
+            for part in &parts[1..] {
+                for (a, b) in s.pixels.iter_mut().zip(&part[k].pixels) {
+                    *a += *b;
+                }
+            }
+            s
+        })
+        .collect();
+    let r = compare(&accumulated, &TestImages::Batches(sums)).unwrap();
+    println!("bounce sum: {r}");
+    assert!(r.passed, "{r}");
+    let mean = |i: &Image| i.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>();
+    let total: f64 = mean(&parts[0][0]) + mean(&parts[1][0]) + mean(&parts[2][0]);
+    for (m, part) in parts.iter().enumerate() {
+        let share = mean(&part[0]) / total;
+        assert!(
+            share > 1e-3 && share < 0.99,
+            "bounce {m}: {share} of the light"
+        );
+    }
+}

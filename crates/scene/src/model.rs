@@ -663,6 +663,9 @@ pub struct PathDesc {
     /// Clamp every camera sample's radiance to this maximum component (scaled down as a
     /// whole, pbrt-v4's `maxcomponentvalue`): biased, removes fireflies.
     pub clamp: Option<f32>,
+    /// Keep only light that reached the camera along exactly this many segments (CS184's
+    /// `-o 0`, `isAccumBounces = false`: only the last bounce).
+    pub only_depth: Option<u32>,
 }
 
 impl Default for PathDesc {
@@ -679,6 +682,7 @@ impl Default for PathDesc {
             splitting: 1,
             caustics: true,
             clamp: None,
+            only_depth: None,
         }
     }
 }

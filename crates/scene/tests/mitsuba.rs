@@ -176,6 +176,7 @@ fn mitsuba_defaults() {
             splitting: 1,
             caustics: true,
             clamp: None,
+            only_depth: None,
         })
     );
     assert_eq!(s.sensors.len(), 1);

@@ -114,7 +114,9 @@ impl Integrator {
         mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
         mut done: impl FnMut(T, Vec3),
     ) {
-        if let Integrator::Path(cfg) = self {
+        if let Integrator::Path(cfg) = self
+            && cfg.only_depth.is_none()
+        {
             // A separate instantiation for clamping: the default loop is untouched.
             if let Some(max) = cfg.clamp {
                 let clamped = |tag, l| done(tag, path::clamp_sample(l, max));

@@ -62,6 +62,8 @@ pub struct PathConfig {
     pub caustics: bool,
     /// Largest component a camera sample may have (scaled down as a whole above it).
     pub clamp: Option<f32>,
+    /// Keep only contributions of paths with exactly this many segments.
+    pub only_depth: Option<u32>,
 }
 
 impl PathConfig {
@@ -84,6 +86,7 @@ impl PathConfig {
             splitting: 1,
             caustics: true,
             clamp: None,
+            only_depth: None,
         }
     }
 
@@ -102,6 +105,7 @@ impl PathConfig {
             splitting: d.splitting.max(1),
             caustics: d.caustics,
             clamp: d.clamp,
+            only_depth: d.only_depth,
             ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
         }
     }
@@ -121,6 +125,7 @@ impl PathConfig {
             splitting: 1,
             caustics: true,
             clamp: None,
+            only_depth: None,
         }
     }
 }
@@ -220,6 +225,20 @@ pub trait PathRecorder {
 pub struct NoRecorder;
 impl PathRecorder for NoRecorder {}
 
+/// Sums the contributions of paths with exactly `depth` segments (one bounce only).
+pub struct DepthFilter {
+    pub depth: u32,
+    pub sum: Vec3,
+}
+
+impl PathRecorder for DepthFilter {
+    fn contribution(&mut self, l: Vec3, c: Contribution) {
+        if c.depth == self.depth {
+            self.sum += l;
+        }
+    }
+}
+
 /// Where the previous vertex was and how its direction sample was drawn.
 #[derive(Clone, Copy)]
 struct Previous {
@@ -281,6 +300,14 @@ impl PathState {
 }
 
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConfig) -> Vec3 {
+    if let Some(depth) = cfg.only_depth {
+        let mut rec = DepthFilter {
+            depth,
+            sum: Vec3::ZERO,
+        };
+        li_recorded(scene, cray, sampler, cfg, &mut rec);
+        return rec.sum;
+    }
     li_recorded(scene, cray, sampler, cfg, &mut NoRecorder)
 }
 
