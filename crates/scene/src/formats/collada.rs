@@ -308,11 +308,23 @@ impl<'a, 'input> Ctx<'a, 'input> {
         for c in n.children().filter(|c| c.is_element()) {
             let t = match c.tag_name().name() {
                 "matrix" => {
-                    let v = self.floats(c)?;
+                    let mut v = self.floats(c)?;
                     if v.len() != 16 {
-                        return Err(
-                            self.err(c, format!("<matrix> expects 16 numbers, found {}", v.len()))
+                        // CS184's parser reads 16 values from a stringstream: a value past
+                        // the end reads as 0 (C++11) and extra values are never read.
+                        self.warn(
+                            c,
+                            format!(
+                                "<matrix> has {} numbers, 16 expected: read as the course's \
+                                 parser reads it (missing entries 0, extra ones ignored; the \
+                                 last row 0 0 0 1)",
+                                v.len()
+                            ),
                         );
+                        v.resize(16, 0.0);
+                        // The projective row, which an affine placement never uses, stays
+                        // (0 0 0 1) so the matrix remains invertible.
+                        v[12..].copy_from_slice(&[0.0, 0.0, 0.0, 1.0]);
                     }
                     // Row-major in the file; glam is column-major.
                     Mat4::from_cols_slice(&v).transpose()
@@ -1319,6 +1331,37 @@ mod tests {
         (a - b).abs().max_element() < 1e-5
     }
 
+    /// A `<matrix>` of 12 or 18 numbers renders as CS184's stream parser reads it (missing
+    /// entries 0, extra ignored), with a warning, instead of failing.
+    #[test]
+    fn short_and_long_matrices_are_read_leniently() {
+        let full = "2 0 0 0  0 4 0 0  0 0 1 3  0 0 0 1";
+        let reference = load(SMALL).unwrap();
+        let probe = |d: &SceneDesc| -> Vec<Vec3> {
+            d.shapes
+                .iter()
+                .flat_map(|s| {
+                    [Vec3::ZERO, Vec3::X, Vec3::Y].map(|p| s.to_world.transform_point3(p))
+                })
+                .collect()
+        };
+        for variant in [
+            "2 0 0 0  0 4 0 0  0 0 1 3",
+            "2 0 0 0  0 4 0 0  0 0 1 3  0 0 0 1  7 7",
+        ] {
+            let d = load(&SMALL.replace(full, variant)).unwrap();
+            assert!(
+                d.warnings
+                    .iter()
+                    .any(|w| w.message.contains("<matrix> has")),
+                "{:?}",
+                d.warnings
+            );
+            let (a, b) = (probe(&reference), probe(&d));
+            assert!(a.iter().zip(&b).all(|(x, y)| close(*x, *y)), "{variant}");
+        }
+    }
+
     #[test]
     fn small_scene_geometry_and_materials() {
         let d = load(SMALL).unwrap();
@@ -1480,7 +1523,6 @@ mod tests {
         );
         expect_err("Z_UP", "W_UP", "up_axis");
         expect_err("<xfov>60</xfov>", "<xfov>200</xfov>", "field of view");
-        expect_err("<matrix>2 0 0 0", "<matrix>2 0 0", "16 numbers");
         expect_err(
             "<area><color>2 3 4</color></area>",
             "<laser/>",
