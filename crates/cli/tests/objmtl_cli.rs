@@ -101,3 +101,53 @@ fn camera_and_light_flags() {
         assert_eq!(o.status.code(), Some(2), "{bad:?}");
     }
 }
+
+/// `map_Ke` is an emission texture: a quad emitting a black-and-white texture shows both,
+/// where a constant `Ke` quad is uniform.
+#[test]
+fn map_ke_textures_the_emission() {
+    let dir = temp_dir("map-ke");
+    // Left half black, right half white (wide enough that bilinear filtering only blends
+    // them near the middle).
+    let mut tex = render::film::Image::new(16, 2);
+    for (i, p) in tex.pixels.iter_mut().enumerate() {
+        if i % 16 >= 8 {
+            *p = render::math::Vec3::splat(1.0);
+        }
+    }
+    render::image_io::write_image(&dir.join("glow.png"), &tex).unwrap();
+    let obj = "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n\
+               vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl glow\nf 1/1 2/2 3/3 4/4\n";
+    std::fs::write(dir.join("quad.obj"), obj).unwrap();
+    let lit = |mtl: &str, name: &str| {
+        std::fs::write(dir.join("quad.mtl"), mtl).unwrap();
+        let out = dir.join(format!("{name}.exr"));
+        let o = render(
+            &dir.join("quad.obj"),
+            &out,
+            &[
+                "--look-from",
+                "0,0,3",
+                "--look-at",
+                "0,0,0",
+                "--up",
+                "0,1,0",
+                "--fov",
+                "40",
+            ],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = render::image_io::read_image(&out).unwrap();
+        // The quad fills the middle of the image: its left and right thirds of the centre row.
+        let row = img.height / 2;
+        let px = |x: u32| img.pixels[(row * img.width + x) as usize].x;
+        (px(img.width * 3 / 8), px(img.width * 5 / 8))
+    };
+    let (l, r) = lit("newmtl glow\nKd 0 0 0\nKe 1 1 1\n", "constant");
+    assert!(l > 0.5 && (l - r).abs() < 0.05, "constant Ke: {l} {r}");
+    let (l, r) = lit(
+        "newmtl glow\nKd 0 0 0\nKe 1 1 1\nmap_Ke glow.png\n",
+        "textured",
+    );
+    assert!(l < 0.05 && r > 0.5, "map_Ke: {l} {r}");
+}

@@ -17,7 +17,8 @@
 //! `map_Kd` replaces `Kd` (MTL says it multiplies; the course files use `Kd 1` with maps).
 //! 8-bit textures are linearised with power 2.2 as the course does; OBJ's `v` axis points up
 //! the image, so bitmaps get the uv transform (u, 1 − v). `Ke` becomes two-sided area
-//! emission of that radiance on the material's triangles. A missing texture file gives one
+//! emission of that radiance on the material's triangles; `map_Ke` an emission texture
+//! (replacing `Ke`, as `map_Kd` replaces `Kd`). A missing texture file gives one
 //! warning and the constant colour instead. `map_bump`/`bump`/`norm` are tangent-space normal
 //! maps (read raw, wrapping the material in `Material::NormalMap`). `map_d` (read raw: its
 //! alpha channel when the file has one, else its first channel) or `d` < 1 (`Tr` > 0) on a
@@ -69,6 +70,8 @@ pub struct MtlMaterial {
     /// Texture paths resolved against the MTL file's folder.
     pub map_kd: Option<PathBuf>,
     pub map_ks: Option<PathBuf>,
+    /// Emission texture (replaces `Ke`, as `map_Kd` replaces `Kd`).
+    pub map_ke: Option<PathBuf>,
     pub map_bump: Option<PathBuf>,
     pub map_d: Option<PathBuf>,
 }
@@ -88,6 +91,7 @@ impl MtlMaterial {
             illum: None,
             map_kd: None,
             map_ks: None,
+            map_ke: None,
             map_bump: None,
             map_d: None,
         }
@@ -172,7 +176,7 @@ pub fn parse_mtl(text: &str, file: &Path, warnings: &mut Vec<Warning>) -> Vec<Mt
                     Err(e) => warn(warnings, format!("{kw}: {e}; ignored")),
                 }
             }
-            "map_kd" | "map_ks" | "map_bump" | "bump" | "norm" | "map_d" => {
+            "map_kd" | "map_ks" | "map_ke" | "map_bump" | "bump" | "norm" | "map_d" => {
                 let Some(name) = map_file(rest) else {
                     warn(warnings, format!("{kw} without a file name ignored"));
                     continue;
@@ -181,6 +185,7 @@ pub fn parse_mtl(text: &str, file: &Path, warnings: &mut Vec<Warning>) -> Vec<Mt
                 match kwl.as_str() {
                     "map_kd" => m.map_kd = Some(p),
                     "map_ks" => m.map_ks = Some(p),
+                    "map_ke" => m.map_ke = Some(p),
                     "map_d" => m.map_d = Some(p),
                     _ => m.map_bump = Some(p),
                 }
@@ -410,12 +415,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
 
     // One scene material (and optional emission) per used OBJ material name.
     let mut tex_cache: HashMap<PathBuf, Option<crate::TextureId>> = HashMap::new();
-    let mut slots: Vec<(Option<MaterialId>, Rgb)> = Vec::new();
+    let mut slots: Vec<(Option<MaterialId>, Option<ColorParam>)> = Vec::new();
     for used in &objm.materials {
         match mtls.iter().find(|m| m.name == used.name) {
             Some(m) => {
-                let (id, ke) = map_material(m, &mut desc, &mut tex_cache);
-                slots.push((Some(id), ke));
+                let (id, emission) = map_material(m, &mut desc, &mut tex_cache);
+                slots.push((Some(id), emission));
             }
             None => {
                 desc.warnings.push(Warning {
@@ -425,7 +430,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
                         used.name
                     ),
                 });
-                slots.push((None, Rgb::ZERO));
+                slots.push((None, None));
             }
         }
     }
@@ -444,7 +449,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
         if tris.is_empty() {
             continue;
         }
-        let (material, ke) = slots.get(g).copied().unwrap_or((None, Rgb::ZERO));
+        let (material, emission) = slots.get(g).cloned().unwrap_or((None, None));
         let (name, loc) = match objm.materials.get(g) {
             Some(n) => (Some(n.name.clone()), n.loc.clone()),
             None => (None, file_loc.clone()),
@@ -453,8 +458,8 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
             shape: Shape::Mesh(Arc::new(submesh(mesh, tris))),
             to_world: Mat4::IDENTITY,
             material,
-            emission: (ke.max_element() > 0.0).then(|| AreaEmission {
-                radiance: ColorParam::Const(ke),
+            emission: emission.map(|radiance| AreaEmission {
+                radiance,
                 two_sided: true,
                 loc: loc.clone(),
             }),
@@ -584,12 +589,13 @@ fn texture(
     id
 }
 
-/// Map one MTL material to a scene material; returns it and its emitted radiance.
+/// Map one MTL material to a scene material; returns it and its emitted radiance (`map_Ke`'s
+/// texture, else `Ke` when not black).
 fn map_material(
     m: &MtlMaterial,
     desc: &mut SceneDesc,
     cache: &mut HashMap<PathBuf, Option<crate::TextureId>>,
-) -> (MaterialId, Rgb) {
+) -> (MaterialId, Option<ColorParam>) {
     let mut param = |c: Rgb, map: &Option<PathBuf>, desc: &mut SceneDesc| match map {
         Some(p) => match texture(p, &m.loc, desc, cache, false) {
             Some(t) => ColorParam::Texture(t),
@@ -662,7 +668,14 @@ fn map_material(
             );
         }
     }
-    (id, m.ke)
+    let emission = match &m.map_ke {
+        Some(p) => match texture(p, &m.loc, desc, cache, false) {
+            Some(t) => Some(ColorParam::Texture(t)),
+            None => (m.ke.max_element() > 0.0).then_some(ColorParam::Const(m.ke)),
+        },
+        None => (m.ke.max_element() > 0.0).then_some(ColorParam::Const(m.ke)),
+    };
+    (id, emission)
 }
 
 #[cfg(test)]
