@@ -543,7 +543,14 @@ fn build_lights(
                 intensity,
                 cutoff_angle,
                 beam_width,
-            } => Light::spot(to_world, (*intensity).into(), *cutoff_angle, *beam_width),
+                falloff,
+            } => Light::spot(
+                to_world,
+                (*intensity).into(),
+                *cutoff_angle,
+                *beam_width,
+                *falloff,
+            ),
             scene::Emitter::Directional {
                 direction,
                 irradiance,

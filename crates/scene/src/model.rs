@@ -157,6 +157,16 @@ pub fn is_similarity(m: &Mat4) -> bool {
         && c[1].dot(c[2]).abs() <= tol
 }
 
+/// The profile of a spot light between its full-intensity cone and its cutoff.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpotFalloff {
+    /// Mitsuba 3: linear in the angle from the beam width to the cutoff.
+    #[default]
+    Mitsuba,
+    /// The CENG795/CENG477 course: ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴.
+    Cosine4,
+}
+
 /// An indexed triangle mesh. `normals` and `uvs` are either empty or one per position.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
@@ -415,6 +425,8 @@ pub enum Emitter {
         cutoff_angle: f32,
         /// Degrees.
         beam_width: f32,
+        /// How the intensity falls between `beam_width` and `cutoff_angle`.
+        falloff: SpotFalloff,
     },
     /// Light arriving from `-direction`... i.e. travelling along `direction` (world).
     Directional { direction: Vec3, irradiance: Rgb },

@@ -162,3 +162,38 @@ fn errors_name_the_path_or_line() {
     assert!(e.contains("meshes/absent.ply"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A course spot light keeps the course's falloff profile (and its full cone angles halved).
+#[test]
+fn spot_lights_use_the_course_falloff() {
+    let dir = std::env::temp_dir().join(format!("penumbra-ceng-spot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("spot.json");
+    std::fs::write(
+        &file,
+        r#"{"Scene": {"Cameras": {"Camera": {"_id": "1", "Position": "0 0 10",
+          "Gaze": "0 0 -1", "Up": "0 1 0", "NearPlane": "-1 1 -1 1", "NearDistance": "1",
+          "ImageResolution": "4 4", "ImageName": "x.png"}},
+          "Lights": {"SpotLight": {"_id": "1", "Position": "0 5 0", "Direction": "0 -1 0",
+            "Intensity": "100 100 100", "CoverageAngle": "60", "FalloffAngle": "20"}},
+          "Materials": {"Material": {"_id": "1", "DiffuseReflectance": "1 1 1"}}}}"#,
+    )
+    .unwrap();
+    let Ok(Document::Scene(d)) = scene::load(&file, &LoadOptions::default()) else {
+        panic!("loads")
+    };
+    let spot = d
+        .emitters
+        .iter()
+        .find_map(|e| match e.emitter {
+            Emitter::Spot {
+                cutoff_angle,
+                beam_width,
+                falloff,
+                ..
+            } => Some((cutoff_angle, beam_width, falloff)),
+            _ => None,
+        })
+        .expect("a spot light");
+    assert_eq!(spot, (30.0, 10.0, scene::SpotFalloff::Cosine4));
+}

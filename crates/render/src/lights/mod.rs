@@ -118,6 +118,8 @@ pub enum Light {
         cos_beam: f32,
         cutoff: f32,
         inv_transition: f32,
+        /// The CENG795 course's profile instead of Mitsuba's.
+        course: bool,
     },
     Directional {
         /// Direction the light travels in (unit).
@@ -266,11 +268,22 @@ impl EnvMap {
 }
 
 /// Spot falloff of Mitsuba 3 for a local direction (cos θ = z).
-fn spot_falloff(cos_t: f32, cos_cutoff: f32, cos_beam: f32, cutoff: f32, inv_trans: f32) -> f32 {
+fn spot_falloff(
+    cos_t: f32,
+    cos_cutoff: f32,
+    cos_beam: f32,
+    cutoff: f32,
+    inv_trans: f32,
+    course: bool,
+) -> f32 {
     if cos_t <= cos_cutoff {
         0.0
     } else if cos_t >= cos_beam {
         1.0
+    } else if course {
+        // CENG795: ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴.
+        let s = ((cos_t - cos_cutoff) / (cos_beam - cos_cutoff)).clamp(0.0, 1.0);
+        (s * s) * (s * s)
     } else {
         ((cutoff - cos_t.clamp(-1.0, 1.0).acos()) * inv_trans).clamp(0.0, 1.0)
     }
@@ -380,7 +393,13 @@ impl Parallelogram {
 }
 
 impl Light {
-    pub fn spot(to_world: &Mat4, intensity: Vec3, cutoff_deg: f32, beam_deg: f32) -> Light {
+    pub fn spot(
+        to_world: &Mat4,
+        intensity: Vec3,
+        cutoff_deg: f32,
+        beam_deg: f32,
+        falloff: scene::SpotFalloff,
+    ) -> Light {
         let cutoff = cutoff_deg.to_radians();
         let beam = beam_deg.to_radians().min(cutoff);
         let rot = Mat3::from_mat4(*to_world);
@@ -396,6 +415,7 @@ impl Light {
             } else {
                 0.0
             },
+            course: falloff == scene::SpotFalloff::Cosine4,
         }
     }
 
@@ -447,6 +467,7 @@ impl Light {
                 cos_beam,
                 cutoff,
                 inv_transition,
+                course,
             } => {
                 let d = *position - r.p;
                 let d2 = d.length_squared();
@@ -455,7 +476,14 @@ impl Light {
                 }
                 let wi = d / d2.sqrt();
                 let local = (*to_local * -wi).normalize_or_zero();
-                let f = spot_falloff(local.z, *cos_cutoff, *cos_beam, *cutoff, *inv_transition);
+                let f = spot_falloff(
+                    local.z,
+                    *cos_cutoff,
+                    *cos_beam,
+                    *cutoff,
+                    *inv_transition,
+                    *course,
+                );
                 (f > 0.0).then(|| LightSample {
                     wi,
                     li: *intensity * f / d2,
@@ -813,6 +841,51 @@ fn sphere_pdf(center: Vec3, radius: f32, from: Vec3, on: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The CENG795 spot profile: full intensity inside the falloff cone, nothing outside the
+    /// coverage cone, ((cos α − cos c) / (cos f − cos c))⁴ between; Mitsuba's is linear in α.
+    #[test]
+    fn course_spot_profile() {
+        let light = |falloff| Light::spot(&Mat4::IDENTITY, Vec3::ONE, 30.0, 10.0, falloff);
+        let at = |l: &Light, deg: f32| {
+            let Light::Spot {
+                cos_cutoff,
+                cos_beam,
+                cutoff,
+                inv_transition,
+                course,
+                ..
+            } = *l
+            else {
+                panic!()
+            };
+            let c = deg.to_radians().cos();
+            spot_falloff(c, cos_cutoff, cos_beam, cutoff, inv_transition, course)
+        };
+        let course = light(scene::SpotFalloff::Cosine4);
+        let mitsuba = light(scene::SpotFalloff::Mitsuba);
+        for deg in [0.0f32, 5.0, 9.9] {
+            assert_eq!(at(&course, deg), 1.0);
+        }
+        for deg in [30.1f32, 45.0, 120.0] {
+            assert_eq!(at(&course, deg), 0.0);
+        }
+        for deg in [12.0f32, 20.0, 28.0] {
+            let (c, cc, cb) = (
+                deg.to_radians().cos(),
+                30f32.to_radians().cos(),
+                10f32.to_radians().cos(),
+            );
+            let expected = ((c - cc) / (cb - cc)).powi(4);
+            assert!((at(&course, deg) - expected).abs() < 1e-5, "{deg}°");
+            let linear = (30.0 - deg) / 20.0;
+            assert!((at(&mitsuba, deg) - linear).abs() < 1e-4, "{deg}°");
+            assert!(
+                (at(&course, deg) - at(&mitsuba, deg)).abs() > 0.02,
+                "{deg}°"
+            );
+        }
+    }
 
     /// The point a `Parallelogram` sample designates, from the mesh.
     fn point(pos: &[Vec3], idx: &[[u32; 3]], q: &Parallelogram, u: Vec2) -> Vec3 {

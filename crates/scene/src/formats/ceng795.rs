@@ -814,6 +814,7 @@ impl Builder {
                         intensity: self.ctx.vec3(self.ctx.req(n, "Intensity")?)?,
                         cutoff_angle: coverage * 0.5,
                         beam_width: falloff * 0.5,
+                        falloff: SpotFalloff::Cosine4,
                     }
                 }
                 "AreaLight" => {

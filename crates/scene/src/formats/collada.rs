@@ -1001,6 +1001,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     intensity: color,
                     cutoff_angle: cutoff,
                     beam_width: cutoff * 0.75,
+                    falloff: SpotFalloff::Mitsuba,
                 }
             }
             "ambient" => Emitter::Constant { radiance: color },

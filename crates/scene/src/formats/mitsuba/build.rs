@@ -744,6 +744,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     intensity: self.rgb(pl, "intensity", Vec3::ONE, true)?,
                     cutoff_angle,
                     beam_width: beam_width.min(cutoff_angle),
+                    falloff: SpotFalloff::Mitsuba,
                 }
             }
             "directional" => {
