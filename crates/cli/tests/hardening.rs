@@ -45,36 +45,35 @@ fn assert_located_failure(out: &Output, file: &Path, needle: &str) {
     assert!(line.contains(needle), "expected '{needle}' in: {line}");
 }
 
-/// A Mitsuba scene nested 10,000 shapes deep overflowed the stack (SIGABRT) before.
-#[test]
-fn deeply_nested_mitsuba_xml_is_refused() {
-    let dir = temp_dir("mitsuba-deep");
-    let file = dir.join("deep.xml");
-    let n = 10_000;
-    let text = format!(
-        "<scene version=\"3.0.0\">{}{}</scene>",
-        "<shape type=\"sphere\">".repeat(n),
-        "</shape>".repeat(n)
-    );
+/// `open` nested `n` deep inside `root`, closed again, written to `name`: `info` refuses it
+/// with a located diagnostic about the nesting.
+fn assert_deep_refused(name: &str, root: (&str, &str), open: &str, close: &str, n: usize) {
+    let dir = temp_dir(name);
+    let file = dir.join(name);
+    let text = format!("{}{}{}{}", root.0, open.repeat(n), close.repeat(n), root.1);
     std::fs::write(&file, text).unwrap();
     let out = penumbra().arg("info").arg(&file).output().unwrap();
     assert_located_failure(&out, &file, "nested more than 256 deep");
 }
 
-/// A CENG795 XML scene with 20,000 nested `<Objects>`: a stack overflow after 1.1 GB before.
+/// A Mitsuba scene nested 10,000 shapes deep overflowed the stack (SIGABRT) before; a
+/// CENG795 XML scene with 20,000 nested `<Objects>` did after 1.1 GB.
 #[test]
-fn deeply_nested_ceng795_xml_is_refused() {
-    let dir = temp_dir("ceng-deep");
-    let file = dir.join("deep.xml");
-    let n = 20_000;
-    let text = format!(
-        "<Scene>{}{}</Scene>",
-        "<Objects>".repeat(n),
-        "</Objects>".repeat(n)
+fn deeply_nested_xml_is_refused() {
+    assert_deep_refused(
+        "mitsuba-deep.xml",
+        ("<scene version=\"3.0.0\">", "</scene>"),
+        "<shape type=\"sphere\">",
+        "</shape>",
+        10_000,
     );
-    std::fs::write(&file, text).unwrap();
-    let out = penumbra().arg("info").arg(&file).output().unwrap();
-    assert_located_failure(&out, &file, "nested more than 256 deep");
+    assert_deep_refused(
+        "ceng-deep.xml",
+        ("<Scene>", "</Scene>"),
+        "<Objects>",
+        "</Objects>",
+        20_000,
+    );
 }
 
 /// COLLADA nodes and CENG795 JSON already had limits (256 nodes, serde_json's 128 levels);

@@ -177,15 +177,9 @@ impl Accel {
                     aabbs.push(Aabb::new(center - radius, center + radius));
                 }
                 &AccelShape::Disk { to_world } => {
-                    let to_object = to_world.inverse();
-                    let det = to_world.determinant();
-                    if det == 0.0
-                        || !det.is_finite()
-                        || !to_object.is_finite()
-                        || !to_world.is_finite()
-                    {
+                    let Some(to_object) = invertible(&to_world) else {
                         continue;
-                    }
+                    };
                     let mut bb = Aabb::INVALID;
                     for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
                         bb.extend(to_world.transform_point3a(Vec3A::new(x, y, 0.0)));
@@ -195,15 +189,9 @@ impl Accel {
                     aabbs.push(bb);
                 }
                 &AccelShape::Ellipsoid { to_world } => {
-                    let to_object = to_world.inverse();
-                    let det = to_world.determinant();
-                    if det == 0.0
-                        || !det.is_finite()
-                        || !to_object.is_finite()
-                        || !to_world.is_finite()
-                    {
+                    let Some(to_object) = invertible(&to_world) else {
                         continue;
-                    }
+                    };
                     prims.push(Prim::Ellipsoid { to_object });
                     ids.push([s, 0]);
                     let (lo, hi) = ellipsoid_bounds(&to_world);
@@ -283,6 +271,14 @@ fn ray_ok(ray: &Ray, t_max: f32) -> bool {
     let z = (ray.o - ray.o) + (ray.d - ray.d);
     // `cmpne(..).any()`: one mask test, where `!=` would branch on each component.
     t_max > 0.0 && z.x + z.y + z.z == 0.0 && ray.d.cmpne(Vec3::ZERO).any()
+}
+
+/// The inverse of a finite, non-singular placement (`None`: the shape is skipped).
+fn invertible(to_world: &Mat4) -> Option<Mat4> {
+    let to_object = to_world.inverse();
+    let det = to_world.determinant();
+    (det != 0.0 && det.is_finite() && to_object.is_finite() && to_world.is_finite())
+        .then_some(to_object)
 }
 
 /// The exact world bounds of the unit sphere under `to_world`: along axis i the extent is

@@ -532,13 +532,7 @@ impl Parser<'_> {
                 if ior <= 0.0 {
                     return Err(l.err_at(6, "a positive index of refraction"));
                 }
-                Material::Dielectric {
-                    int_ior: ior,
-                    ext_ior: 1.0,
-                    specular_reflectance: ColorParam::constant(1.0),
-                    specular_transmittance: ColorParam::constant(1.0),
-                    absorption: beer_absorption(color),
-                }
+                glass(ior, color)
             }
             "Emissive" => {
                 emission = Some(color);
@@ -633,13 +627,7 @@ impl Parser<'_> {
                         specular_transmittance: ColorParam::Const(unused_is_white(color)),
                     }
                 } else {
-                    Material::Dielectric {
-                        int_ior: ior,
-                        ext_ior: 1.0,
-                        specular_reflectance: ColorParam::constant(1.0),
-                        specular_transmittance: ColorParam::constant(1.0),
-                        absorption: beer_absorption(color),
-                    }
+                    glass(ior, color)
                 }
             }
             "Emissive" => {
@@ -877,6 +865,17 @@ fn unused_is_white(c: Rgb) -> Rgb {
 }
 
 /// Beer's law from a transmittance-per-unit-length colour (all zero or all one: clear).
+/// `Refractive`: smooth glass of index `ior` whose colour is its Beer's-law transmittance.
+fn glass(ior: f32, color: Rgb) -> Material {
+    Material::Dielectric {
+        int_ior: ior,
+        ext_ior: 1.0,
+        specular_reflectance: ColorParam::constant(1.0),
+        specular_transmittance: ColorParam::constant(1.0),
+        absorption: beer_absorption(color),
+    }
+}
+
 fn beer_absorption(c: Rgb) -> Option<Rgb> {
     if c == Rgb::ZERO || c == Rgb::ONE {
         return None;
