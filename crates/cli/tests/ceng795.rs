@@ -391,3 +391,45 @@ fn display_unit_scenes_write_rounded_pngs() {
     assert!(checked >= 20, "only {checked} display-unit scenes");
     std::fs::remove_dir_all(&tmp).ok();
 }
+
+/// A one-pixel CENG795 scene looking straight down at a plane lit by a point light at the eye,
+/// with a material of type `kind` (plus `extra` keys) of diffuse reflectance 0.3.
+fn plane_scene(kind: &str, extra: &str) -> SceneDesc {
+    let text = format!(
+        r#"{{"Scene": {{
+  "BackgroundColor": "0 0 0",
+  "Cameras": {{"Camera": {{"_id": "1", "Position": "0 0 5", "Gaze": "0 0 -1", "Up": "0 1 0",
+    "NearPlane": "-0.01 0.01 -0.01 0.01", "NearDistance": "1", "ImageResolution": "1 1",
+    "ImageName": "p.png"}}}},
+  "Lights": {{"PointLight": {{"_id": "1", "Position": "0 0 5", "Intensity": "1000 1000 1000"}}}},
+  "Materials": {{"Material": {{"_id": "1", "_type": "{kind}", "AmbientReflectance": "0 0 0",
+    "DiffuseReflectance": "0.3 0.3 0.3", "SpecularReflectance": "0 0 0",
+    "MirrorReflectance": "0.5 0.5 0.5", "RefractionIndex": "1.5"{extra}}}}},
+  "VertexData": {{"_data": "0 0 0"}},
+  "Objects": {{"Plane": {{"_id": "1", "Material": "1", "Point": "1", "Normal": "0 0 1"}}}}
+}}}}"#
+    );
+    let tmp = temp_dir("plane");
+    let file = tmp.join(format!("{kind}.json"));
+    std::fs::write(&file, text).unwrap();
+    let desc = load(&file);
+    std::fs::remove_dir_all(&tmp).ok();
+    desc
+}
+
+/// Mirror, conductor and dielectric materials keep the course's diffuse lobe beside their
+/// ideal one: the plane reads kd·I·cos θ / d² = 0.3 · 1000 / 25 = 12 (the ideal lobe sees the
+/// black background), whichever lobe each sample chose. Dropping the lobes gives 0. Nothing
+/// about these materials is warned about any more, rough or not.
+#[test]
+fn course_materials_keep_their_phong_lobes() {
+    for kind in ["mirror", "conductor", "dielectric"] {
+        for extra in ["", r#", "Roughness": "0.2", "AbsorptionIndex": "2""#] {
+            let desc = plane_scene(kind, extra);
+            assert!(desc.warnings.is_empty(), "{kind}: {:?}", desc.warnings);
+            let img = &batches(&desc, 1, 16, 1, 5)[0];
+            let v = img.pixels[0];
+            assert!((v.x - 12.0).abs() < 1e-3 * 12.0, "{kind}{extra}: {v}");
+        }
+    }
+}

@@ -8,12 +8,13 @@
 
 use std::sync::Arc;
 
-use scene::{ColorParam, FloatParam, Material, MicrofacetDistribution};
+use scene::{ColorParam, CourseIdealKind, FloatParam, Material, MicrofacetDistribution};
 
 use crate::bsdf::Microfacet;
 use crate::bsdf::{
-    Bsdf, Conductor, Dielectric, Diffuse, MicrofacetType, NoriMicrofacet, PhongFamily, Plastic,
-    RoughConductor, RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
+    Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, MicrofacetType,
+    NoriMicrofacet, PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic,
+    RoughPlasticTables, ThinDielectric,
 };
 use crate::build::Scene;
 use crate::math::{Frame, PVec3, Vec2, Vec3};
@@ -221,18 +222,39 @@ impl RtMaterial {
                 specular,
                 ior,
                 absorption,
-            } => Bsdf::PhongFamily(
-                PhongFamily::new(
+                ideal,
+            } => {
+                let phong = PhongFamily::new(
                     *model,
                     *normalized,
                     *kd_fresnel,
                     *exponent,
                     p.color(diffuse, uv),
-                    (*specular).into(),
+                    p.color(specular, uv),
                     *ior,
                 )
-                .with_absorption(*ior, *absorption),
-            ),
+                .with_absorption(*ior, *absorption);
+                match ideal {
+                    None => Bsdf::PhongFamily(phong),
+                    Some(i) => {
+                        let lobe = match i.kind {
+                            CourseIdealKind::Mirror => IdealLobe::Mirror,
+                            CourseIdealKind::Conductor { eta, k } => {
+                                IdealLobe::Conductor { eta, k }
+                            }
+                            CourseIdealKind::Dielectric { ior, .. } => {
+                                IdealLobe::Dielectric { eta: ior }
+                            }
+                        };
+                        Bsdf::Course(CourseMaterial::new(
+                            phong,
+                            lobe,
+                            i.reflectance.into(),
+                            i.roughness,
+                        ))
+                    }
+                }
+            }
             Material::Null
             | Material::TwoSided { .. }
             | Material::NormalMap { .. }
@@ -311,6 +333,18 @@ impl Scene {
         match &self.materials[id.0 as usize].material {
             Material::Dielectric {
                 absorption: Some(sigma),
+                ..
+            }
+            | Material::PhongFamily {
+                ideal:
+                    Some(scene::CourseIdeal {
+                        kind:
+                            CourseIdealKind::Dielectric {
+                                absorption: Some(sigma),
+                                ..
+                            },
+                        ..
+                    }),
                 ..
             } if *sigma != PVec3::ZERO => Some((*sigma).into()),
             _ => None,

@@ -8,8 +8,8 @@
 //! that `pdf(wo, wi)` reproduces the sample's pdf.
 
 use render::bsdf::{
-    Bsdf, Diffuse, MicrofacetType, NoriMicrofacet, PhongFamily, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, TransportMode,
+    Bsdf, CourseMaterial, Diffuse, IdealLobe, MicrofacetType, NoriMicrofacet, PhongFamily, Plastic,
+    RoughConductor, RoughDielectric, RoughPlastic, TransportMode,
 };
 use render::math::{Vec2, Vec3};
 use render::stats::{Chi2Config, Pcg32, chi2_test, sidak};
@@ -133,6 +133,33 @@ fn cases() -> Vec<(String, Bsdf, Vec3)> {
                 false,
             );
         }
+    }
+    // CENG795 mirror/conductor/dielectric: Phong lobes beside a sampled-only ideal lobe; the
+    // χ² sees the Phong part with its lobe probability.
+    for (ideal, tag) in [
+        (IdealLobe::Mirror, "mirror"),
+        (IdealLobe::Conductor { eta: 0.37, k: 2.82 }, "conductor"),
+        (IdealLobe::Dielectric { eta: 1.5 }, "dielectric"),
+    ] {
+        add(
+            format!("phong-family course {tag} + original blinnphong, roughness 0.2"),
+            CourseMaterial::new(
+                PhongFamily::new(
+                    PhongModel::OriginalBlinnPhong,
+                    false,
+                    false,
+                    30.0,
+                    Vec3::new(0.3, 0.2, 0.1),
+                    Vec3::new(0.5, 0.5, 0.4),
+                    1.5,
+                ),
+                ideal,
+                Vec3::splat(0.8),
+                0.2,
+            )
+            .into(),
+            false,
+        );
     }
     out
 }

@@ -296,12 +296,14 @@ pub enum Material {
         kd_fresnel: bool,
         exponent: f32,
         diffuse: ColorParam,
-        specular: Rgb,
+        specular: ColorParam,
         /// Refraction index used by the Torrance–Sparrow Fresnel term.
         ior: f32,
         /// `AbsorptionIndex` k: when positive, the Torrance–Sparrow Fresnel term is that of a
         /// conductor with complex index `ior + i k` instead of Schlick's dielectric one.
         absorption: f32,
+        /// The recursively traced lobe of a course mirror, conductor or dielectric.
+        ideal: Option<CourseIdeal>,
     },
     /// Tangent-space normal map around `nested` (Mitsuba `normalmap`): the texture's RGB in
     /// [0,1] encodes the shading normal 2·c − 1 in the frame (dp/du, n × dp/du, n). The texture
@@ -320,6 +322,32 @@ pub enum Material {
     },
     /// Invisible interface (Mitsuba `null`).
     Null,
+}
+
+/// The ideal lobe of a CENG795 `mirror`, `conductor` or `dielectric` material, traced on top
+/// of its Phong-family lobes (render crate `bsdf::course` gives the exact definitions).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CourseIdeal {
+    pub kind: CourseIdealKind,
+    /// `MirrorReflectance` (mirror, conductor).
+    pub reflectance: Rgb,
+    /// `Roughness`: side of the square the ideal direction is perturbed in (0: none).
+    pub roughness: f32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CourseIdealKind {
+    Mirror,
+    /// Complex index `eta + i k` (`RefractionIndex`, `AbsorptionIndex`).
+    Conductor {
+        eta: f32,
+        k: f32,
+    },
+    /// `RefractionIndex`, and `AbsorptionCoefficient` (Beer–Lambert, per unit length) inside.
+    Dielectric {
+        ior: f32,
+        absorption: Option<Rgb>,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

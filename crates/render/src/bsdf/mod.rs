@@ -17,6 +17,7 @@
 //!   are shared (`Arc`) rather than copied, so `Bsdf` is `Clone` but not `Copy`.
 
 mod conductor;
+mod course;
 mod dielectric;
 mod diffuse;
 pub mod fresnel;
@@ -30,6 +31,7 @@ mod rough_plastic;
 mod thin_dielectric;
 
 pub use conductor::Conductor;
+pub use course::{CourseMaterial, IdealLobe};
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use microfacet::{Microfacet, MicrofacetType};
@@ -115,6 +117,7 @@ pub enum Bsdf {
     RoughPlastic(RoughPlastic),
     NoriMicrofacet(NoriMicrofacet),
     PhongFamily(PhongFamily),
+    Course(CourseMaterial),
 }
 
 macro_rules! dispatch {
@@ -130,6 +133,7 @@ macro_rules! dispatch {
             Bsdf::RoughPlastic($b) => $e,
             Bsdf::NoriMicrofacet($b) => $e,
             Bsdf::PhongFamily($b) => $e,
+            Bsdf::Course($b) => $e,
         }
     };
 }
@@ -207,6 +211,12 @@ impl_from!(
     PhongFamily
 );
 
+impl From<CourseMaterial> for Bsdf {
+    fn from(b: CourseMaterial) -> Bsdf {
+        Bsdf::Course(b)
+    }
+}
+
 /// Mirror `w` about the normal (+z): the specular reflection direction in the local frame.
 #[inline]
 pub(crate) fn reflect_z(w: Vec3) -> Vec3 {
@@ -251,4 +261,13 @@ pub(crate) fn mean(c: Vec3) -> f32 {
 #[inline]
 pub(crate) fn reflect_z_about(w: Vec3, m: Vec3) -> Vec3 {
     2.0 * w.dot(m) * m - w
+}
+#[test]
+fn tmp_size() {
+    eprintln!(
+        "SIZE Bsdf {} Phong {} Course {}",
+        size_of::<Bsdf>(),
+        size_of::<PhongFamily>(),
+        size_of::<CourseMaterial>()
+    );
 }

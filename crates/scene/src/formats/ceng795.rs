@@ -463,11 +463,9 @@ impl Builder {
             let c = self.ctx.vec3(n)?;
             self.desc.background = (c != Vec3::ZERO).then_some(c);
         }
-        for key in ["ShadowRayEpsilon", "IntersectionTestEpsilon"] {
-            if scene.child(key).is_some() {
-                self.unsupported(format!("{key} (Penumbra offsets rays robustly by itself)"));
-            }
-        }
+        // `ShadowRayEpsilon` and `IntersectionTestEpsilon` are read by nobody: secondary rays
+        // leave from an origin offset by the hit point's floating-point error bound (pbrt's
+        // scheme), which needs no scene-dependent epsilon.
         for n in scene.children("VertexData") {
             let v = self.ctx.floats(n)?;
             if !v.len().is_multiple_of(3) {
@@ -661,89 +659,19 @@ impl Builder {
             Some(t) => self.ctx.text(t)?.trim().to_ascii_lowercase(),
             None => String::new(),
         };
-        let dropped_lobes = kd != Vec3::ZERO || ks != Vec3::ZERO;
-        let material = match kind.as_str() {
-            "" | "none" => match n.child("_BRDF") {
-                Some(bn) => {
-                    let bid = self.ctx.uint(bn)?;
-                    let &(model, normalized, kd_fresnel, exponent) = brdfs
-                        .get(&bid)
-                        .ok_or_else(|| self.ctx.err(bn, format!("BRDF {bid} is not defined")))?;
-                    Material::PhongFamily {
-                        model,
-                        normalized,
-                        kd_fresnel,
-                        exponent,
-                        diffuse: ColorParam::Const(kd),
-                        specular: ks,
-                        ior,
-                        absorption: k.max(0.0),
-                    }
-                }
-                // The homework's default shading, Lambert + Blinn-Phong in the course's
-                // convention f = kd + ks cosᵖα / cos θi (no 1/π, so point-lit renders match
-                // the course's images), also when ks = 0 so that a scene stays consistent.
-                None => Material::PhongFamily {
-                    model: PhongModel::OriginalBlinnPhong,
-                    normalized: false,
-                    kd_fresnel: false,
-                    exponent: phong_exp,
-                    diffuse: ColorParam::Const(kd),
-                    specular: ks,
-                    ior,
-                    absorption: 0.0,
-                },
-            },
-            "mirror" => {
-                if dropped_lobes {
-                    self.unsupported("diffuse/specular lobes of mirror materials");
-                }
-                Material::Mirror {
-                    reflectance: ColorParam::Const(mirror),
-                }
-            }
-            "conductor" => {
-                if dropped_lobes {
-                    self.unsupported("diffuse/specular lobes of conductor materials");
-                }
-                let eta = Vec3::splat(ior);
-                let kk = Vec3::splat(k);
-                if roughness > 0.0 {
-                    self.unsupported(
-                        "Roughness (approximated by a Beckmann microfacet of alpha = Roughness)",
-                    );
-                    Material::RoughConductor {
-                        distribution: MicrofacetDistribution::Beckmann,
-                        alpha_u: FloatParam::Const(roughness),
-                        alpha_v: FloatParam::Const(roughness),
-                        eta,
-                        k: kk,
-                        specular_reflectance: ColorParam::Const(mirror),
-                    }
-                } else {
-                    Material::Conductor {
-                        eta,
-                        k: kk,
-                        specular_reflectance: ColorParam::Const(mirror),
-                    }
-                }
-            }
-            "dielectric" => {
-                if roughness > 0.0 {
-                    self.unsupported("Roughness of dielectric materials");
-                }
-                if dropped_lobes {
-                    self.unsupported("diffuse/specular lobes of dielectric materials");
-                }
-                let absorption = self.opt_vec3(n, "AbsorptionCoefficient")?;
-                Material::Dielectric {
-                    int_ior: ior,
-                    ext_ior: 1.0,
-                    specular_reflectance: ColorParam::constant(1.0),
-                    specular_transmittance: ColorParam::constant(1.0),
-                    absorption: absorption.filter(|a| *a != Vec3::ZERO),
-                }
-            }
+        let ideal_kind = match kind.as_str() {
+            "" | "none" => None,
+            "mirror" => Some(CourseIdealKind::Mirror),
+            "conductor" => Some(CourseIdealKind::Conductor {
+                eta: ior,
+                k: k.max(0.0),
+            }),
+            "dielectric" => Some(CourseIdealKind::Dielectric {
+                ior,
+                absorption: self
+                    .opt_vec3(n, "AbsorptionCoefficient")?
+                    .filter(|a| *a != Vec3::ZERO),
+            }),
             other => {
                 return Err(self.ctx.err(
                     n,
@@ -753,6 +681,40 @@ impl Builder {
                     ),
                 ));
             }
+        };
+        let ideal = ideal_kind.map(|kind| CourseIdeal {
+            kind,
+            reflectance: mirror,
+            roughness: roughness.max(0.0),
+        });
+        // Every type keeps the course's ambient/diffuse/specular shading: the BRDF named by
+        // `_BRDF`, or the homework's default, Lambert + Blinn-Phong in the course's convention
+        // f = kd + ks cosᵖα / cos θi (no 1/π, so point-lit renders match the course's images).
+        let (model, normalized, kd_fresnel, exponent) = match n.child("_BRDF") {
+            Some(bn) => {
+                let bid = self.ctx.uint(bn)?;
+                *brdfs
+                    .get(&bid)
+                    .ok_or_else(|| self.ctx.err(bn, format!("BRDF {bid} is not defined")))?
+            }
+            None => (PhongModel::OriginalBlinnPhong, false, false, phong_exp),
+        };
+        let material = Material::PhongFamily {
+            model,
+            normalized,
+            kd_fresnel,
+            exponent,
+            diffuse: ColorParam::Const(kd),
+            specular: ColorParam::Const(ks),
+            ior,
+            // The complex index only bends the Torrance–Sparrow Fresnel term of BRDF-named
+            // materials, as before.
+            absorption: if n.child("_BRDF").is_some() {
+                k.max(0.0)
+            } else {
+                0.0
+            },
+            ideal,
         };
         let mid = self.desc.add_material(MaterialDesc {
             material,
