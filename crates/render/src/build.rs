@@ -21,7 +21,7 @@ use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
 use crate::shapes::{Ellipsoid, Reads, ShapeGeom, SurfaceInteraction, interaction};
-use crate::textures::Texture;
+use crate::textures::{TexCoord, Texture};
 
 /// A problem found while building (unreadable texture, unsupported feature).
 #[derive(Clone, Debug, thiserror::Error)]
@@ -82,6 +82,10 @@ pub struct Scene {
     pub sampler: SamplerDesc,
     pub integrator: IntegratorDesc,
     pub background: Option<Vec3>,
+    /// A texture over the image seen by escaping camera rays (CENG795 `replace_background`).
+    pub background_texture: Option<u32>,
+    /// Whether any material is [`Material::Unlit`] (only then does the path loop look).
+    pub has_unlit: bool,
     /// Sum of the scene's ambient terms ([`scene::Emitter::Ambient`]), used by Whitted.
     pub ambient: Vec3,
     pub lights: Vec<Light>,
@@ -156,7 +160,7 @@ impl Scene {
             let Some(opacity) = &shape.opacity else {
                 return Some(si);
             };
-            let alpha = self.float(opacity, si.uv);
+            let alpha = self.float(opacity, si.tex());
             let u = u64_to_unit(mix64(key ^ ((hit.shape as u64) << 32 | hit.prim as u64)));
             if alpha >= 1.0 || u < alpha {
                 return Some(si);
@@ -215,25 +219,25 @@ impl Scene {
     /// The value of a colour parameter at `uv`. Constants are inline; texture lookups stay
     /// behind a call, so that constants (most parameters) cost no call in the hot loops.
     #[inline(always)]
-    pub fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3 {
+    pub fn color(&self, p: &ColorParam, at: TexCoord) -> Vec3 {
         match p {
             ColorParam::Const(c) => (*c).into(),
-            ColorParam::Texture(t) => self.texture(t.0, uv),
+            ColorParam::Texture(t) => self.texture(t.0, at),
         }
     }
 
     /// [`Scene::color`] for a float parameter.
     #[inline(always)]
-    pub fn float(&self, p: &FloatParam, uv: Vec2) -> f32 {
+    pub fn float(&self, p: &FloatParam, at: TexCoord) -> f32 {
         match p {
             FloatParam::Const(c) => *c,
-            FloatParam::Texture(t) => self.texture(t.0, uv).x,
+            FloatParam::Texture(t) => self.texture(t.0, at).x,
         }
     }
 
     #[inline(never)]
-    fn texture(&self, t: u32, uv: Vec2) -> Vec3 {
-        self.textures[t as usize].eval(uv)
+    fn texture(&self, t: u32, at: TexCoord) -> Vec3 {
+        self.textures[t as usize].eval(at)
     }
 
     /// A representative reflectance colour at `si` (the `albedo` AOV).
@@ -383,6 +387,16 @@ fn opacity_from_alpha(
     Ok(())
 }
 
+/// The linear part of `m` is a multiple of the identity (no rotation, no reflection).
+fn no_rotation(m: &glam::Mat4) -> bool {
+    let l = glam::Mat3::from_mat4(*m);
+    let d = l.x_axis.x;
+    let off = l - glam::Mat3::from_diagonal(glam::Vec3::splat(d));
+    off.to_cols_array()
+        .iter()
+        .all(|x| x.abs() <= 1e-6 * d.abs())
+}
+
 /// The alpha channel of a bitmap texture as a texture, if the file has a non-opaque one.
 fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Texture>, BuildError> {
     let scene::Texture::Bitmap {
@@ -390,6 +404,7 @@ fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Textur
         filter,
         wrap,
         to_uv,
+        corner_texels,
         ..
     } = &desc.texture
     else {
@@ -411,11 +426,20 @@ fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Textur
         filter: *filter,
         wrap: *wrap,
         to_uv: *to_uv,
+        corner_texels: *corner_texels,
     }))
 }
 
 fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, BuildError> {
-    Ok(match &desc.texture {
+    load_texture_kind(&desc.texture, desc, base)
+}
+
+fn load_texture_kind(
+    texture: &scene::Texture,
+    desc: &scene::TextureDesc,
+    base: &Path,
+) -> Result<Texture, BuildError> {
+    Ok(match texture {
         scene::Texture::Constant(c) => Texture::Constant((*c).into()),
         scene::Texture::Checkerboard {
             color0,
@@ -433,6 +457,7 @@ fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, Build
             raw,
             gamma,
             to_uv,
+            corner_texels,
         } => {
             let full: PathBuf = if path.is_absolute() {
                 path.clone()
@@ -453,8 +478,33 @@ fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, Build
                 filter: *filter,
                 wrap: *wrap,
                 to_uv: *to_uv,
+                corner_texels: *corner_texels,
             }
         }
+        scene::Texture::Perlin { scale, conversion } => Texture::Perlin {
+            scale: *scale,
+            conversion: *conversion,
+        },
+        scene::Texture::SolidChecker {
+            black,
+            white,
+            scale,
+            offset,
+        } => Texture::SolidChecker {
+            black: (*black).into(),
+            white: (*white).into(),
+            scale: *scale,
+            offset: *offset,
+        },
+        scene::Texture::Affine {
+            texture,
+            scale,
+            offset,
+        } => Texture::Affine {
+            texture: Box::new(load_texture_kind(texture, desc, base)?),
+            scale: *scale,
+            offset: (*offset).into(),
+        },
     })
 }
 
@@ -606,8 +656,12 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
             Shape::Mesh(m) => mesh_geom(m, &s.to_world),
             Shape::Rectangle => mesh_geom(&rectangle_mesh(), &s.to_world),
             Shape::Cube => mesh_geom(&cube_mesh(), &s.to_world),
-            Shape::Sphere { center, radius } if scene::is_similarity(&s.to_world) => {
-                // A rotation, uniform scale and translation keep it a sphere.
+            Shape::Sphere { center, radius }
+                if scene::is_similarity(&s.to_world)
+                    && (desc.textures.is_empty() || no_rotation(&s.to_world)) =>
+            {
+                // A rotation, uniform scale and translation keep it a sphere (and its uv
+                // parameterisation too unless rotated: textured rotated spheres go below).
                 let c = s.to_world.transform_point3(*center);
                 let r = s
                     .to_world
@@ -619,7 +673,8 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                 }
             }
             Shape::Sphere { center, radius } => {
-                // Non-uniform scale or shear: an ellipsoid, the unit sphere of this frame.
+                // Non-uniform scale or shear: an ellipsoid, the unit sphere of this frame (also a
+                // rotated textured sphere, whose uv turns with it).
                 let frame = s.to_world
                     * Mat4::from_translation(*center)
                     * Mat4::from_scale(PVec3::splat(*radius));
@@ -772,6 +827,11 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         sampler,
         integrator,
         background: desc.background.map(Vec3::from),
+        background_texture: desc.background_texture.map(|t| t.0),
+        has_unlit: desc
+            .materials
+            .iter()
+            .any(|m| matches!(m.material, Material::Unlit { .. })),
         ambient,
         lights,
         shape_lights,

@@ -183,6 +183,28 @@ impl Camera {
         }
     }
 
+    /// The film position in [0, 1]² (x right, y down) that the ray leaving the camera in
+    /// world direction `d` (from `origin`, which only an orthographic camera reads) comes
+    /// through: the inverse of [`Self::generate_ray`] for the lens centre. CENG795's
+    /// `replace_background` spreads a texture over the image with it.
+    pub fn film_uv(&self, origin: Vec3, d: Vec3) -> Vec2 {
+        let inv = self.to_world.inverse();
+        let p = match self.kind {
+            Kind::Orthographic => {
+                let q = inv.transform_point3a(origin);
+                Vec3::new(q.x * self.half_extent.x, q.y * self.half_extent.x, 1.0)
+            }
+            _ => {
+                let c = inv.transform_vector3a(d);
+                c / c.z
+            }
+        };
+        Vec2::new(
+            0.5 * (1.0 - (p.x - self.centre.x) / self.half_extent.x),
+            0.5 * (1.0 - (p.y - self.centre.y) / self.half_extent.y),
+        )
+    }
+
     /// Whether the lens needs a 2D sample.
     pub fn needs_lens_sample(&self) -> bool {
         matches!(self.kind, Kind::ThinLens { .. })
@@ -192,6 +214,31 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn film_uv_inverts_generate_ray() {
+        let cam = Camera::new(
+            &scene::Camera {
+                projection: Projection::Window {
+                    left: -0.3,
+                    right: 0.5,
+                    bottom: -0.2,
+                    top: 0.4,
+                },
+                to_world: Mat4::from_rotation_y(0.3)
+                    * Mat4::from_translation(scene::Vec3::new(1.0, 2.0, 3.0)),
+                near_clip: 0.0,
+                far_clip: 1e4,
+            },
+            64,
+            48,
+        );
+        for (x, y) in [(0.5, 0.5), (10.25, 40.0), (63.5, 0.5)] {
+            let r = cam.generate_ray(Vec2::new(x, y), Vec2::ZERO);
+            let uv = cam.film_uv(r.ray.o, r.ray.d);
+            assert!((uv - Vec2::new(x / 64.0, y / 48.0)).length() < 1e-5, "{uv}");
+        }
+    }
 
     fn desc(projection: Projection) -> scene::Camera {
         scene::Camera {

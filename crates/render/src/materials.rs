@@ -17,8 +17,9 @@ use crate::bsdf::{
     RoughPlasticTables, ThinDielectric,
 };
 use crate::build::Scene;
-use crate::math::{Frame, PVec3, Vec2, Vec3};
+use crate::math::{Frame, PVec3, Vec3};
 use crate::shapes::SurfaceInteraction;
+use crate::textures::TexCoord;
 
 #[derive(Clone, Debug)]
 pub struct RtMaterial {
@@ -36,18 +37,18 @@ pub fn microfacet_type(d: MicrofacetDistribution) -> MicrofacetType {
     }
 }
 
-/// Evaluates colour and scalar parameters (textures) at a uv.
+/// Evaluates colour and scalar parameters (textures) at a surface point.
 pub trait Params {
-    fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3;
-    fn float(&self, p: &FloatParam, uv: Vec2) -> f32;
+    fn color(&self, p: &ColorParam, at: TexCoord) -> Vec3;
+    fn float(&self, p: &FloatParam, at: TexCoord) -> f32;
 }
 
 impl Params for Scene {
-    fn color(&self, p: &ColorParam, uv: Vec2) -> Vec3 {
-        Scene::color(self, p, uv)
+    fn color(&self, p: &ColorParam, at: TexCoord) -> Vec3 {
+        Scene::color(self, p, at)
     }
-    fn float(&self, p: &FloatParam, uv: Vec2) -> f32 {
-        Scene::float(self, p, uv)
+    fn float(&self, p: &FloatParam, at: TexCoord) -> f32 {
+        Scene::float(self, p, at)
     }
 }
 
@@ -55,13 +56,13 @@ impl Params for Scene {
 pub struct ConstantParams;
 
 impl Params for ConstantParams {
-    fn color(&self, p: &ColorParam, _uv: Vec2) -> Vec3 {
+    fn color(&self, p: &ColorParam, _at: TexCoord) -> Vec3 {
         match p {
             ColorParam::Const(c) => (*c).into(),
             ColorParam::Texture(_) => Vec3::splat(0.5),
         }
     }
-    fn float(&self, p: &FloatParam, _uv: Vec2) -> f32 {
+    fn float(&self, p: &FloatParam, _at: TexCoord) -> f32 {
         match p {
             FloatParam::Const(c) => *c,
             FloatParam::Texture(_) => 0.5,
@@ -93,12 +94,12 @@ impl RtMaterial {
 }
 
 impl RtMaterial {
-    /// The BSDF of this material with its parameters evaluated at `uv` (`None` for `null`
-    /// and for an unresolved `twosided` or `normalmap`).
-    pub fn bsdf<P: Params>(&self, p: &P, uv: Vec2) -> Option<Bsdf> {
+    /// The BSDF of this material with its parameters evaluated at `at` (`None` for `null`,
+    /// `unlit` and an unresolved `twosided`, `normalmap` or `bumpmap`).
+    pub fn bsdf<P: Params>(&self, p: &P, at: TexCoord) -> Option<Bsdf> {
         let bsdf = match &self.material {
             Material::Diffuse { reflectance } => {
-                Bsdf::Diffuse(Diffuse::new(p.color(reflectance, uv)))
+                Bsdf::Diffuse(Diffuse::new(p.color(reflectance, at)))
             }
             Material::Conductor {
                 eta,
@@ -107,10 +108,10 @@ impl RtMaterial {
             } => Bsdf::Conductor(Conductor::new(
                 (*eta).into(),
                 (*k).into(),
-                p.color(specular_reflectance, uv),
+                p.color(specular_reflectance, at),
             )),
             Material::Mirror { reflectance } => {
-                Bsdf::Conductor(Conductor::mirror(p.color(reflectance, uv)))
+                Bsdf::Conductor(Conductor::mirror(p.color(reflectance, at)))
             }
             Material::RoughConductor {
                 distribution,
@@ -121,11 +122,11 @@ impl RtMaterial {
                 specular_reflectance,
             } => Bsdf::RoughConductor(RoughConductor::new(
                 microfacet_type(*distribution),
-                alpha(p.float(alpha_u, uv)),
-                alpha(p.float(alpha_v, uv)),
+                alpha(p.float(alpha_u, at)),
+                alpha(p.float(alpha_v, at)),
                 (*eta).into(),
                 (*k).into(),
-                p.color(specular_reflectance, uv),
+                p.color(specular_reflectance, at),
             )),
             Material::Dielectric {
                 int_ior,
@@ -135,8 +136,8 @@ impl RtMaterial {
                 ..
             } => {
                 let mut d = Dielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(specular_reflectance, uv);
-                d.specular_transmittance = p.color(specular_transmittance, uv);
+                d.specular_reflectance = p.color(specular_reflectance, at);
+                d.specular_transmittance = p.color(specular_transmittance, at);
                 Bsdf::Dielectric(d)
             }
             Material::ThinDielectric {
@@ -146,8 +147,8 @@ impl RtMaterial {
                 specular_transmittance,
             } => {
                 let mut d = ThinDielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(specular_reflectance, uv);
-                d.specular_transmittance = p.color(specular_transmittance, uv);
+                d.specular_reflectance = p.color(specular_reflectance, at);
+                d.specular_transmittance = p.color(specular_transmittance, at);
                 Bsdf::ThinDielectric(d)
             }
             Material::RoughDielectric {
@@ -161,13 +162,13 @@ impl RtMaterial {
             } => {
                 let mut d = RoughDielectric::new(
                     microfacet_type(*distribution),
-                    alpha(p.float(alpha_u, uv)),
-                    alpha(p.float(alpha_v, uv)),
+                    alpha(p.float(alpha_u, at)),
+                    alpha(p.float(alpha_v, at)),
                     *int_ior,
                     *ext_ior,
                 );
-                d.specular_reflectance = p.color(specular_reflectance, uv);
-                d.specular_transmittance = p.color(specular_transmittance, uv);
+                d.specular_reflectance = p.color(specular_reflectance, at);
+                d.specular_transmittance = p.color(specular_transmittance, at);
                 Bsdf::RoughDielectric(d)
             }
             Material::Plastic {
@@ -177,8 +178,8 @@ impl RtMaterial {
                 ext_ior,
                 nonlinear,
             } => Bsdf::Plastic(Plastic::new(
-                p.color(diffuse_reflectance, uv),
-                p.color(specular_reflectance, uv),
+                p.color(diffuse_reflectance, at),
+                p.color(specular_reflectance, at),
                 *int_ior,
                 *ext_ior,
                 *nonlinear,
@@ -197,8 +198,8 @@ impl RtMaterial {
                     Microfacet::isotropic(microfacet_type(*distribution), alpha(*a)),
                     int_ior / ext_ior,
                     tables,
-                    p.color(diffuse_reflectance, uv),
-                    p.color(specular_reflectance, uv),
+                    p.color(diffuse_reflectance, at),
+                    p.color(specular_reflectance, at),
                     *nonlinear,
                 ))
             }
@@ -229,8 +230,8 @@ impl RtMaterial {
                     *normalized,
                     *kd_fresnel,
                     *exponent,
-                    p.color(diffuse, uv),
-                    p.color(specular, uv),
+                    p.color(diffuse, at),
+                    p.color(specular, at),
                     *ior,
                 )
                 .with_absorption(*ior, *absorption);
@@ -256,8 +257,10 @@ impl RtMaterial {
                 }
             }
             Material::Null
+            | Material::Unlit { .. }
             | Material::TwoSided { .. }
             | Material::NormalMap { .. }
+            | Material::BumpMap { .. }
             | Material::Mask { .. } => return None,
         };
         Some(bsdf)
@@ -292,7 +295,7 @@ pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId
         match &m.material {
             Material::TwoSided { front, back } => todo.extend(std::iter::once(*front).chain(*back)),
             Material::Mask { nested, .. } => todo.push(*nested),
-            Material::NormalMap { .. } => return false,
+            Material::NormalMap { .. } | Material::BumpMap { .. } => return false,
             Material::RoughConductor {
                 alpha_u, alpha_v, ..
             }
@@ -312,6 +315,7 @@ pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId
             | Material::RoughPlastic { .. }
             | Material::NoriMicrofacet { .. }
             | Material::PhongFamily { .. }
+            | Material::Unlit { .. }
             | Material::Null => {}
         }
     }
@@ -351,6 +355,15 @@ impl Scene {
         }
     }
 
+    /// The colour an [`Material::Unlit`] surface shows at `si` (`None` for other materials).
+    pub fn unlit_color(&self, si: &SurfaceInteraction) -> Option<Vec3> {
+        let id = self.shapes[si.shape as usize].material?;
+        match &self.materials[id.0 as usize].material {
+            Material::Unlit { color } => Some(self.color(color, si.tex())),
+            _ => None,
+        }
+    }
+
     /// The ambient reflectance of the material at `si` (`None` without a material).
     pub fn ambient_reflectance(&self, si: &SurfaceInteraction) -> Option<Vec3> {
         let id = self.shapes[si.shape as usize].material?;
@@ -383,12 +396,24 @@ impl Scene {
                     }
                 }
                 Material::NormalMap { nested, texture } => {
-                    let c = self.textures[texture.0 as usize].eval(si.uv);
+                    let c = self.textures[texture.0 as usize].eval(si.tex());
                     let local = (c * 2.0 - Vec3::ONE).normalize_or_zero();
                     if local.z > 0.0 {
                         let n = frame.to_world(local).normalize();
                         frame = Frame::from_normal_tangent(n, frame.s);
                     }
+                    id = *nested;
+                }
+                Material::BumpMap {
+                    nested,
+                    texture,
+                    factor,
+                } => {
+                    let t = &self.textures[texture.0 as usize];
+                    let g = t.height_gradient(si.tex(), frame.s, frame.t);
+                    let n = frame.n;
+                    let tilted = (n - *factor * (g - g.dot(n) * n)).normalize_or(n);
+                    frame = Frame::from_normal_tangent(tilted, frame.s);
                     id = *nested;
                 }
                 // The opacity acts in `Scene::intersect` (a cut-out is never hit).
@@ -399,7 +424,7 @@ impl Scene {
                 }
             }
         }
-        let bsdf = mat?.bsdf(self, si.uv)?;
+        let bsdf = mat?.bsdf(self, si.tex())?;
         Some((bsdf, frame))
     }
 }

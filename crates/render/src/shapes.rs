@@ -202,6 +202,15 @@ pub struct SurfaceInteraction {
 }
 
 impl SurfaceInteraction {
+    /// Where textures are looked up at this point.
+    #[inline]
+    pub fn tex(&self) -> crate::textures::TexCoord {
+        crate::textures::TexCoord {
+            uv: self.uv,
+            p: self.p,
+        }
+    }
+
     /// A ray leaving the surface in direction `d`, origin offset to the side `d` points to.
     #[inline]
     pub fn spawn_ray(&self, d: Vec3) -> Ray {

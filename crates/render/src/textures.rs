@@ -1,17 +1,35 @@
-//! Textures evaluated at a surface uv (Mitsuba 3 semantics).
+//! Textures evaluated at a surface point (Mitsuba 3 semantics, plus the CENG795 course's).
 //!
 //! - `Bitmap`: uv is transformed by `to_uv`, then wrapped; (0,0) is the *top-left* corner of
 //!   the image file (Mitsuba 3 does not flip bitmaps; its OBJ reader flips v instead).
-//!   Bilinear filtering between pixel centres, or nearest.
+//!   Bilinear filtering between pixel centres, or nearest. With `corner_texels` (CENG795)
+//!   texel (i, j) sits at (i/w, j/h): nearest is texel (round(u·w), round(v·h)) and bilinear
+//!   weights the four texels around (u·w, v·h), as the course's lecture defines them.
 //! - `Checkerboard`: `color0` where the fractional parts of u and v are both below or both
 //!   above ½, `color1` elsewhere.
+//! - `Perlin`, `SolidChecker`: solid textures of the world-space point (see [`perlin`]).
+//! - `Affine`: another texture times a scale plus an offset.
 
 use std::sync::Arc;
 
-use scene::{TextureFilter, WrapMode};
+use scene::{NoiseConversion, TextureFilter, WrapMode};
 
 use crate::film::Image;
 use crate::math::{Mat3, Vec2, Vec3};
+
+/// Where a texture is looked up: the surface's uv and its world-space point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TexCoord {
+    pub uv: Vec2,
+    pub p: Vec3,
+}
+
+impl TexCoord {
+    /// A lookup that only has a uv (surface textures ignore `p`).
+    pub fn uv(uv: Vec2) -> TexCoord {
+        TexCoord { uv, p: Vec3::ZERO }
+    }
+}
 
 #[derive(Clone, Debug)]
 pub enum Texture {
@@ -21,12 +39,87 @@ pub enum Texture {
         filter: TextureFilter,
         wrap: WrapMode,
         to_uv: Mat3,
+        corner_texels: bool,
     },
     Checkerboard {
         color0: Vec3,
         color1: Vec3,
         to_uv: Mat3,
     },
+    Perlin {
+        scale: f32,
+        conversion: NoiseConversion,
+    },
+    SolidChecker {
+        black: Vec3,
+        white: Vec3,
+        scale: f32,
+        offset: f32,
+    },
+    Affine {
+        texture: Box<Texture>,
+        scale: f32,
+        offset: Vec3,
+    },
+}
+
+/// The course's gradient set: the 12 cube-edge directions, four of them repeated to make 16.
+const GRADIENTS: [[f32; 3]; 16] = [
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [-1.0, -1.0, 0.0],
+    [1.0, 0.0, 1.0],
+    [-1.0, 0.0, 1.0],
+    [1.0, 0.0, -1.0],
+    [-1.0, 0.0, -1.0],
+    [0.0, 1.0, 1.0],
+    [0.0, -1.0, 1.0],
+    [0.0, 1.0, -1.0],
+    [0.0, -1.0, -1.0],
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+    [0.0, -1.0, 1.0],
+    [0.0, -1.0, -1.0],
+];
+
+/// The permutation table P of 0..15. The course draws a random one when its program starts;
+/// ours is one fixed draw, so that images repeat from run to run.
+pub const PERMUTATION: [usize; 16] = [11, 4, 14, 1, 8, 6, 0, 13, 3, 15, 9, 2, 7, 12, 5, 10];
+
+/// The course's weight f(x) = −6|x|⁵ + 15|x|⁴ − 10|x|³ + 1 (1 at 0, 0 at |x| = 1).
+#[inline]
+fn weight(x: f32) -> f32 {
+    let a = x.abs();
+    let a3 = a * a * a;
+    a3 * (a * (-6.0 * a + 15.0) - 10.0) + 1.0
+}
+
+/// The gradient of lattice point (i, j, k): G[P[(i + P[(j + P[k mod 16]) mod 16]) mod 16]].
+#[inline]
+fn lattice_gradient(i: i64, j: i64, k: i64) -> Vec3 {
+    let m = |x: i64| x.rem_euclid(16) as usize;
+    let g = GRADIENTS[PERMUTATION[m(i + PERMUTATION[m(j + PERMUTATION[m(k)] as i64)] as i64)]];
+    Vec3::new(g[0], g[1], g[2])
+}
+
+/// The CENG795 course's Perlin noise at `p` (already scaled), in [−1, 1]: the sum over the
+/// eight lattice points (i, j, k) of the cell around p of G(i,j,k)·v · f(vx) f(vy) f(vz),
+/// with v = p − (i, j, k).
+pub fn perlin(p: Vec3) -> f32 {
+    let base = p.floor();
+    let (x0, y0, z0) = (base.x as i64, base.y as i64, base.z as i64);
+    let mut sum = 0.0;
+    for dz in 0..2 {
+        for dy in 0..2 {
+            for dx in 0..2 {
+                let (i, j, k) = (x0 + dx, y0 + dy, z0 + dz);
+                let v = p - Vec3::new(i as f32, j as f32, k as f32);
+                sum += lattice_gradient(i, j, k).dot(v) * weight(v.x) * weight(v.y) * weight(v.z);
+            }
+        }
+    }
+    sum
 }
 
 #[inline]
@@ -44,7 +137,7 @@ fn wrap_index(i: i64, n: u32, mode: WrapMode) -> u32 {
 }
 
 impl Texture {
-    pub fn eval(&self, uv: Vec2) -> Vec3 {
+    pub fn eval(&self, at: TexCoord) -> Vec3 {
         match self {
             Texture::Constant(c) => *c,
             Texture::Checkerboard {
@@ -52,7 +145,7 @@ impl Texture {
                 color1,
                 to_uv,
             } => {
-                let p = to_uv.transform_point2(uv);
+                let p = to_uv.transform_point2(at.uv);
                 let f = p - p.floor();
                 if (f.x > 0.5) == (f.y > 0.5) {
                     *color0
@@ -65,14 +158,17 @@ impl Texture {
                 filter,
                 wrap,
                 to_uv,
+                corner_texels,
             } => {
-                let p = to_uv.transform_point2(uv);
+                let p = to_uv.transform_point2(at.uv);
                 if !p.is_finite() {
                     return Vec3::ZERO;
                 }
                 let (w, h) = (image.width, image.height);
-                let x = p.x * w as f32;
-                let y = p.y * h as f32;
+                // Centred texels: texel i covers [i, i+1) of x; corner texels: [i-½, i+½).
+                let shift = if *corner_texels { 0.5 } else { 0.0 };
+                let x = p.x * w as f32 + shift;
+                let y = p.y * h as f32 + shift;
                 match filter {
                     TextureFilter::Nearest => {
                         let xi = wrap_index(x.floor() as i64, w, *wrap);
@@ -92,6 +188,83 @@ impl Texture {
                     }
                 }
             }
+            Texture::Perlin { scale, conversion } => {
+                let n = perlin(at.p * *scale);
+                Vec3::splat(match conversion {
+                    NoiseConversion::Linear => 0.5 * (n + 1.0),
+                    NoiseConversion::AbsVal => n.abs(),
+                })
+            }
+            Texture::SolidChecker {
+                black,
+                white,
+                scale,
+                offset,
+            } => {
+                let c = ((at.p + Vec3::splat(*offset)) * *scale).floor();
+                let odd = (c.x as i64 + c.y as i64 + c.z as i64).rem_euclid(2) == 1;
+                if odd { *black } else { *white }
+            }
+            Texture::Affine {
+                texture,
+                scale,
+                offset,
+            } => texture.eval(at) * *scale + *offset,
+        }
+    }
+
+    /// The world-space gradient of the texture's height (its channel mean) at `at`, for bump
+    /// mapping. Image textures differentiate between neighbouring texels along u and v, which
+    /// run along `s` and `t` (the unit tangents of the shading frame); solid textures by
+    /// central differences in space.
+    pub fn height_gradient(&self, at: TexCoord, s: Vec3, t: Vec3) -> Vec3 {
+        let height = |at: TexCoord| {
+            let c = self.eval(at);
+            (c.x + c.y + c.z) / 3.0
+        };
+        match self.texel_size() {
+            Some(du) => {
+                let h0 = height(at);
+                let hu = height(TexCoord {
+                    uv: at.uv + Vec2::new(du.x, 0.0),
+                    ..at
+                });
+                let hv = height(TexCoord {
+                    uv: at.uv + Vec2::new(0.0, du.y),
+                    ..at
+                });
+                (hu - h0) * s + (hv - h0) * t
+            }
+            None => {
+                let eps = self.solid_epsilon();
+                let d = |e: Vec3| {
+                    height(TexCoord { p: at.p + e, ..at }) - height(TexCoord { p: at.p - e, ..at })
+                };
+                Vec3::new(d(Vec3::X * eps), d(Vec3::Y * eps), d(Vec3::Z * eps)) / (2.0 * eps)
+            }
+        }
+    }
+
+    /// One texel in uv, for textures made of texels.
+    fn texel_size(&self) -> Option<Vec2> {
+        match self {
+            Texture::Bitmap { image, .. } => Some(Vec2::new(
+                1.0 / image.width as f32,
+                1.0 / image.height as f32,
+            )),
+            Texture::Affine { texture, .. } => texture.texel_size(),
+            _ => None,
+        }
+    }
+
+    /// A finite-difference step small against a solid texture's features.
+    fn solid_epsilon(&self) -> f32 {
+        match self {
+            Texture::Perlin { scale, .. } | Texture::SolidChecker { scale, .. } => {
+                1e-3 / scale.abs().max(1e-6)
+            }
+            Texture::Affine { texture, .. } => texture.solid_epsilon(),
+            _ => 1e-3,
         }
     }
 
@@ -104,6 +277,16 @@ impl Texture {
                 let n = image.pixels.len().max(1) as f32;
                 image.pixels.iter().copied().sum::<Vec3>() / n
             }
+            Texture::Perlin { conversion, .. } => Vec3::splat(match conversion {
+                NoiseConversion::Linear => 0.5,
+                NoiseConversion::AbsVal => 0.25,
+            }),
+            Texture::SolidChecker { black, white, .. } => 0.5 * (*black + *white),
+            Texture::Affine {
+                texture,
+                scale,
+                offset,
+            } => texture.mean() * *scale + *offset,
         }
     }
 }
@@ -111,6 +294,107 @@ impl Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The noise is the course's formula: an independent, literal f64 evaluation of
+    /// Σ G(i,j,k)·v f(vx) f(vy) f(vz) over the eight lattice points at a list of points, and
+    /// one value worked by hand: at (0.5, 0, 0) only (0,0,0) and (1,0,0) weigh (f(±½) = ½,
+    /// f(0) = 1, f(±1) = 0), with G(0,0,0) = G[P[P[P[0]]]] = G[14] = (0,−1,1) and G(1,0,0) =
+    /// G[P[1 + P[P[0]]]] = G[P[3]] = G[1] = (−1,1,0): n = ½·(0·½) + ½·(−1·−½) = 0.25.
+    #[test]
+    fn perlin_is_the_course_formula() {
+        assert!((perlin(Vec3::new(0.5, 0.0, 0.0)) - 0.25).abs() < 1e-6);
+        let literal = |x: f64, y: f64, z: f64| -> f64 {
+            let f = |t: f64| {
+                let a = t.abs();
+                -6.0 * a.powi(5) + 15.0 * a.powi(4) - 10.0 * a.powi(3) + 1.0
+            };
+            let m = |v: i64| v.rem_euclid(16) as usize;
+            let mut sum = 0.0;
+            for i in [x.floor() as i64, x.floor() as i64 + 1] {
+                for j in [y.floor() as i64, y.floor() as i64 + 1] {
+                    for k in [z.floor() as i64, z.floor() as i64 + 1] {
+                        let idx =
+                            PERMUTATION[m(i + PERMUTATION[m(j + PERMUTATION[m(k)] as i64)] as i64)];
+                        let g = GRADIENTS[idx];
+                        let v = [x - i as f64, y - j as f64, z - k as f64];
+                        let dot = g[0] as f64 * v[0] + g[1] as f64 * v[1] + g[2] as f64 * v[2];
+                        sum += dot * f(v[0]) * f(v[1]) * f(v[2]);
+                    }
+                }
+            }
+            sum
+        };
+        let mut rng = crate::stats::Pcg32::new(17, 3);
+        let mut points = vec![(0.25, 0.5, 0.75), (-3.3, 7.1, -0.2), (15.9, -16.1, 31.5)];
+        for _ in 0..200 {
+            let mut c = || (rng.next_f32() as f64 - 0.5) * 40.0;
+            points.push((c(), c(), c()));
+        }
+        for (x, y, z) in points {
+            let ours = perlin(Vec3::new(x as f32, y as f32, z as f32)) as f64;
+            let theirs = literal(x as f32 as f64, y as f32 as f64, z as f32 as f64);
+            assert!(
+                (ours - theirs).abs() < 1e-5,
+                "({x}, {y}, {z}): {ours} vs {theirs}"
+            );
+            assert!(ours.abs() <= 1.0);
+        }
+        // Zero on the lattice; the conversions map into [0, 1].
+        assert_eq!(perlin(Vec3::new(3.0, -2.0, 5.0)), 0.0);
+        let patch = Texture::Perlin {
+            scale: 1.0,
+            conversion: NoiseConversion::Linear,
+        };
+        let vein = Texture::Perlin {
+            scale: 1.0,
+            conversion: NoiseConversion::AbsVal,
+        };
+        let at = TexCoord {
+            uv: Vec2::ZERO,
+            p: Vec3::new(0.5, 0.0, 0.0),
+        };
+        assert!((patch.eval(at).x - 0.625).abs() < 1e-6);
+        assert!((vein.eval(at).x - 0.25).abs() < 1e-6);
+    }
+
+    /// The solid gradient used for bump mapping is the derivative of the height: compared
+    /// with a wide central difference of the literal noise.
+    #[test]
+    fn perlin_height_gradient_is_its_derivative() {
+        let t = Texture::Perlin {
+            scale: 2.0,
+            conversion: NoiseConversion::Linear,
+        };
+        let p = Vec3::new(0.37, -1.21, 2.03);
+        let g = t.height_gradient(TexCoord { uv: Vec2::ZERO, p }, Vec3::X, Vec3::Y);
+        let h = 1e-2;
+        for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+            let d =
+                (0.5 * (perlin((p + axis * h) * 2.0) - perlin((p - axis * h) * 2.0))) / (2.0 * h);
+            assert!(
+                (g.dot(axis) - d).abs() < 0.02 * d.abs().max(0.1),
+                "{g} vs {d}"
+            );
+        }
+    }
+
+    #[test]
+    fn corner_texels_round_to_the_nearest() {
+        let mut img = Image::new(4, 1);
+        for i in 0..4 {
+            img.set(i, 0, Vec3::splat(i as f32));
+        }
+        let t = Texture::Bitmap {
+            image: Arc::new(img),
+            filter: TextureFilter::Nearest,
+            wrap: WrapMode::Repeat,
+            to_uv: Mat3::IDENTITY,
+            corner_texels: true,
+        };
+        // u·w = 1.4 → texel 1; 1.6 → texel 2; 3.6 → 4 wraps to 0.
+        let at = |u: f32| t.eval(TexCoord::uv(Vec2::new(u / 4.0, 0.0))).x;
+        assert_eq!((at(1.4), at(1.6), at(3.6)), (1.0, 2.0, 0.0));
+    }
 
     #[test]
     fn wrap_modes() {
@@ -129,10 +413,10 @@ mod tests {
             color1: Vec3::ONE,
             to_uv: Mat3::IDENTITY,
         };
-        assert_eq!(t.eval(Vec2::new(0.25, 0.25)), Vec3::ZERO);
-        assert_eq!(t.eval(Vec2::new(0.75, 0.75)), Vec3::ZERO);
-        assert_eq!(t.eval(Vec2::new(0.75, 0.25)), Vec3::ONE);
-        assert_eq!(t.eval(Vec2::new(1.25, 0.75)), Vec3::ONE);
+        assert_eq!(t.eval(TexCoord::uv(Vec2::new(0.25, 0.25))), Vec3::ZERO);
+        assert_eq!(t.eval(TexCoord::uv(Vec2::new(0.75, 0.75))), Vec3::ZERO);
+        assert_eq!(t.eval(TexCoord::uv(Vec2::new(0.75, 0.25))), Vec3::ONE);
+        assert_eq!(t.eval(TexCoord::uv(Vec2::new(1.25, 0.75))), Vec3::ONE);
     }
 
     #[test]
@@ -147,10 +431,14 @@ mod tests {
             filter: TextureFilter::Bilinear,
             wrap: WrapMode::Clamp,
             to_uv: Mat3::IDENTITY,
+            corner_texels: false,
         };
-        assert!((t.eval(Vec2::new(0.25, 0.25)) - Vec3::new(1.0, 0.0, 0.0)).length() < 1e-6);
-        assert!((t.eval(Vec2::new(0.75, 0.75)) - Vec3::ONE).length() < 1e-6);
-        let mid = t.eval(Vec2::new(0.5, 0.5));
+        assert!(
+            (t.eval(TexCoord::uv(Vec2::new(0.25, 0.25))) - Vec3::new(1.0, 0.0, 0.0)).length()
+                < 1e-6
+        );
+        assert!((t.eval(TexCoord::uv(Vec2::new(0.75, 0.75))) - Vec3::ONE).length() < 1e-6);
+        let mid = t.eval(TexCoord::uv(Vec2::new(0.5, 0.5)));
         assert!((mid - Vec3::splat(0.5)).length() < 1e-6);
     }
 }

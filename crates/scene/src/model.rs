@@ -66,6 +66,9 @@ pub struct SceneDesc {
     pub integrator: IntegratorDesc,
     /// Background radiance seen by rays that escape (formats with a "background colour").
     pub background: Option<Rgb>,
+    /// A texture spread over the image instead (CENG795 `replace_background`): camera rays
+    /// that escape see it at the film position (u, v) ∈ [0, 1]², v down.
+    pub background_texture: Option<TextureId>,
     /// How integrators pick one emitter for next-event estimation.
     pub light_selection: LightSelection,
     /// Non-fatal findings of the loader (unknown parameters, ignored features...).
@@ -320,6 +323,16 @@ pub enum Material {
         nested: MaterialId,
         opacity: FloatParam,
     },
+    /// Bump map around `nested` (CENG795 `bump_normal`): the shading normal tilts against the
+    /// gradient of the texture's height (its channel mean), scaled by `factor`.
+    BumpMap {
+        nested: MaterialId,
+        texture: TextureId,
+        factor: f32,
+    },
+    /// No shading at all (CENG795 `replace_all`): the surface shows `color` as radiance to
+    /// whoever looks at it, reflects nothing and lights nothing else.
+    Unlit { color: ColorParam },
     /// Invisible interface (Mitsuba `null`).
     Null,
 }
@@ -372,6 +385,8 @@ impl Material {
             Material::RoughPlastic { .. } => "roughplastic",
             Material::TwoSided { .. } => "twosided",
             Material::NormalMap { .. } => "normalmap",
+            Material::BumpMap { .. } => "bumpmap",
+            Material::Unlit { .. } => "unlit",
             Material::Mask { .. } => "mask",
             Material::Mirror { .. } => "mirror",
             Material::NoriMicrofacet { .. } => "microfacet",
@@ -416,12 +431,45 @@ pub enum Texture {
         /// Gamma used to linearise 8-bit data when not sRGB (CENG795 `_degamma`, CS-E5520 2.2).
         gamma: Option<f32>,
         to_uv: Mat3,
+        /// Texel (i, j) sits at uv (i/w, j/h) — the CENG795 course's addressing, where nearest
+        /// is texel (round(u·w), round(v·h)) — instead of at its centre ((i+½)/w, (j+½)/h).
+        corner_texels: bool,
     },
     Checkerboard {
         color0: Rgb,
         color1: Rgb,
         to_uv: Mat3,
     },
+    /// The CENG795 course's Perlin noise at the world-space point p·`scale` (render crate
+    /// `textures::perlin` has the definition), converted to [0, 1] as `conversion` says; grey.
+    Perlin {
+        scale: f32,
+        conversion: NoiseConversion,
+    },
+    /// The CENG795 course's solid checkerboard: cells of side 1/`scale` in world space, shifted
+    /// by `offset`; `black` where the parities of ⌊(x + offset)·scale⌋, ⌊(y + …)⌋, ⌊(z + …)⌋
+    /// have an odd sum, `white` elsewhere.
+    SolidChecker {
+        black: Rgb,
+        white: Rgb,
+        scale: f32,
+        offset: f32,
+    },
+    /// `texture` · `scale` + `offset` (CENG795 `Normalizer` and `blend_kd`).
+    Affine {
+        texture: Box<Texture>,
+        scale: f32,
+        offset: Rgb,
+    },
+}
+
+/// How the course's Perlin noise n ∈ [−1, 1] becomes a value in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoiseConversion {
+    /// (n + 1) / 2 (`linear`, the lecture's "patch").
+    Linear,
+    /// |n| (`absval`, the lecture's "vein").
+    AbsVal,
 }
 
 // ---------------------------------------------------------------------------------------------

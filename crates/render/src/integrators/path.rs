@@ -26,6 +26,7 @@ use crate::lights::{Light, Receiver};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::{Sampler, warp};
 use crate::shapes::SurfaceInteraction;
+use crate::textures::TexCoord;
 
 /// How emission found by BSDF-sampled rays is weighted against emitter sampling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -566,10 +567,14 @@ fn vertex(
                 });
                 l += st.throughput * le * w;
             }
-            if let Some(bg) = scene.background
-                && st.depth == 0
-            {
-                l += bg;
+            if st.depth == 0 {
+                if let Some(bg) = scene.background {
+                    l += bg;
+                }
+                if let Some(t) = scene.background_texture {
+                    let uv = scene.camera.film_uv(st.ray.o, st.ray.d);
+                    l += scene.textures[t as usize].eval(TexCoord::uv(uv));
+                }
             }
             if l != Vec3::ZERO {
                 *result += l;
@@ -599,6 +604,19 @@ fn vertex(
             *result += l;
             rec.contribution(l, contribution(Via::Emission, st.depth + 1));
         }
+    }
+
+    // A surface without shading shows its colour to whoever reaches it, and ends the path.
+    if scene.has_unlit
+        && let Some(c) = scene.unlit_color(si)
+    {
+        let l = st.throughput * c;
+        if l != Vec3::ZERO {
+            *result += l;
+            rec.contribution(l, contribution(Via::Emission, st.depth + 1));
+        }
+        rec.end(PathEnd::Absorbed);
+        return false;
     }
 
     let bsdf = scene.bsdf_at(si);

@@ -28,6 +28,7 @@ use crate::math::{Frame, INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance, rsqrt};
 use crate::sampling::distrib::{Distribution1D, Distribution2D};
 use crate::sampling::warp;
 use crate::shapes::{Ellipsoid, ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
+use crate::textures::TexCoord;
 use glam::Mat3A;
 
 /// A point on an emitter with what it sends towards the receiver.
@@ -605,7 +606,7 @@ impl Light {
                         let uv = if textured { sphere_uv(dir) } else { Vec2::ZERO };
                         return Some(LightSample {
                             wi,
-                            li: scene.color(radiance, uv),
+                            li: scene.color(radiance, TexCoord { uv, p }),
                             pdf: pdf_solid,
                             delta: false,
                             target: ShadowTarget::Surface { p, p_error, n },
@@ -625,7 +626,7 @@ impl Light {
                 }
                 Some(LightSample {
                     wi,
-                    li: scene.color(radiance, uv),
+                    li: scene.color(radiance, TexCoord { uv, p }),
                     pdf: pdf * d2 / cos_l.abs(),
                     delta: false,
                     target: ShadowTarget::Surface { p, p_error, n },
@@ -684,7 +685,7 @@ impl Light {
                 ..
             } => {
                 if *two_sided || si.shading.n.dot(si.wo) > 0.0 {
-                    scene.color(radiance, si.uv)
+                    scene.color(radiance, si.tex())
                 } else {
                     Vec3::ZERO
                 }
@@ -752,7 +753,7 @@ fn sample_sphere(
     };
     Some(LightSample {
         wi,
-        li: scene.color(radiance, uv),
+        li: scene.color(radiance, TexCoord { uv, p }),
         pdf: pdf_solid,
         delta: false,
         target: ShadowTarget::Surface {

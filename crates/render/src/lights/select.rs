@@ -14,6 +14,7 @@ use crate::build::Scene;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::distrib::AliasTable;
 use crate::shapes::ShapeGeom;
+use crate::textures::TexCoord;
 
 use super::bvh::{LightBounds, LightBvh};
 use super::{Light, Receiver};
@@ -43,7 +44,7 @@ fn mean_radiance(scene: &Scene, c: &ColorParam) -> f32 {
                     ((i % N) as f32 + 0.5) / N as f32,
                     ((i / N) as f32 + 0.5) / N as f32,
                 );
-                sum += mean(scene.color(c, uv));
+                sum += mean(scene.color(c, TexCoord::uv(uv)));
             }
             sum / (N * N) as f32
         }

@@ -19,6 +19,25 @@
 //! thin-lens camera (`FocusDistance` + `ApertureSize`) with an off-centre window is
 //! approximated by a centred frustum aimed at the window centre (with a warning).
 //!
+//! Materials: every type keeps the course's ambient/diffuse/specular shading (the `_BRDF` it
+//! names, or Lambert + original Blinn–Phong); `mirror`, `conductor` and `dielectric` add the
+//! ideal lobe the course traces recursively, with `Roughness` as the homework's perturbation
+//! of its direction (render crate `bsdf::course`).
+//!
+//! Textures (homework 4): `Images` and `TextureMap`s of type `image` (nearest or bilinear,
+//! texel (i, j) at uv (i/w, j/h) as the lecture addresses them, values divided by
+//! `Normalizer`, default 255), `perlin` (the lecture's noise with its 16 gradients; `NoiseScale`,
+//! `NoiseConversion` linear/patch or absval/vein; the permutation is one fixed draw where the
+//! course draws one per run) and `checkerboard` (solid, in world space: `BlackColor`,
+//! `WhiteColor`, `Scale`, `Offset`). An object's `Textures` list applies them by `DecalMode`:
+//! `replace_kd`, `blend_kd` ((kd + t)/2), `replace_ks`, `replace_all` (the texture shown as
+//! radiance, in display units 255·t, no shading), `replace_normal` (tangent-space normal map),
+//! `bump_normal` (the normal tilted against the height gradient times `BumpFactor`: texel
+//! differences along u and v for images, the spatial gradient for Perlin noise). A
+//! `replace_background` map is the image's background, texel (i, j) on pixel (i, j).
+//! `TexCoordData` is indexed like `VertexData` (a mesh's `_textureOffset` shifts it); spheres
+//! with textures take the lecture's uv, u = (π − atan2(z, x))/2π, v = acos(y/r)/π.
+//!
 //! Output: a camera without `Tonemap` holds radiance in 0–255 display units, so its 8-bit
 //! image is clamp(round(L), 0, 255) per channel with no gamma (`Tonemap::DisplayUnits`); with
 //! a `Tonemap`, Reinhard's photographic operator. EXR output keeps the radiance either way.
@@ -397,6 +416,27 @@ fn degamma(c: Rgb, on: bool) -> Rgb {
 // ---------------------------------------------------------------------------------------------
 // Builder
 
+/// What a `TextureMap` does to the objects that list it (homework 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Decal {
+    ReplaceKd,
+    BlendKd,
+    ReplaceKs,
+    ReplaceAll,
+    ReplaceNormal,
+    BumpNormal,
+    ReplaceBackground,
+}
+
+#[derive(Clone, Debug)]
+struct TextureMap {
+    /// The texture's value in [0, 1] (image texels divided by the normalizer).
+    texture: Texture,
+    decal: Decal,
+    bump_factor: f32,
+    loc: Loc,
+}
+
 struct BaseMesh {
     mesh: Arc<TriMesh>,
     to_world: Mat4,
@@ -412,6 +452,11 @@ struct Builder {
     transforms: HashMap<(char, u32), Mat4>,
     materials: HashMap<u32, MaterialId>,
     images: HashMap<u32, PathBuf>,
+    texture_maps: HashMap<u32, TextureMap>,
+    /// Materials derived from a material and the texture maps an object lists.
+    textured: HashMap<(Option<MaterialId>, Vec<u32>), Option<MaterialId>>,
+    /// Radiance is in 0–255 display units (no camera has a `Tonemap`).
+    display_units: bool,
     meshes: HashMap<u32, BaseMesh>,
     /// Unsupported features met, reported once at the end.
     unsupported: Vec<String>,
@@ -434,6 +479,9 @@ impl Builder {
             transforms: HashMap::new(),
             materials: HashMap::new(),
             images: HashMap::new(),
+            texture_maps: HashMap::new(),
+            textured: HashMap::new(),
+            display_units: true,
             meshes: HashMap::new(),
             unsupported: Vec::new(),
             max_depth: 6,
@@ -484,6 +532,10 @@ impl Builder {
         for t in scene.children("Transformations") {
             self.transformations(t)?;
         }
+        self.display_units = !scene.children("Cameras").any(|c| {
+            c.children("Camera")
+                .any(|cam| cam.child("Tonemap").is_some())
+        });
         for t in scene.children("Textures") {
             self.textures(t)?;
         }
@@ -593,10 +645,296 @@ impl Builder {
                 self.images.insert(id, self.dir.join(p));
             }
         }
-        if t.child("TextureMap").is_some() {
-            self.unsupported("texture maps on objects (Textures.TextureMap)");
+        for n in t.children("TextureMap") {
+            let id = self.ctx.id(n)?;
+            let map = self.texture_map(n)?;
+            if map.decal == Decal::ReplaceBackground {
+                let tid = self.desc.add_texture(TextureDesc {
+                    texture: self.display(centred_texels(map.texture.clone())),
+                    name: Some(format!("texture map {id} (background)")),
+                    loc: map.loc.clone(),
+                });
+                self.desc.background_texture = Some(tid);
+            }
+            self.texture_maps.insert(id, map);
         }
         Ok(())
+    }
+
+    /// A texture map's parameter: the element `key`, or the attribute `_key` with its first
+    /// letter in lower case (`Normalizer` or `_normalizer`).
+    fn map_param<'a>(n: &'a Node, key: &str) -> Option<&'a Node> {
+        n.child(key).or_else(|| {
+            let mut attr = String::from("_");
+            let mut chars = key.chars();
+            if let Some(c) = chars.next() {
+                attr.extend(c.to_lowercase());
+            }
+            attr.extend(chars);
+            n.child(&attr)
+        })
+    }
+
+    fn map_float(&self, n: &Node, key: &str, default: f32) -> Result<f32> {
+        Self::map_param(n, key).map_or(Ok(default), |c| self.ctx.float(c))
+    }
+
+    fn map_word(&self, n: &Node, key: &str) -> Result<Option<String>> {
+        Self::map_param(n, key)
+            .map(|c| Ok(self.ctx.text(c)?.trim().to_ascii_lowercase()))
+            .transpose()
+    }
+
+    fn texture_map(&self, n: &Node) -> Result<TextureMap> {
+        let kind = self.map_word(n, "Type")?.unwrap_or_default();
+        let decal = match self.map_word(n, "DecalMode")?.as_deref() {
+            Some("replace_kd") => Decal::ReplaceKd,
+            Some("blend_kd") => Decal::BlendKd,
+            Some("replace_ks") => Decal::ReplaceKs,
+            Some("replace_all") => Decal::ReplaceAll,
+            Some("replace_normal") => Decal::ReplaceNormal,
+            Some("bump_normal") => Decal::BumpNormal,
+            Some("replace_background") => Decal::ReplaceBackground,
+            Some(o) => {
+                return Err(self.ctx.err(
+                    n,
+                    format!(
+                        "unknown decal mode '{o}' (expected replace_kd, blend_kd, replace_ks, \
+                         replace_all, replace_normal, bump_normal or replace_background)"
+                    ),
+                ));
+            }
+            None => return Err(self.ctx.err(n, "texture map without a 'DecalMode'")),
+        };
+        let bump_factor = self.map_float(n, "BumpFactor", 1.0)?;
+        let texture = match kind.as_str() {
+            "image" => {
+                let idn = Self::map_param(n, "ImageId")
+                    .ok_or_else(|| self.ctx.err(n, "image texture map without an 'ImageId'"))?;
+                let image = self.ctx.uint(idn)?;
+                let path = self
+                    .images
+                    .get(&image)
+                    .ok_or_else(|| self.ctx.err(idn, format!("image {image} is not defined")))?
+                    .clone();
+                let filter = match self.map_word(n, "Interpolation")?.as_deref() {
+                    Some("nearest") => TextureFilter::Nearest,
+                    Some("bilinear") | None => TextureFilter::Bilinear,
+                    Some(o) => {
+                        return Err(self.ctx.err(
+                            n,
+                            format!("unknown interpolation '{o}' (expected nearest or bilinear)"),
+                        ));
+                    }
+                };
+                let normalizer = self.map_float(n, "Normalizer", 255.0)?;
+                if !(normalizer > 0.0 && normalizer.is_finite()) {
+                    return Err(self.ctx.err(n, "the normalizer must be positive"));
+                }
+                let bitmap = Texture::Bitmap {
+                    path,
+                    filter,
+                    wrap: WrapMode::Repeat,
+                    raw: true,
+                    gamma: None,
+                    to_uv: Mat3::IDENTITY,
+                    corner_texels: true,
+                };
+                // Decoded texels are c / 255; the course divides c by the normalizer.
+                if normalizer == 255.0 {
+                    bitmap
+                } else {
+                    Texture::Affine {
+                        texture: Box::new(bitmap),
+                        scale: 255.0 / normalizer,
+                        offset: Vec3::ZERO,
+                    }
+                }
+            }
+            "perlin" => {
+                let conversion = match self.map_word(n, "NoiseConversion")?.as_deref() {
+                    Some("linear" | "patch") | None => NoiseConversion::Linear,
+                    Some("absval" | "vein") => NoiseConversion::AbsVal,
+                    Some(o) => {
+                        return Err(self.ctx.err(
+                            n,
+                            format!("unknown noise conversion '{o}' (expected linear or absval)"),
+                        ));
+                    }
+                };
+                Texture::Perlin {
+                    scale: self.map_float(n, "NoiseScale", 1.0)?,
+                    conversion,
+                }
+            }
+            "checkerboard" => {
+                let colour = |key: &str, d: Vec3| -> Result<Vec3> {
+                    Self::map_param(n, key).map_or(Ok(d), |c| self.ctx.vec3(c))
+                };
+                let black = colour("BlackColor", Vec3::ZERO)?;
+                let white = colour("WhiteColor", Vec3::ONE)?;
+                // Colours written in 0–255 are divided by 255 like texels.
+                let norm = if black.max_element() > 1.0 || white.max_element() > 1.0 {
+                    255.0
+                } else {
+                    1.0
+                };
+                Texture::SolidChecker {
+                    black: black / norm,
+                    white: white / norm,
+                    scale: self.map_float(n, "Scale", 1.0)?,
+                    offset: self.map_float(n, "Offset", 0.0)?,
+                }
+            }
+            o => {
+                return Err(self.ctx.err(
+                    n,
+                    format!(
+                        "unknown texture map type '{o}' (expected image, perlin or checkerboard)"
+                    ),
+                ));
+            }
+        };
+        Ok(TextureMap {
+            texture,
+            decal,
+            bump_factor,
+            loc: self.ctx.loc(n),
+        })
+    }
+
+    /// A texture's value as radiance the camera shows: 0–255 display units when the scene is
+    /// in them, so that the default normalizer pastes the texels themselves.
+    fn display(&self, texture: Texture) -> Texture {
+        if self.display_units {
+            Texture::Affine {
+                texture: Box::new(texture),
+                scale: 255.0,
+                offset: Vec3::ZERO,
+            }
+        } else {
+            texture
+        }
+    }
+
+    /// The material of object `n`: its `Material` with the `Textures` it lists applied
+    /// (homework 4: at most one shading and one normal texture per object).
+    fn object_material(&mut self, n: &Node) -> Result<Option<MaterialId>> {
+        let base = self.material_ref(n)?;
+        let Some(tn) = n.child("Textures") else {
+            return Ok(base);
+        };
+        let ids = self.ctx.uints(tn)?;
+        if ids.is_empty() {
+            return Ok(base);
+        }
+        let key = (base, ids.clone());
+        if let Some(m) = self.textured.get(&key) {
+            return Ok(*m);
+        }
+        let mut maps = Vec::new();
+        for &id in &ids {
+            let m = self
+                .texture_maps
+                .get(&id)
+                .ok_or_else(|| self.ctx.err(tn, format!("texture map {id} is not defined")))?;
+            maps.push(m.clone());
+        }
+        let mut desc = match base {
+            Some(b) => self.desc.material(b).clone(),
+            // The course's objects always name a material; without one, a grey diffuse.
+            None => MaterialDesc {
+                material: Material::PhongFamily {
+                    model: PhongModel::OriginalBlinnPhong,
+                    normalized: false,
+                    kd_fresnel: false,
+                    exponent: 1.0,
+                    diffuse: ColorParam::constant(0.5),
+                    specular: ColorParam::constant(0.0),
+                    ior: 1.5,
+                    absorption: 0.0,
+                    ideal: None,
+                },
+                ambient: Vec3::ZERO,
+                name: None,
+                loc: self.ctx.loc(n),
+            },
+        };
+        desc.name = Some(format!(
+            "{} with texture maps {ids:?}",
+            desc.name.as_deref().unwrap_or("material")
+        ));
+        // Shading decals change the material itself; normal decals wrap it afterwards.
+        let mut unlit = None;
+        for m in maps.iter() {
+            let add = |b: &mut Self, texture: Texture| {
+                b.desc.add_texture(TextureDesc {
+                    texture,
+                    name: None,
+                    loc: m.loc.clone(),
+                })
+            };
+            match m.decal {
+                Decal::ReplaceKd | Decal::BlendKd | Decal::ReplaceKs => {
+                    let Material::PhongFamily {
+                        diffuse, specular, ..
+                    } = &mut desc.material
+                    else {
+                        return Err(self.ctx.err(tn, "texture maps need a course material"));
+                    };
+                    let texture = match (m.decal, &*diffuse) {
+                        (Decal::BlendKd, ColorParam::Const(kd)) => Texture::Affine {
+                            texture: Box::new(m.texture.clone()),
+                            scale: 0.5,
+                            offset: *kd * 0.5,
+                        },
+                        _ => m.texture.clone(),
+                    };
+                    let id = ColorParam::Texture(add(self, texture));
+                    if m.decal == Decal::ReplaceKs {
+                        *specular = id;
+                    } else {
+                        *diffuse = id;
+                    }
+                }
+                Decal::ReplaceAll => {
+                    let texture = self.display(m.texture.clone());
+                    unlit = Some(ColorParam::Texture(add(self, texture)));
+                }
+                Decal::ReplaceNormal | Decal::BumpNormal | Decal::ReplaceBackground => {}
+            }
+        }
+        if let Some(color) = unlit {
+            desc.material = Material::Unlit { color };
+        }
+        let mut id = self.desc.add_material(desc);
+        for m in maps.iter() {
+            let texture = self.desc.add_texture(TextureDesc {
+                texture: m.texture.clone(),
+                name: None,
+                loc: m.loc.clone(),
+            });
+            let material = match m.decal {
+                Decal::ReplaceNormal => Material::NormalMap {
+                    nested: id,
+                    texture,
+                },
+                Decal::BumpNormal => Material::BumpMap {
+                    nested: id,
+                    texture,
+                    factor: m.bump_factor,
+                },
+                _ => continue,
+            };
+            id = self.desc.add_material(MaterialDesc {
+                material,
+                ambient: self.desc.material(id).ambient,
+                name: Some(format!("{:?} around material {}", m.decal, id.0)),
+                loc: m.loc.clone(),
+            });
+        }
+        self.textured.insert(key, Some(id));
+        Ok(Some(id))
     }
 
     // --- materials -------------------------------------------------------------------------
@@ -852,6 +1190,18 @@ impl Builder {
 
     /// Build a compact mesh from 1-based vertex ids into `VertexData`.
     fn mesh_from_ids(&self, n: &Node, ids: &[u32], smooth: bool) -> Result<TriMesh> {
+        self.mesh_from_ids_uv(n, ids, smooth, 0)
+    }
+
+    /// [`Self::mesh_from_ids`], with vertex id i reading its uv at `TexCoordData` id
+    /// i + `uv_shift` (a mesh's `_textureOffset` differing from its `_vertexOffset`).
+    fn mesh_from_ids_uv(
+        &self,
+        n: &Node,
+        ids: &[u32],
+        smooth: bool,
+        uv_shift: i64,
+    ) -> Result<TriMesh> {
         if !ids.len().is_multiple_of(3) {
             return Err(self.ctx.err(n, "face indices are not a multiple of 3"));
         }
@@ -868,7 +1218,11 @@ impl Builder {
                         let i = mesh.positions.len() as u32;
                         mesh.positions.push(p);
                         if use_uv {
-                            let uv = self.uvs.get(id as usize - 1).copied().unwrap_or_default();
+                            let uv = usize::try_from(i64::from(id) - 1 + uv_shift)
+                                .ok()
+                                .and_then(|i| self.uvs.get(i))
+                                .copied()
+                                .unwrap_or_default();
                             mesh.uvs.push(uv);
                         }
                         remap.insert(id, i);
@@ -912,9 +1266,6 @@ impl Builder {
             if n.child("MotionBlur").is_some() {
                 self.unsupported("MotionBlur");
             }
-            if n.child("Textures").is_some() {
-                self.unsupported("textures on objects");
-            }
             match key.as_str() {
                 "Mesh" | "LightMesh" => self.mesh(n, key == "LightMesh")?,
                 "MeshInstance" => self.instance(n)?,
@@ -925,7 +1276,7 @@ impl Builder {
                     }
                     let mesh = self.mesh_from_ids(n, &ids, false)?;
                     let to_world = self.transform_list(n.child("Transformations"))?;
-                    let material = self.material_ref(n)?;
+                    let material = self.object_material(n)?;
                     self.push(n, Shape::Mesh(Arc::new(mesh)), to_world, material, None);
                 }
                 "Sphere" | "LightSphere" => {
@@ -935,9 +1286,26 @@ impl Builder {
                     if radius <= 0.0 {
                         return Err(self.ctx.err(n, "radius must be positive"));
                     }
-                    let to_world = self.transform_list(n.child("Transformations"))?;
-                    let material = self.material_ref(n)?;
+                    let mut to_world = self.transform_list(n.child("Transformations"))?;
+                    let material = self.object_material(n)?;
                     let emission = self.emission(n, key == "LightSphere")?;
+                    let (mut center, mut radius) = (center, radius);
+                    if n.child("Textures").is_some() {
+                        // The course's sphere uv: θ = acos(y/r), φ = atan2(z, x),
+                        // u = (π − φ)/2π, v = θ/π — Mitsuba's (φ about +z from +x, θ from +z)
+                        // in the frame x' = −x, y' = z, z' = y.
+                        let course = Mat4::from_cols(
+                            glam::Vec4::new(-1.0, 0.0, 0.0, 0.0),
+                            glam::Vec4::new(0.0, 0.0, 1.0, 0.0),
+                            glam::Vec4::new(0.0, 1.0, 0.0, 0.0),
+                            glam::Vec4::W,
+                        );
+                        to_world = to_world
+                            * Mat4::from_translation(center)
+                            * Mat4::from_scale(Vec3::splat(radius))
+                            * course;
+                        (center, radius) = (Vec3::ZERO, 1.0);
+                    }
                     self.push(
                         n,
                         Shape::Sphere { center, radius },
@@ -957,7 +1325,7 @@ impl Builder {
                         return Err(self.ctx.err(n, "zero plane normal"));
                     }
                     let to_world = self.transform_list(n.child("Transformations"))?;
-                    let material = self.material_ref(n)?;
+                    let material = self.object_material(n)?;
                     self.push(
                         n,
                         Shape::InfinitePlane { point, normal },
@@ -1006,17 +1374,19 @@ impl Builder {
             }
             m
         } else {
-            let offset = match faces.child("_vertexOffset") {
-                Some(o) => self.ctx.uint(o)?,
-                None => 0,
+            let offset = |key: &str| match faces.child(key) {
+                Some(o) => self.ctx.uint(o),
+                None => Ok(0),
             };
+            let (offset, tex_offset) = (offset("_vertexOffset")?, offset("_textureOffset")?);
             let ids: Vec<u32> = self
                 .ctx
                 .uints(faces)?
                 .into_iter()
                 .map(|i| i.saturating_add(offset)) // overflow → out of range below
                 .collect();
-            self.mesh_from_ids(faces, &ids, smooth)?
+            let uv_shift = i64::from(tex_offset) - i64::from(offset);
+            self.mesh_from_ids_uv(faces, &ids, smooth, uv_shift)?
         };
         if mesh.indices.is_empty() {
             self.warn(n, "mesh has no faces");
@@ -1024,7 +1394,7 @@ impl Builder {
         mesh.normals.retain(|_| smooth);
         let mesh = Arc::new(mesh);
         let to_world = self.transform_list(n.child("Transformations"))?;
-        let material = self.material_ref(n)?;
+        let material = self.object_material(n)?;
         let emission = self.emission(n, light)?;
         if let Some(id) = n.child("_id").map(|i| self.ctx.uint(i)).transpose()? {
             self.meshes.insert(
@@ -1321,6 +1691,40 @@ impl Builder {
 }
 
 /// Area-weighted vertex normals.
+/// `t` with an image's texels at their centres: the background spreads texel (i, j) over the
+/// pixel (i, j) of an image of the texture's size.
+fn centred_texels(t: Texture) -> Texture {
+    match t {
+        Texture::Bitmap {
+            path,
+            filter,
+            wrap,
+            raw,
+            gamma,
+            to_uv,
+            ..
+        } => Texture::Bitmap {
+            path,
+            filter,
+            wrap,
+            raw,
+            gamma,
+            to_uv,
+            corner_texels: false,
+        },
+        Texture::Affine {
+            texture,
+            scale,
+            offset,
+        } => Texture::Affine {
+            texture: Box::new(centred_texels(*texture)),
+            scale,
+            offset,
+        },
+        other => other,
+    }
+}
+
 fn smooth_normals(mesh: &mut TriMesh) {
     let mut normals = vec![Vec3::ZERO; mesh.positions.len()];
     for t in &mesh.indices {

@@ -571,6 +571,7 @@ fn texture(
                 raw,
                 gamma: (!raw).then_some(TEXTURE_GAMMA),
                 to_uv: obj_to_uv(),
+                corner_texels: false,
             },
             name: path.file_name().map(|n| n.to_string_lossy().into_owned()),
             loc: loc.clone(),

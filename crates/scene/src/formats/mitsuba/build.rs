@@ -410,6 +410,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     raw,
                     gamma: None,
                     to_uv,
+                    corner_texels: false,
                 }
             }
             "checkerboard" => Texture::Checkerboard {
