@@ -649,12 +649,16 @@ impl Builder {
             let id = self.ctx.id(n)?;
             let map = self.texture_map(n)?;
             if map.decal == Decal::ReplaceBackground {
+                let mut texture = map.texture.clone();
+                centre_texels(&mut texture);
                 let tid = self.desc.add_texture(TextureDesc {
-                    texture: self.display(centred_texels(map.texture.clone())),
+                    texture: self.display(texture),
                     name: Some(format!("texture map {id} (background)")),
                     loc: map.loc.clone(),
                 });
+                // It replaces the background colour.
                 self.desc.background_texture = Some(tid);
+                self.desc.background = None;
             }
             self.texture_maps.insert(id, map);
         }
@@ -904,11 +908,13 @@ impl Builder {
                 Decal::ReplaceNormal | Decal::BumpNormal | Decal::ReplaceBackground => {}
             }
         }
+        let shaded = unlit.is_none();
         if let Some(color) = unlit {
             desc.material = Material::Unlit { color };
         }
         let mut id = self.desc.add_material(desc);
-        for m in maps.iter() {
+        // Normals do not matter to a surface without shading.
+        for m in maps.iter().filter(|_| shaded) {
             let texture = self.desc.add_texture(TextureDesc {
                 texture: m.texture.clone(),
                 name: None,
@@ -1691,37 +1697,13 @@ impl Builder {
 }
 
 /// Area-weighted vertex normals.
-/// `t` with an image's texels at their centres: the background spreads texel (i, j) over the
+/// Put an image's texels at their centres: the background spreads texel (i, j) over the
 /// pixel (i, j) of an image of the texture's size.
-fn centred_texels(t: Texture) -> Texture {
+fn centre_texels(t: &mut Texture) {
     match t {
-        Texture::Bitmap {
-            path,
-            filter,
-            wrap,
-            raw,
-            gamma,
-            to_uv,
-            ..
-        } => Texture::Bitmap {
-            path,
-            filter,
-            wrap,
-            raw,
-            gamma,
-            to_uv,
-            corner_texels: false,
-        },
-        Texture::Affine {
-            texture,
-            scale,
-            offset,
-        } => Texture::Affine {
-            texture: Box::new(centred_texels(*texture)),
-            scale,
-            offset,
-        },
-        other => other,
+        Texture::Bitmap { corner_texels, .. } => *corner_texels = false,
+        Texture::Affine { texture, .. } => centre_texels(texture),
+        _ => {}
     }
 }
 
