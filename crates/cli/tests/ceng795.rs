@@ -21,13 +21,7 @@ use scene::{Document, LoadOptions, SceneDesc};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
 fn shared() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/ceng795");
-    if p.is_dir() {
-        Some(p)
-    } else {
-        eprintln!("notice: {} absent, CENG795 CLI tests skipped", p.display());
-        None
-    }
+    scene::testing::shared_dir("scenes/ceng795")
 }
 
 fn temp_dir(name: &str) -> PathBuf {

@@ -317,14 +317,9 @@ fn command_line_flags() {
 /// timings at full size are in the issue notes).
 #[test]
 fn every_shared_dae_renders_with_its_own_camera() {
-    let shared = root().join("../shared/scenes/cs184");
-    if !shared.is_dir() {
-        eprintln!(
-            "notice: {} is absent; shared CS184 renders skipped",
-            shared.display()
-        );
+    let Some(shared) = scene::testing::shared_dir("scenes/cs184") else {
         return;
-    }
+    };
     let dir = std::env::temp_dir().join(format!("penumbra-cs184-all-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut files: Vec<PathBuf> = ["sky", "meshedit"]

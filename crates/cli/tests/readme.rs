@@ -110,7 +110,7 @@ fn shrink(args: &mut Vec<String>) {
 fn readme_commands_run_as_written() {
     let root = repo_root();
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
-    let shared = root.join("../shared").is_dir();
+    let shared = scene::testing::shared_dir("").is_some();
     let scratch = std::env::temp_dir().join(format!("penumbra-readme-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&scratch);
     let mut ran = 0;

@@ -639,10 +639,12 @@ mod tests {
         assert!(mv.t_test(0.5) > 0.001, "{}", mv.t_test(0.5));
         assert!(mv.t_test(0.52) < 1e-6);
         assert!((t_test(0.0, 1.0, 1_000_000, 0.0) - 1.0).abs() < 1e-12);
-        // |t| = 1.96 with many dof: p ≈ 0.05.
-        let p = t_test(1.96, 1.0, 1_000_000_000, 0.0);
-        assert!(p < 1.0);
+        // |t| = 1.96 with many dof: p ≈ 0.05 (mean 1.96e-3, variance 1, n = 10⁶).
         let p = t_test(1.96e-3, 1.0, 1_000_000, 0.0);
+        assert!((p - 0.05).abs() < 1e-3, "{p}");
+        // Few degrees of freedom widen the tails: t = 2.262 with 9 dof is p = 0.05 (Student's
+        // table), where the normal would give 0.024.
+        let p = t_test(2.262 * (1.0f64 / 10.0).sqrt(), 1.0, 10, 0.0);
         assert!((p - 0.05).abs() < 1e-3, "{p}");
     }
 }

@@ -21,15 +21,7 @@ use render::image_io::write_image;
 use render::math::Vec3;
 
 fn references_dir() -> Option<PathBuf> {
-    // `shared/references` sits next to the checkout (../shared from the workspace root).
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .ancestors()
-        .map(|a| a.join("shared/references"))
-        .find(|p| p.join("mitsuba-cbox.exr").exists());
-    if dir.is_none() {
-        eprintln!("skipped: shared/references not found");
-    }
-    dir
+    scene::testing::shared_dir("references")
 }
 
 /// SplitMix64 → standard normals (Box–Muller); a fixed, platform-independent stream.

@@ -2,8 +2,6 @@
 //! each ellipsoid's silhouette through the pixel centres equals the analytic one, pixel for
 //! pixel, and an emissive ellipsoid's light sampling has the density it claims.
 
-use std::path::Path;
-
 use glam::{DMat4, DVec3};
 use render::build::{BuildOptions, build};
 use render::math::{Mat4, PVec3, Vec2, Vec3};
@@ -24,15 +22,9 @@ fn analytic_hit(frame: &DMat4, o: DVec3, d: DVec3) -> Option<f64> {
 
 #[test]
 fn ellipsoid_silhouettes_are_pixel_exact() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/scenes/ceng795/json/hw2/ellipsoids.json");
-    if !path.is_file() {
-        eprintln!(
-            "notice: {} is absent; ellipsoid silhouette test skipped",
-            path.display()
-        );
+    let Some(path) = scene::testing::shared_dir("scenes/ceng795/json/hw2/ellipsoids.json") else {
         return;
-    }
+    };
     let Ok(Document::Scene(desc)) = scene::load(&path, &LoadOptions::default()) else {
         panic!("ellipsoids.json loads");
     };

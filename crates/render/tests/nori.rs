@@ -2,17 +2,13 @@
 //! holding a `ttest` or `chi2test` must pass, as `penumbra test` runs them (Šidák-corrected
 //! α = 0.01 per file, fixed seed). Skipped with a notice when `../shared` is absent.
 
-use std::path::Path;
-
 use scene::{Document, LoadOptions};
 
 #[test]
 fn nori_test_files_pass() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/nori");
-    if !root.is_dir() {
-        eprintln!("notice: {} is absent; Nori tests skipped", root.display());
+    let Some(root) = scene::testing::shared_dir("scenes/nori") else {
         return;
-    }
+    };
     let mut files = Vec::new();
     for dir in ["pa4/tests", "pa5/tests"] {
         for e in std::fs::read_dir(root.join(dir)).unwrap() {

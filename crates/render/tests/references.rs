@@ -31,16 +31,7 @@ const SPP: u32 = 32;
 const PARITY_SPP: u32 = 256;
 
 fn shared() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
-    if p.join("references").is_dir() {
-        Some(p)
-    } else {
-        eprintln!(
-            "notice: {} is absent; reference comparisons skipped",
-            p.display()
-        );
-        None
-    }
+    scene::testing::shared_dir("references").map(|r| r.join(".."))
 }
 
 fn render_batches(scene_file: &Path, defines: &[(&str, &str)], spp: u32) -> Vec<Image> {

@@ -7,6 +7,7 @@ pub mod error;
 pub mod formats;
 pub mod model;
 pub mod spectra;
+pub mod testing;
 pub(crate) mod textpos;
 
 pub use error::{LoadError, Loc, Result, Warning};

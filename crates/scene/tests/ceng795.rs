@@ -5,16 +5,7 @@ use std::path::{Path, PathBuf};
 use scene::{Document, Emitter, IntegratorDesc, LoadOptions, Material, Projection, Shape};
 
 fn shared() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/ceng795");
-    if p.is_dir() {
-        Some(p)
-    } else {
-        eprintln!(
-            "notice: {} absent, CENG795 scene tests skipped",
-            p.display()
-        );
-        None
-    }
+    scene::testing::shared_dir("scenes/ceng795")
 }
 
 fn scenes(dir: &Path, out: &mut Vec<PathBuf>) {

@@ -6,16 +6,7 @@ use std::path::{Path, PathBuf};
 use scene::{Document, LoadOptions, Shape};
 
 fn shared() -> Option<PathBuf> {
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/cs184");
-    if d.is_dir() {
-        Some(d)
-    } else {
-        eprintln!(
-            "notice: {} is absent; CS184 scene tests skipped",
-            d.display()
-        );
-        None
-    }
+    scene::testing::shared_dir("scenes/cs184")
 }
 
 fn dae_files(dir: &Path) -> Vec<PathBuf> {

@@ -739,13 +739,7 @@ fn malformed_fixtures_fail_with_located_errors() {
 // Shared scenes
 
 fn shared() -> Option<PathBuf> {
-    let p = Path::new("/work/shared");
-    if p.is_dir() {
-        Some(p.to_path_buf())
-    } else {
-        println!("notice: /work/shared is absent; skipping the shared-scene tests");
-        None
-    }
+    scene::testing::shared_dir("")
 }
 
 fn xml_files(dir: &Path, out: &mut Vec<PathBuf>) {
