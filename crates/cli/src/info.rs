@@ -3,7 +3,6 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use glam::Vec3;
 use scene::{
     DirectionSampling, Document, FilterDesc, FovAxis, IntegratorDesc, MisHeuristic, NoriIntegrator,
     PathDesc, Projection, RussianRoulette, SamplerKind, SceneDesc, Shape, TestKind,
@@ -23,47 +22,6 @@ fn count<'a>(names: impl Iterator<Item = &'a str>) -> String {
         .map(|(k, v)| format!("{v} {k}"))
         .collect::<Vec<_>>()
         .join(", ")
-}
-
-/// World-space bounds of the bounded shapes.
-fn bounds(desc: &SceneDesc) -> Option<(Vec3, Vec3)> {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    let mut grow = |p: Vec3| {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    };
-    for s in &desc.shapes {
-        let m = s.to_world;
-        match &s.shape {
-            Shape::Mesh(mesh) => mesh
-                .positions
-                .iter()
-                .for_each(|p| grow(m.transform_point3(*p))),
-            Shape::Sphere { center, radius } => {
-                let c = m.transform_point3(*center);
-                let r = m.transform_vector3(Vec3::new(*radius, 0.0, 0.0)).length();
-                grow(c - Vec3::splat(r));
-                grow(c + Vec3::splat(r));
-            }
-            Shape::Rectangle | Shape::Disk | Shape::Cube => {
-                let z = if matches!(s.shape, Shape::Cube) {
-                    [-1.0, 1.0]
-                } else {
-                    [0.0, 0.0]
-                };
-                for x in [-1.0, 1.0] {
-                    for y in [-1.0, 1.0] {
-                        for z in z {
-                            grow(m.transform_point3(Vec3::new(x, y, z)));
-                        }
-                    }
-                }
-            }
-            Shape::InfinitePlane { .. } => {}
-        }
-    }
-    (lo.x <= hi.x).then_some((lo, hi))
 }
 
 fn axis_name(a: FovAxis) -> &'static str {
@@ -207,7 +165,7 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
         area,
         count(desc.emitters.iter().map(|e| e.emitter.kind_name()))
     );
-    match bounds(desc) {
+    match desc.bounds() {
         Some((lo, hi)) => println!("{indent}bounds:     {lo} .. {hi}"),
         None => println!("{indent}bounds:     empty"),
     }

@@ -390,7 +390,7 @@ impl ViewArgs {
             let from = self.look_from.unwrap_or(origin);
             let at = self.look_at.unwrap_or(from + m.z_axis.truncate());
             let up = self.up.unwrap_or(m.y_axis.truncate());
-            s.camera.to_world = objmtl::look_at(from, at, up).ok_or_else(|| {
+            s.camera.to_world = scene::formats::common::look_at(from, at, up).ok_or_else(|| {
                 Failure::input("--look-from/--look-at/--up: degenerate view (zero direction or up parallel to it)")
             })?;
         }

@@ -76,6 +76,11 @@ pub struct SceneDesc {
 }
 
 impl SceneDesc {
+    /// World-space bounds of the bounded shapes (`None` when there are none).
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        bounds_of(&self.shapes)
+    }
+
     pub fn add_material(&mut self, m: MaterialDesc) -> MaterialId {
         self.materials.push(m);
         MaterialId(self.materials.len() as u32 - 1)
@@ -125,6 +130,60 @@ pub enum Shape {
     Cube,
     /// An infinite plane through `point` with normal `normal` (object space).
     InfinitePlane { point: Vec3, normal: Vec3 },
+}
+
+impl ShapeDesc {
+    /// World-space bounds (`None` for an infinite plane). Spheres are bounded exactly, also
+    /// as ellipsoids: the centre ± radius × the length of each row of the linear part.
+    /// Rectangles and disks by the corners of their square, cubes by theirs.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let m = &self.to_world;
+        let corners = |z: [f32; 2]| {
+            let mut lo = Vec3::splat(f32::INFINITY);
+            let mut hi = Vec3::splat(f32::NEG_INFINITY);
+            for x in [-1.0, 1.0] {
+                for y in [-1.0, 1.0] {
+                    for z in z {
+                        let q = m.transform_point3(Vec3::new(x, y, z));
+                        lo = lo.min(q);
+                        hi = hi.max(q);
+                    }
+                }
+            }
+            (lo, hi)
+        };
+        let b = match &self.shape {
+            Shape::Mesh(mesh) => {
+                let mut lo = Vec3::splat(f32::INFINITY);
+                let mut hi = Vec3::splat(f32::NEG_INFINITY);
+                for p in &mesh.positions {
+                    let q = m.transform_point3(*p);
+                    lo = lo.min(q);
+                    hi = hi.max(q);
+                }
+                (lo, hi)
+            }
+            Shape::Sphere { center, radius } => {
+                let c = m.transform_point3(*center);
+                let l = Mat3::from_mat4(*m);
+                let ext = Vec3::new(l.row(0).length(), l.row(1).length(), l.row(2).length())
+                    * radius.abs();
+                (c - ext, c + ext)
+            }
+            Shape::Rectangle | Shape::Disk => corners([0.0, 0.0]),
+            Shape::Cube => corners([-1.0, 1.0]),
+            Shape::InfinitePlane { .. } => return None,
+        };
+        (b.0.cmple(b.1).all() && b.0.is_finite() && b.1.is_finite()).then_some(b)
+    }
+}
+
+/// World-space bounds of the bounded ones of `shapes` (`None` when there are none).
+pub fn bounds_of<'a>(shapes: impl IntoIterator<Item = &'a ShapeDesc>) -> Option<(Vec3, Vec3)> {
+    shapes
+        .into_iter()
+        .filter_map(ShapeDesc::bounds)
+        .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
 }
 
 impl Shape {

@@ -46,6 +46,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::formats::common::look_at;
 use crate::formats::ply::read_ply;
 use crate::model::*;
 use crate::textpos::TextIndex;
@@ -376,22 +377,6 @@ impl Ctx {
 fn rotation(angle: f32, axis: Vec3) -> Option<Mat4> {
     let a = axis.normalize_or_zero();
     (a != Vec3::ZERO).then(|| Mat4::from_axis_angle(a, angle.to_radians()))
-}
-
-/// A camera-to-world matrix in Mitsuba's convention (+z forward, +x left).
-fn camera_frame(origin: Vec3, dir: Vec3, up: Vec3) -> Option<Mat4> {
-    let dir = dir.normalize_or_zero();
-    let left = up.cross(dir).normalize_or_zero();
-    if dir == Vec3::ZERO || left == Vec3::ZERO {
-        return None;
-    }
-    let new_up = dir.cross(left);
-    Some(Mat4::from_cols(
-        left.extend(0.0),
-        new_up.extend(0.0),
-        dir.extend(0.0),
-        origin.extend(1.0),
-    ))
 }
 
 /// A frame whose +z is `n` (for rectangles and spot lights).
@@ -1525,7 +1510,7 @@ impl Builder {
             }
         };
         let c = &self.ctx;
-        let to_world = camera_frame(pos, dir, up)
+        let to_world = look_at(pos, pos + dir, up)
             .ok_or_else(|| c.err(n, "gaze is zero or parallel to 'Up'"))?;
         let projection = match (n.child("FocusDistance"), n.child("ApertureSize")) {
             (Some(f), Some(a)) => Projection::ThinLens {

@@ -1175,30 +1175,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
 /// World-space bounds of the scene's shapes, leaving out area-light squares (CS184's
 /// `Scene::get_bbox` covers objects, not lights).
 pub fn scene_bounds(desc: &SceneDesc) -> Option<(Vec3, Vec3)> {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for s in &desc.shapes {
-        match &s.shape {
-            Shape::Mesh(m) => {
-                for p in &m.positions {
-                    let q = s.to_world.transform_point3(*p);
-                    lo = lo.min(q);
-                    hi = hi.max(q);
-                }
-            }
-            Shape::Sphere { center, radius } => {
-                let c = s.to_world.transform_point3(*center);
-                // Bound of the transformed sphere: radius times each row's length.
-                let m = Mat3::from_mat4(s.to_world);
-                let ext =
-                    Vec3::new(m.row(0).length(), m.row(1).length(), m.row(2).length()) * *radius;
-                lo = lo.min(c - ext);
-                hi = hi.max(c + ext);
-            }
-            _ => {}
-        }
-    }
-    (lo.cmple(hi).all() && lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+    crate::model::bounds_of(desc.shapes.iter().filter(|s| s.emission.is_none()))
 }
 
 /// The CS184 pathtracer ignores where the COLLADA camera is: `Application::load` aims it at

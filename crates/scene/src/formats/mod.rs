@@ -2,6 +2,7 @@
 
 pub mod ceng795;
 pub mod collada;
+pub mod common;
 pub mod comp30019;
 pub mod mitsuba;
 pub mod obj;

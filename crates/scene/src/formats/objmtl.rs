@@ -37,6 +37,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use super::common::look_at;
 use super::obj;
 use crate::{
     AreaEmission, Camera, ColorParam, Document, FilterDesc, FloatParam, FovAxis, IntegratorDesc,
@@ -275,22 +276,6 @@ fn map_file(rest: &str) -> Option<String> {
     }
     let name = toks.get(i..)?.join(" ");
     (!name.is_empty()).then_some(name)
-}
-
-/// Camera-to-world with Mitsuba's convention (columns left, up, dir, origin); `None` when the
-/// direction is degenerate or parallel to `up`.
-pub fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
-    let dir = (target - origin).normalize_or_zero();
-    let left = up.cross(dir).normalize_or_zero();
-    if dir == Vec3::ZERO || left == Vec3::ZERO || !(origin.is_finite() && left.is_finite()) {
-        return None;
-    }
-    Some(Mat4::from_cols(
-        left.extend(0.0),
-        dir.cross(left).extend(0.0),
-        dir.extend(0.0),
-        origin.extend(1.0),
-    ))
 }
 
 /// A one-sided square area light of side `size` centred at `center`, emitting along `normal`.

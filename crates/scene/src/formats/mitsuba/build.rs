@@ -1434,55 +1434,11 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     }
 }
 
-/// World-space bounds of the scene's shapes (None when empty or unbounded).
-fn scene_bounds(scene: &SceneDesc) -> Option<(Vec3, Vec3)> {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    let mut add = |m: &Mat4, p: Vec3| {
-        let q = m.transform_point3(p);
-        lo = lo.min(q);
-        hi = hi.max(q);
-    };
-    for s in &scene.shapes {
-        let m = &s.to_world;
-        match &s.shape {
-            Shape::Mesh(mesh) => mesh.positions.iter().for_each(|&p| add(m, p)),
-            Shape::Sphere { center, radius } => {
-                for i in 0..8 {
-                    let sign = Vec3::new(
-                        if i & 1 == 0 { -1.0 } else { 1.0 },
-                        if i & 2 == 0 { -1.0 } else { 1.0 },
-                        if i & 4 == 0 { -1.0 } else { 1.0 },
-                    );
-                    add(m, *center + sign * radius.abs());
-                }
-            }
-            Shape::Rectangle | Shape::Disk | Shape::Cube => {
-                let z = if matches!(s.shape, Shape::Cube) {
-                    1.0
-                } else {
-                    0.0
-                };
-                for i in 0..8 {
-                    let p = Vec3::new(
-                        if i & 1 == 0 { -1.0 } else { 1.0 },
-                        if i & 2 == 0 { -1.0 } else { 1.0 },
-                        if i & 4 == 0 { -z } else { z },
-                    );
-                    add(m, p);
-                }
-            }
-            Shape::InfinitePlane { .. } => {}
-        }
-    }
-    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
-}
-
 /// Mitsuba's fallback camera: 45° field of view, looking along +z at the scene's bounding box
 /// from `distance` in front of its near face.
 fn default_sensor(scene: &SceneDesc, loc: &Loc) -> Sensor {
     let fov = 45.0f32;
-    let (to_world, near_clip, far_clip) = match scene_bounds(scene) {
+    let (to_world, near_clip, far_clip) = match scene.bounds() {
         Some((lo, hi)) => {
             let center = (lo + hi) * 0.5;
             let extents = hi - lo;

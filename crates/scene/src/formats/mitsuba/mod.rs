@@ -45,7 +45,7 @@ use tree::err;
 
 use crate::{Document, LoadOptions, Loc, MaterialId, Result, SceneDesc, TestDesc, TestKind};
 
-pub use props::look_at;
+pub use crate::formats::common::look_at;
 
 /// Load a Mitsuba 3 / Mitsuba 0.6 / Nori XML file: a scene or a Nori `<test>`.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {

@@ -6,6 +6,7 @@ use std::cell::Cell;
 use glam::{Mat4, Vec3};
 
 use super::tree::{Attr, Elem, err};
+use crate::formats::common::look_at;
 use crate::{Loc, Result};
 
 /// A colour-like value before conversion (its meaning depends on where it is used).
@@ -153,31 +154,6 @@ fn check_attrs(e: &Elem, allowed: &[&str], warnings: &mut Vec<crate::Warning>) {
             });
         }
     }
-}
-
-/// Mitsuba's `look_at`: camera-to-world whose columns are (left, up, dir, origin).
-pub fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
-    let dir = (target - origin).normalize_or_zero();
-    if dir == Vec3::ZERO {
-        return None;
-    }
-    let up = if up.length_squared() == 0.0 {
-        // Mitsuba: any vector orthogonal to dir (coordinate_system).
-        dir.any_orthonormal_vector()
-    } else {
-        up
-    };
-    let left = up.cross(dir).normalize_or_zero();
-    if left == Vec3::ZERO || !left.is_finite() {
-        return None;
-    }
-    let new_up = dir.cross(left);
-    Some(Mat4::from_cols(
-        left.extend(0.0),
-        new_up.extend(0.0),
-        dir.extend(0.0),
-        origin.extend(1.0),
-    ))
 }
 
 /// Parse the children of a `<transform>`, each left-multiplied onto the accumulated matrix.
