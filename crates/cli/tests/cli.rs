@@ -172,3 +172,45 @@ fn same_seed_same_image_for_any_thread_count() {
     assert!(images.windows(2).all(|w| w[0] == w[1]));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Texture and environment-map files are found when the scene is named by a relative path
+/// from another folder (they were joined to the scene's folder twice).
+#[test]
+fn textures_of_a_scene_named_relatively_are_found() {
+    let dir = temp_dir("relative");
+    let scenes = dir.join("scenes");
+    std::fs::create_dir_all(scenes.join("tex")).unwrap();
+    image::RgbImage::from_pixel(4, 4, image::Rgb([200, 100, 50]))
+        .save(scenes.join("tex/a.png"))
+        .unwrap();
+    std::fs::write(
+        scenes.join("s.xml"),
+        r#"<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="30"/>
+    <transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+  </sensor>
+  <emitter type="envmap"><string name="filename" value="tex/a.png"/></emitter>
+  <shape type="sphere"><bsdf type="diffuse">
+    <texture type="bitmap" name="reflectance"><string name="filename" value="tex/a.png"/></texture>
+  </bsdf></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let o = penumbra()
+        .current_dir(&dir)
+        .args([
+            "render",
+            "scenes/s.xml",
+            "--spp",
+            "1",
+            "-q",
+            "-o",
+            "out.exr",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.join("out.exr").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -2,7 +2,6 @@
 //! (world-space geometry and its BVH, decoded textures, the chosen sensor's camera, film and
 //! sampler, the integrator).
 
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use scene::{
@@ -16,7 +15,10 @@ use crate::geometry::Ray;
 use crate::image_io::{self, Decode};
 use crate::integrators::Integrator;
 use crate::lights::select::LightSampler;
-use crate::lights::{EnvMap, Light, MeshSampling, Receiver};
+use crate::lights::{
+    AreaLight, ConstantLight, DirectionalLight, EnvMap, Light, MeshSampling, PointLight, Receiver,
+    SpotLight,
+};
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
@@ -360,7 +362,6 @@ pub fn cube_mesh() -> TriMesh {
 /// first channel, as any scalar texture does. The alpha textures are appended to `textures`.
 fn opacity_from_alpha(
     desc: &SceneDesc,
-    base: &Path,
     shapes: &mut [ShapeInfo],
     textures: &mut Vec<Texture>,
 ) -> Result<(), BuildError> {
@@ -372,7 +373,7 @@ fn opacity_from_alpha(
         let id = match alpha_of.get(&t.0) {
             Some(id) => *id,
             None => {
-                let id = alpha_texture(&desc.textures[t.0 as usize], base)?.map(|tex| {
+                let id = alpha_texture(&desc.textures[t.0 as usize])?.map(|tex| {
                     textures.push(tex);
                     textures.len() as u32 - 1
                 });
@@ -398,7 +399,7 @@ fn no_rotation(m: &glam::Mat4) -> bool {
 }
 
 /// The alpha channel of a bitmap texture as a texture, if the file has a non-opaque one.
-fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Texture>, BuildError> {
+fn alpha_texture(desc: &scene::TextureDesc) -> Result<Option<Texture>, BuildError> {
     let scene::Texture::Bitmap {
         path,
         filter,
@@ -411,7 +412,7 @@ fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Textur
         return Ok(None);
     };
     let (mut image, alpha) =
-        image_io::read_image_alpha(&base.join(path), Decode::Raw).map_err(|e| BuildError {
+        image_io::read_image_alpha(path, Decode::Raw).map_err(|e| BuildError {
             loc: desc.loc.clone(),
             message: format!("cannot read texture: {e}"),
         })?;
@@ -430,14 +431,13 @@ fn alpha_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Option<Textur
     }))
 }
 
-fn load_texture(desc: &scene::TextureDesc, base: &Path) -> Result<Texture, BuildError> {
-    load_texture_kind(&desc.texture, desc, base)
+fn load_texture(desc: &scene::TextureDesc) -> Result<Texture, BuildError> {
+    load_texture_kind(&desc.texture, desc)
 }
 
 fn load_texture_kind(
     texture: &scene::Texture,
     desc: &scene::TextureDesc,
-    base: &Path,
 ) -> Result<Texture, BuildError> {
     Ok(match texture {
         scene::Texture::Constant(c) => Texture::Constant((*c).into()),
@@ -459,17 +459,13 @@ fn load_texture_kind(
             to_uv,
             corner_texels,
         } => {
-            let full: PathBuf = if path.is_absolute() {
-                path.clone()
-            } else {
-                base.join(path)
-            };
+            // Loaders resolve file names (absolute, or relative to the working directory).
             let decode = match (raw, gamma) {
                 (true, _) => Decode::Raw,
                 (false, Some(g)) => Decode::Gamma(*g),
                 (false, None) => Decode::Srgb,
             };
-            let image = image_io::read_image_with(&full, decode).map_err(|e| BuildError {
+            let image = image_io::read_image_with(path, decode).map_err(|e| BuildError {
                 loc: desc.loc.clone(),
                 message: format!("cannot read texture: {e}"),
             })?;
@@ -501,7 +497,7 @@ fn load_texture_kind(
             scale,
             offset,
         } => Texture::Affine {
-            texture: Box::new(load_texture_kind(texture, desc, base)?),
+            texture: Box::new(load_texture_kind(texture, desc)?),
             scale: *scale,
             offset: (*offset).into(),
         },
@@ -513,7 +509,6 @@ fn load_texture_kind(
 fn build_lights(
     desc: &SceneDesc,
     shapes: &[ShapeInfo],
-    base: &Path,
     split: bool,
 ) -> Result<(Vec<Light>, Vec<ShapeLights>), BuildError> {
     let mut lights = Vec::new();
@@ -542,14 +537,14 @@ fn build_lights(
                         count: areas.len() as u32,
                     };
                     for (t, area) in areas.into_iter().enumerate() {
-                        lights.push(Light::Area {
+                        lights.push(Light::Area(AreaLight {
                             shape: i as u32,
                             radiance: radiance.clone(),
                             two_sided,
                             triangles: None,
                             prim: Some(t as u32),
                             area: if area.is_finite() { area } else { 0.0 },
-                        });
+                        }));
                     }
                     continue;
                 }
@@ -568,14 +563,14 @@ fn build_lights(
             continue;
         }
         shape_light[i] = ShapeLights::Whole(lights.len() as u32);
-        lights.push(Light::Area {
+        lights.push(Light::Area(AreaLight {
             shape: i as u32,
             radiance: radiance.clone(),
             two_sided,
             triangles,
             prim: None,
             area,
-        });
+        }));
     }
     for e in &desc.emitters {
         lights.push(match &e.emitter {
@@ -584,46 +579,41 @@ fn build_lights(
             scene::Emitter::Point {
                 position,
                 intensity,
-            } => Light::Point {
+            } => Light::Point(PointLight {
                 position: (*position).into(),
                 intensity: (*intensity).into(),
-            },
+            }),
             scene::Emitter::Spot {
                 to_world,
                 intensity,
                 cutoff_angle,
                 beam_width,
                 falloff,
-            } => Light::spot(
+            } => Light::Spot(SpotLight::new(
                 to_world,
                 (*intensity).into(),
                 *cutoff_angle,
                 *beam_width,
                 *falloff,
-            ),
+            )),
             scene::Emitter::Directional {
                 direction,
                 irradiance,
-            } => Light::Directional {
+            } => Light::Directional(DirectionalLight {
                 direction: direction.normalize_or_zero().into(),
                 irradiance: (*irradiance).into(),
-            },
-            scene::Emitter::Constant { radiance } => Light::Constant {
+            }),
+            scene::Emitter::Constant { radiance } => Light::Constant(ConstantLight {
                 radiance: (*radiance).into(),
-            },
+            }),
             scene::Emitter::EnvMap {
                 path,
                 scale,
                 to_world,
                 mapping,
             } => {
-                let full = if path.is_absolute() {
-                    path.clone()
-                } else {
-                    base.join(path)
-                };
                 let image =
-                    image_io::read_image_with(&full, Decode::Srgb).map_err(|err| BuildError {
+                    image_io::read_image_with(path, Decode::Srgb).map_err(|err| BuildError {
                         loc: e.loc.clone(),
                         message: format!("cannot read environment map: {err}"),
                     })?;
@@ -636,11 +626,6 @@ fn build_lights(
 
 /// Turn a loaded scene into a renderable one.
 pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError> {
-    let base = desc
-        .source
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_default();
     let sensor = desc.sensors.get(opts.sensor).ok_or_else(|| BuildError {
         loc: Loc::file(&desc.source),
         message: format!(
@@ -731,13 +716,13 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
     let mut textures = desc
         .textures
         .iter()
-        .map(|t| load_texture(t, &base))
+        .map(load_texture)
         .collect::<Result<Vec<_>, _>>()?;
-    opacity_from_alpha(desc, &base, &mut shapes, &mut textures)?;
+    opacity_from_alpha(desc, &mut shapes, &mut textures)?;
 
     let selection = opts.light_selection.unwrap_or(desc.light_selection);
     let split = selection != LightSelection::Uniform;
-    let (lights, shape_lights) = build_lights(desc, &shapes, &base, split)?;
+    let (lights, shape_lights) = build_lights(desc, &shapes, split)?;
     let infinite_lights = (0..lights.len() as u32)
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();

@@ -483,6 +483,7 @@ pub enum Texture {
     Constant(Rgb),
     /// An image file. 8-bit images are sRGB-decoded unless `raw`; float images are linear.
     Bitmap {
+        /// Resolved by the loader: absolute, or relative to the working directory.
         path: PathBuf,
         filter: TextureFilter,
         wrap: WrapMode,
@@ -573,6 +574,7 @@ pub enum Emitter {
     Ambient { radiance: Rgb },
     /// Image-based environment light.
     EnvMap {
+        /// Resolved by the loader: absolute, or relative to the working directory.
         path: PathBuf,
         scale: f32,
         to_world: Mat4,

@@ -1,0 +1,40 @@
+//! Directional lights: irradiance arriving along one direction from infinitely far; a delta
+//! light.
+
+use super::select::{mean, scene_radius};
+use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use crate::build::Scene;
+use crate::math::{PI, Vec2, Vec3};
+
+#[derive(Clone, Debug)]
+pub struct DirectionalLight {
+    /// Direction the light travels in (unit).
+    pub direction: Vec3,
+    pub irradiance: Vec3,
+}
+
+impl LightModel for DirectionalLight {
+    fn is_delta(&self) -> bool {
+        true
+    }
+
+    fn is_infinite(&self) -> bool {
+        true
+    }
+
+    fn sample_li(&self, _scene: &Scene, _r: &Receiver, _u: Vec2) -> Option<LightSample> {
+        Some(LightSample {
+            wi: -self.direction,
+            li: self.irradiance,
+            pdf: 1.0,
+            delta: true,
+            target: ShadowTarget::Infinite,
+        })
+    }
+
+    /// The power through a disk of the scene's bounding radius r: π r²·E.
+    fn power(&self, scene: &Scene) -> f32 {
+        let r = scene_radius(scene);
+        PI * r * r * mean(self.irradiance)
+    }
+}

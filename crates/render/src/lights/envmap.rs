@@ -1,0 +1,203 @@
+//! Image-based environment lights: an equirectangular (lat-long) image, bilinearly
+//! interpolated, importance-sampled with a piecewise-constant 2D distribution of its pixel
+//! luminance weighted by sin θ; or a light probe (Debevec's angular map), sampled uniformly.
+//! Local directions map to uv = (atan2(x, −z) / 2π, acos(y) / π), y up, as in Mitsuba.
+
+use scene::EnvMapping;
+
+use super::select::{mean, scene_radius};
+use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use crate::build::Scene;
+use crate::film::Image;
+use crate::math::{INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
+use crate::sampling::distrib::Distribution2D;
+use crate::sampling::warp;
+use crate::shapes::SurfaceInteraction;
+
+#[derive(Debug)]
+pub struct EnvMap {
+    pub image: Image,
+    pub scale: f32,
+    pub to_world: Mat3,
+    pub to_local: Mat3,
+    pub mapping: EnvMapping,
+    pub distribution: Distribution2D,
+}
+
+impl EnvMap {
+    pub fn new(image: Image, scale: f32, to_world: &Mat4, mapping: EnvMapping) -> EnvMap {
+        let (w, h) = (image.width as usize, image.height as usize);
+        // Mitsuba's lat-long grid: columns are pixel centres (u = (x + ½)/w), rows are grid
+        // *vertices* (v = y/(h − 1)), so cell (x, y) of the sampling grid spans the rows y and
+        // y + 1 and, through the bilinear lookup, the columns x − 1 … x + 1. Each cell gets the
+        // largest luminance of those pixels times sin θ at its centre: the pdf is then never
+        // small where the interpolated radiance is large (a one-pixel sun would otherwise
+        // bleed into cells the pdf barely samples).
+        let lum = |x: usize, y: usize| {
+            let v = luminance(image.get(x as u32, y as u32));
+            if v.is_finite() { v.max(0.0) } else { 0.0 }
+        };
+        let rows = h.saturating_sub(1).max(1);
+        let mut weights = vec![0f32; w * rows];
+        for y in 0..rows {
+            let sin_theta = ((y as f32 + 0.5) / rows as f32 * PI).sin();
+            for x in 0..w {
+                let mut m = 0f32;
+                for yy in [y, (y + 1).min(h - 1)] {
+                    for dx in [-1i64, 0, 1] {
+                        let xx = (x as i64 + dx).rem_euclid(w as i64) as usize;
+                        m = m.max(lum(xx, yy));
+                    }
+                }
+                weights[y * w + x] = m * sin_theta;
+            }
+        }
+        let rot = Mat3::from_mat4(*to_world);
+        EnvMap {
+            distribution: Distribution2D::new(&weights, w, rows),
+            image,
+            scale,
+            to_world: rot,
+            to_local: rot.inverse(),
+            mapping,
+        }
+    }
+
+    fn dir_to_uv(&self, d_world: Vec3) -> Vec2 {
+        let d = (self.to_local * d_world).normalize_or_zero();
+        match self.mapping {
+            EnvMapping::LatLong => {
+                let mut u = d.x.atan2(-d.z) * (0.5 * INV_PI);
+                if u < 0.0 {
+                    u += 1.0;
+                }
+                Vec2::new(u, d.y.clamp(-1.0, 1.0).acos() * INV_PI)
+            }
+            EnvMapping::Probe => {
+                // Debevec's angular map: r = acos(-z) / (π √(x² + y²)).
+                let xy = (d.x * d.x + d.y * d.y).sqrt();
+                let r = if xy > 0.0 {
+                    (-d.z).clamp(-1.0, 1.0).acos() * INV_PI / xy
+                } else {
+                    0.0
+                };
+                Vec2::new(0.5 + 0.5 * d.x * r, 0.5 - 0.5 * d.y * r)
+            }
+        }
+    }
+
+    fn uv_to_dir(&self, uv: Vec2) -> (Vec3, f32) {
+        let phi = uv.x * 2.0 * PI;
+        let theta = uv.y * PI;
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        let local = Vec3::new(st * sp, ct, -st * cp);
+        ((self.to_world * local).normalize(), st)
+    }
+
+    /// Bilinear lookup on Mitsuba's grid: x = u·w − ½ (pixel centres, wrapping in u),
+    /// y = v·(h − 1) (rows at the grid vertices, v = 0 and 1 on the first and last rows).
+    /// Probe maps use pixel centres in both axes.
+    fn lookup(&self, uv: Vec2) -> Vec3 {
+        let (w, h) = (self.image.width as i64, self.image.height as i64);
+        let x = uv.x * w as f32 - 0.5;
+        let y = match self.mapping {
+            EnvMapping::LatLong => uv.y * (h - 1) as f32,
+            EnvMapping::Probe => uv.y * h as f32 - 0.5,
+        };
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let px = |dx: i64, dy: i64| {
+            let xi = (x0 + dx).rem_euclid(w) as u32;
+            let yi = (y0 + dy).clamp(0, h - 1) as u32;
+            self.image.get(xi, yi)
+        };
+        ((px(0, 0) * (1.0 - fx) + px(1, 0) * fx) * (1.0 - fy)
+            + (px(0, 1) * (1.0 - fx) + px(1, 1) * fx) * fy)
+            * self.scale
+    }
+
+    pub fn eval(&self, d_world: Vec3) -> Vec3 {
+        self.lookup(self.dir_to_uv(d_world))
+    }
+
+    fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        if self.mapping == EnvMapping::Probe {
+            // Probe maps are sampled uniformly over the sphere.
+            let d = warp::square_to_uniform_sphere(u);
+            return Some((d, self.eval(d), warp::uniform_sphere_pdf()));
+        }
+        let (uv, pdf_uv) = self.distribution.sample(u);
+        let (d, sin_theta) = self.uv_to_dir(uv);
+        if pdf_uv <= 0.0 || sin_theta <= 0.0 {
+            return None;
+        }
+        Some((d, self.lookup(uv), pdf_uv / (2.0 * PI * PI * sin_theta)))
+    }
+
+    fn pdf(&self, d_world: Vec3) -> f32 {
+        if self.mapping == EnvMapping::Probe {
+            return warp::uniform_sphere_pdf();
+        }
+        let uv = self.dir_to_uv(d_world);
+        let sin_theta = (uv.y * PI).sin();
+        if sin_theta <= 0.0 {
+            return 0.0;
+        }
+        self.distribution.pdf(uv) / (2.0 * PI * PI * sin_theta)
+    }
+}
+
+impl LightModel for EnvMap {
+    fn is_delta(&self) -> bool {
+        false
+    }
+
+    fn is_infinite(&self) -> bool {
+        true
+    }
+
+    fn environment(&self, d: Vec3) -> Vec3 {
+        self.eval(d)
+    }
+
+    fn sample_li(&self, _scene: &Scene, _r: &Receiver, u: Vec2) -> Option<LightSample> {
+        let (wi, li, pdf) = self.sample(u)?;
+        Some(LightSample {
+            wi,
+            li,
+            pdf,
+            delta: false,
+            target: ShadowTarget::Infinite,
+        })
+    }
+
+    fn pdf_li(&self, _: &Scene, _: &Receiver, wi: Vec3, _: Option<&SurfaceInteraction>) -> f32 {
+        self.pdf(wi)
+    }
+
+    /// The power through a disk of the scene's bounding radius r: 4π·π r²·L̄, L̄ the
+    /// solid-angle mean of the map.
+    fn power(&self, scene: &Scene) -> f32 {
+        let (w, h) = (self.image.width, self.image.height);
+        let (mut sum, mut weight) = (0f64, 0f64);
+        for y in 0..h {
+            // Lat-long rows are spaced by θ: weight by sin θ for the solid-angle mean.
+            let s = match self.mapping {
+                EnvMapping::LatLong => ((y as f32 + 0.5) / h as f32 * PI).sin() as f64,
+                EnvMapping::Probe => 1.0,
+            };
+            for x in 0..w {
+                let v = mean(self.image.get(x, y));
+                if v.is_finite() {
+                    sum += s * v as f64;
+                }
+                weight += s;
+            }
+        }
+        let avg = if weight > 0.0 { sum / weight } else { 0.0 } as f32 * self.scale.max(0.0);
+        let r = scene_radius(scene);
+        4.0 * PI * PI * r * r * avg
+    }
+}

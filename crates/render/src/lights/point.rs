@@ -1,0 +1,40 @@
+//! Point lights: intensity / d² towards every direction; a delta light.
+
+use super::bvh::LightBounds;
+use super::select::{mean, omni};
+use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use crate::build::Scene;
+use crate::math::{PI, Vec2, Vec3};
+
+#[derive(Clone, Debug)]
+pub struct PointLight {
+    pub position: Vec3,
+    pub intensity: Vec3,
+}
+
+impl LightModel for PointLight {
+    fn is_delta(&self) -> bool {
+        true
+    }
+
+    fn sample_li(&self, _scene: &Scene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
+        let d = self.position - r.p;
+        let d2 = d.length_squared();
+        (d2 > 0.0).then(|| LightSample {
+            wi: d / d2.sqrt(),
+            li: self.intensity / d2,
+            pdf: 1.0,
+            delta: true,
+            target: ShadowTarget::Point(self.position),
+        })
+    }
+
+    /// 4π·I.
+    fn power(&self, _scene: &Scene) -> f32 {
+        4.0 * PI * mean(self.intensity)
+    }
+
+    fn bounds(&self, _scene: &Scene, phi: f32) -> Option<LightBounds> {
+        Some(omni(self.position, self.position, phi))
+    }
+}

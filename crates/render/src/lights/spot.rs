@@ -1,0 +1,168 @@
+//! Spot lights: a point light restricted to a cone, with Mitsuba 3's linear falloff in angle
+//! between `beam_width` and `cutoff_angle`, or the CENG795 course's
+//! ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴; a delta light.
+
+use super::bvh::LightBounds;
+use super::select::{mean, omni};
+use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use crate::build::Scene;
+use crate::math::{Mat3, Mat4, PI, Vec2, Vec3};
+
+#[derive(Clone, Debug)]
+pub struct SpotLight {
+    pub position: Vec3,
+    pub to_local: Mat3,
+    pub intensity: Vec3,
+    pub cos_cutoff: f32,
+    pub cos_beam: f32,
+    pub cutoff: f32,
+    pub inv_transition: f32,
+    /// The CENG795 course's profile instead of Mitsuba's.
+    pub course: bool,
+}
+
+impl SpotLight {
+    pub fn new(
+        to_world: &Mat4,
+        intensity: Vec3,
+        cutoff_deg: f32,
+        beam_deg: f32,
+        falloff: scene::SpotFalloff,
+    ) -> SpotLight {
+        let cutoff = cutoff_deg.to_radians();
+        let beam = beam_deg.to_radians().min(cutoff);
+        let rot = Mat3::from_mat4(*to_world);
+        SpotLight {
+            position: to_world.w_axis.truncate().into(),
+            to_local: rot.inverse(),
+            intensity,
+            cos_cutoff: cutoff.cos(),
+            cos_beam: beam.cos(),
+            cutoff,
+            inv_transition: if cutoff > beam {
+                1.0 / (cutoff - beam)
+            } else {
+                0.0
+            },
+            course: falloff == scene::SpotFalloff::Cosine4,
+        }
+    }
+
+    /// The falloff for a local direction of cosine `cos_t` about the axis.
+    fn falloff(&self, cos_t: f32) -> f32 {
+        spot_falloff(
+            cos_t,
+            self.cos_cutoff,
+            self.cos_beam,
+            self.cutoff,
+            self.inv_transition,
+            self.course,
+        )
+    }
+}
+
+impl LightModel for SpotLight {
+    fn is_delta(&self) -> bool {
+        true
+    }
+
+    fn sample_li(&self, _scene: &Scene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
+        let d = self.position - r.p;
+        let d2 = d.length_squared();
+        if d2 <= 0.0 {
+            return None;
+        }
+        let wi = d / d2.sqrt();
+        let local = (self.to_local * -wi).normalize_or_zero();
+        let f = self.falloff(local.z);
+        (f > 0.0).then(|| LightSample {
+            wi,
+            li: self.intensity * f / d2,
+            pdf: 1.0,
+            delta: true,
+            target: ShadowTarget::Point(self.position),
+        })
+    }
+
+    /// 2π·I·((1 − cos θbeam) + (cos θbeam − cos θcutoff)/2).
+    fn power(&self, _scene: &Scene) -> f32 {
+        2.0 * PI
+            * mean(self.intensity)
+            * ((1.0 - self.cos_beam) + 0.5 * (self.cos_beam - self.cos_cutoff))
+    }
+
+    fn bounds(&self, _scene: &Scene, phi: f32) -> Option<LightBounds> {
+        let at = omni(self.position, self.position, phi);
+        let w = (self.to_local.inverse() * Vec3::Z).normalize_or_zero();
+        if w == Vec3::ZERO {
+            return Some(at);
+        }
+        let theta_e = (self.cos_cutoff.clamp(-1.0, 1.0).acos()
+            - self.cos_beam.clamp(-1.0, 1.0).acos())
+        .max(0.0);
+        Some(LightBounds {
+            w,
+            cos_o: self.cos_beam,
+            cos_e: theta_e.cos(),
+            ..at
+        })
+    }
+}
+
+/// Spot falloff of Mitsuba 3 for a local direction (cos θ = z).
+fn spot_falloff(
+    cos_t: f32,
+    cos_cutoff: f32,
+    cos_beam: f32,
+    cutoff: f32,
+    inv_trans: f32,
+    course: bool,
+) -> f32 {
+    if cos_t <= cos_cutoff {
+        0.0
+    } else if cos_t >= cos_beam {
+        1.0
+    } else if course {
+        // CENG795: ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴.
+        let s = ((cos_t - cos_cutoff) / (cos_beam - cos_cutoff)).clamp(0.0, 1.0);
+        (s * s) * (s * s)
+    } else {
+        ((cutoff - cos_t.clamp(-1.0, 1.0).acos()) * inv_trans).clamp(0.0, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The CENG795 spot profile: full intensity inside the falloff cone, nothing outside the
+    /// coverage cone, ((cos α − cos c) / (cos f − cos c))⁴ between; Mitsuba's is linear in α.
+    #[test]
+    fn course_spot_profile() {
+        let light = |falloff| SpotLight::new(&Mat4::IDENTITY, Vec3::ONE, 30.0, 10.0, falloff);
+        let at = |l: &SpotLight, deg: f32| l.falloff(deg.to_radians().cos());
+        let course = light(scene::SpotFalloff::Cosine4);
+        let mitsuba = light(scene::SpotFalloff::Mitsuba);
+        for deg in [0.0f32, 5.0, 9.9] {
+            assert_eq!(at(&course, deg), 1.0);
+        }
+        for deg in [30.1f32, 45.0, 120.0] {
+            assert_eq!(at(&course, deg), 0.0);
+        }
+        for deg in [12.0f32, 20.0, 28.0] {
+            let (c, cc, cb) = (
+                deg.to_radians().cos(),
+                30f32.to_radians().cos(),
+                10f32.to_radians().cos(),
+            );
+            let expected = ((c - cc) / (cb - cc)).powi(4);
+            assert!((at(&course, deg) - expected).abs() < 1e-5, "{deg}°");
+            let linear = (30.0 - deg) / 20.0;
+            assert!((at(&mitsuba, deg) - linear).abs() < 1e-4, "{deg}°");
+            assert!(
+                (at(&course, deg) - at(&mitsuba, deg)).abs() > 0.02,
+                "{deg}°"
+            );
+        }
+    }
+}
