@@ -427,3 +427,23 @@ fn course_materials_keep_their_phong_lobes() {
         }
     }
 }
+
+/// `SampleClamp` on a path-tracing camera is the path tracer's sample clamp.
+#[test]
+fn sample_clamp_reaches_the_path_tracer() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/ceng795/cornell_phong.json");
+    let text = std::fs::read_to_string(&src).unwrap();
+    let from = r#""RendererParams""#;
+    assert!(text.contains(from));
+    let text = text.replacen(from, &format!(r#""SampleClamp": "10", {from}"#), 1);
+    let tmp = temp_dir("clamp");
+    let file = tmp.join("clamp.json");
+    std::fs::write(&file, text).unwrap();
+    let desc = load(&file);
+    std::fs::remove_dir_all(&tmp).ok();
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let Some(scene::IntegratorDesc::Path(p)) = &desc.sensors[0].integrator else {
+        panic!("path tracer expected")
+    };
+    assert_eq!(p.clamp, Some(10.0));
+}

@@ -1677,11 +1677,19 @@ impl Builder {
         if let Some(s) = n.child("SplittingFactor") {
             d.splitting = self.ctx.uint(s)?.max(1);
         }
+        // Sample clamping (the "…_clamping" renders): each camera sample scaled down to this
+        // largest component, as `--clamp` does.
+        if let Some(c) = n.child("SampleClamp").or_else(|| n.child("Clamp")) {
+            let v = self.ctx.float(c)?;
+            if v.is_nan() || v <= 0.0 {
+                return Err(self.ctx.err(c, "the clamp value must be positive"));
+            }
+            d.clamp = Some(v);
+        }
         Ok(IntegratorDesc::Path(d))
     }
 }
 
-/// Area-weighted vertex normals.
 /// Put an image's texels at their centres: the background spreads texel (i, j) over the
 /// pixel (i, j) of an image of the texture's size.
 fn centre_texels(t: &mut Texture) {
@@ -1692,6 +1700,7 @@ fn centre_texels(t: &mut Texture) {
     }
 }
 
+/// Area-weighted vertex normals.
 fn smooth_normals(mesh: &mut TriMesh) {
     let mut normals = vec![Vec3::ZERO; mesh.positions.len()];
     for t in &mesh.indices {
