@@ -611,7 +611,8 @@ impl Light {
                             target: ShadowTarget::Surface { p, p_error, n },
                         });
                     }
-                    ShapeGeom::Plane { .. } => return None,
+                    // Emitters are never instanced nor moving (`build` flattens them).
+                    ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => return None,
                 };
                 let to = p - r.p;
                 let d2 = to.length_squared();

@@ -221,7 +221,8 @@ pub fn light_bounds(scene: &Scene, light: &Light) -> Option<LightBounds> {
                         })
                     }
                 },
-                ShapeGeom::Plane { .. } => None,
+                // Emitters are never instanced nor moving (`build` flattens them).
+                ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => None,
             }
         }
         Light::Directional { .. } | Light::Constant { .. } | Light::EnvMap(_) => None,

@@ -870,6 +870,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             .or_else(|| pl.elem.value("name"))
             .map(str::to_string);
         self.scene.shapes.push(ShapeDesc {
+            motion: None,
             shape,
             to_world,
             material,
