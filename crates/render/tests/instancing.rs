@@ -70,14 +70,52 @@ const SCENE: &str = r#"{
   }
 }"#;
 
+/// The same kind of scene through Mitsuba's `shapegroup` / `instance`.
+const MITSUBA: &str = r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 3, 9" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="1"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="64"/>
+            <rfilter type="box"/></film>
+    </sensor>
+    <shape type="shapegroup" id="g">
+        <shape type="obj"><string name="filename" value="octa.obj"/>
+            <transform name="to_world"><rotate x="1" angle="20"/></transform></shape>
+        <shape type="sphere"><float name="radius" value="0.4"/>
+            <point name="center" x="0" y="1.2" z="0"/></shape>
+    </shape>
+    <shape type="instance"><ref id="g"/>
+        <transform name="to_world"><translate x="-2"/></transform></shape>
+    <shape type="instance"><ref id="g"/>
+        <transform name="to_world"><scale x="1.5" y="0.6" z="1"/><rotate y="1" angle="40"/>
+            <translate x="1.5" z="-1"/></transform></shape>
+    <shape type="instance"><ref id="g"/>
+        <transform name="to_world"><scale x="-0.8" y="1.2" z="0.9"/><translate z="1.5" y="0.2"/></transform></shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="8"/><rotate x="1" angle="-90"/><translate y="-1"/></transform></shape>
+    <emitter type="constant"/>
+</scene>"#;
+
+const OCTA_OBJ: &str = "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+    vn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\n\
+    f 1//1 3//3 5//5\nf 5//5 3//3 2//2\nf 2//2 3//3 6//6\nf 6//6 3//3 1//1\n\
+    f 5//5 4//4 1//1\nf 2//2 4//4 5//5\nf 6//6 4//4 2//2\nf 1//1 4//4 6//6\n";
+
 fn load() -> scene::SceneDesc {
+    load_files(&[("instances.json", SCENE)])
+}
+
+fn load_files(files: &[(&str, &str)]) -> scene::SceneDesc {
     // One directory per call: the tests run in parallel threads of one process.
     static CALLS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
     let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!("penumbra-instancing-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path: PathBuf = dir.join("instances.json");
-    std::fs::write(&path, SCENE).unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    let path: PathBuf = dir.join(files[0].0);
     let doc = scene::load(&path, &Default::default()).expect("scene loads");
     let _ = std::fs::remove_dir_all(&dir);
     match doc {
@@ -136,13 +174,29 @@ fn the_scene_is_instanced() {
 
 #[test]
 fn depth_and_normals_equal_the_flattened_scene() {
-    let desc = load();
+    exact_check(&load());
+}
+
+#[test]
+fn mitsuba_shapegroup_instances_equal_the_flattened_scene() {
+    let desc = load_files(&[("scene.xml", MITSUBA), ("octa.obj", OCTA_OBJ)]);
+    assert_eq!(desc.shapes.len(), 7);
+    let inst = build_with(&desc, false, IntegratorDesc::Depth, 1);
+    assert_eq!(
+        inst.accel.instancing_stats().0,
+        1,
+        "the octahedron is a prototype"
+    );
+    exact_check(&desc);
+}
+
+fn exact_check(desc: &scene::SceneDesc) {
     for (integrator, what) in [
         (IntegratorDesc::Depth, "depth"),
         (IntegratorDesc::Normals, "normals"),
     ] {
-        let a = render_image(&build_with(&desc, false, integrator.clone(), 5), 1);
-        let b = render_image(&build_with(&desc, true, integrator, 5), 1);
+        let a = render_image(&build_with(desc, false, integrator.clone(), 5), 1);
+        let b = render_image(&build_with(desc, true, integrator, 5), 1);
         let mut covered = 0;
         for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
             let d = (*p - *q).abs().max_element();
