@@ -235,3 +235,22 @@ fn path_traced_images_agree_statistically() {
     // The images are not black: the comparison has something to compare.
     assert!(c.mean_ratio.iter().all(|r| (r - 1.0).abs() < 0.05), "{c}");
 }
+
+/// Emitters are flattened, never instanced: light sampling works on world-space triangles.
+/// A shapegroup holding an emitting mesh gives one area light per instance.
+#[test]
+fn emitting_instances_are_flattened() {
+    let xml = r#"<scene version="3.0.0">
+    <shape type="shapegroup" id="g">
+        <shape type="obj"><string name="filename" value="octa.obj"/>
+            <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+    </shape>
+    <shape type="instance"><ref id="g"/></shape>
+    <shape type="instance"><ref id="g"/>
+        <transform name="to_world"><translate x="3"/></transform></shape>
+</scene>"#;
+    let desc = load_files(&[("scene.xml", xml), ("octa.obj", OCTA_OBJ)]);
+    let scene = build(&desc, &BuildOptions::default()).unwrap();
+    assert_eq!(scene.accel.instancing_stats().0, 0);
+    assert_eq!(scene.lights.len(), 2);
+}
