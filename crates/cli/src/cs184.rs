@@ -129,6 +129,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
             seed: Some(args.seed),
             integrator: None,
             light_selection: None,
+            flatten_instances: false,
         },
         time: None,
         threads: args.threads,

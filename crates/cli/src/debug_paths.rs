@@ -188,10 +188,9 @@ fn trace(scene: &Scene, args: &Args) -> Result<Collector, Failure> {
     let mut sampler = Sampler::new(scene.sampler.kind, args.count.max(1), scene.sampler.seed);
     for index in 0..args.count {
         rec.path = index;
-        sampler.start_pixel_sample(UVec2::new(x, y), index);
-        let p_film = UVec2::new(x, y).as_vec2() + sampler.next_2d();
-        let u_lens = sampler.next_2d();
-        let cray = scene.camera.generate_ray(p_film, u_lens);
+        // The renderer's own camera sample (film position, lens, and shutter time when
+        // something moves), so the paths are those of the render.
+        let (_, cray) = render::render::camera_sample(scene, &mut sampler, UVec2::new(x, y), index);
         li_recorded(scene, &cray, &mut sampler, &cfg, &mut rec);
     }
     Ok(rec)

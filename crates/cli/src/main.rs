@@ -691,6 +691,7 @@ fn render_job(args: &RenderArgs, outputs: Vec<PathBuf>, sensor: usize) -> Render
             seed: args.seed,
             integrator: args.integrator.clone(),
             light_selection: args.light_sampler,
+            flatten_instances: false,
         },
         time: args.time,
         threads: args.threads,

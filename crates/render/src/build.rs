@@ -2,6 +2,7 @@
 //! (world-space geometry and its BVH, decoded textures, the chosen sensor's camera, film and
 //! sampler, the integrator).
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use scene::{
@@ -22,7 +23,7 @@ use crate::lights::{
 use crate::materials::RtMaterial;
 use crate::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
-use crate::shapes::{Ellipsoid, Reads, ShapeGeom, SurfaceInteraction, interaction};
+use crate::shapes::{Ellipsoid, Instance, Reads, ShapeGeom, SurfaceInteraction, interaction};
 use crate::textures::{TexCoord, Texture};
 
 /// A problem found while building (unreadable texture, unsupported feature).
@@ -44,6 +45,9 @@ pub struct BuildOptions {
     pub integrator: Option<IntegratorDesc>,
     /// Overrides `SceneDesc::light_selection`.
     pub light_selection: Option<LightSelection>,
+    /// Copy shared meshes into world space instead of instancing them (see [`build`]): the
+    /// reference the instanced build is tested against.
+    pub flatten_instances: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -102,6 +106,8 @@ pub struct Scene {
     pub triangle_count: usize,
     /// Whether any shape has an [`ShapeInfo::opacity`] (only then do queries look at it).
     pub has_cutouts: bool,
+    /// Whether any shape moves (only then do camera rays draw a time).
+    pub has_motion: bool,
 }
 
 impl Scene {
@@ -635,13 +641,60 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         ),
     })?;
 
+    let mut warnings = Vec::new();
+    // Instancing: a mesh shared (same `Arc`) by two or more shapes that do not emit is a
+    // prototype, built once in its object space; each of its shapes is an instance. A mesh
+    // used once is copied to world space as before. Emitters are always copied: light
+    // sampling works on world-space triangles.
+    let mut uses: HashMap<*const TriMesh, u32> = HashMap::new();
+    if !opts.flatten_instances {
+        for s in &desc.shapes {
+            if let Shape::Mesh(m) = &s.shape
+                && s.emission.is_none()
+            {
+                *uses.entry(Arc::as_ptr(m)).or_default() += 1;
+            }
+        }
+    }
+    let mut proto_of: HashMap<*const TriMesh, u32> = HashMap::new();
+    let mut protos: Vec<ShapeGeom> = Vec::new();
+    let mut motion_ignored = false;
     let mut shapes = Vec::with_capacity(desc.shapes.len());
     for s in &desc.shapes {
-        let geom = match &s.shape {
-            Shape::Mesh(m) => mesh_geom(m, &s.to_world),
-            Shape::Rectangle => mesh_geom(&rectangle_mesh(), &s.to_world),
-            Shape::Cube => mesh_geom(&cube_mesh(), &s.to_world),
-            Shape::Sphere { center, radius }
+        // Emitters and infinite planes do not move (light sampling is static; a plane has
+        // no bounds to sweep).
+        let motion = s
+            .motion
+            .filter(|m| *m != PVec3::ZERO && m.is_finite())
+            .filter(|_| {
+                let ok = s.emission.is_none() && !matches!(s.shape, Shape::InfinitePlane { .. });
+                motion_ignored |= !ok;
+                ok
+            })
+            .map(Vec3::from);
+        let shared = match &s.shape {
+            Shape::Mesh(m) if uses.get(&Arc::as_ptr(m)).is_some_and(|&n| n >= 2) => Some(m),
+            _ => None,
+        };
+        let instanced = shared.and_then(|m| {
+            let next = protos.len() as u32;
+            let proto = *proto_of.entry(Arc::as_ptr(m)).or_insert(next);
+            if proto == next {
+                protos.push(mesh_geom(m, &Mat4::IDENTITY));
+            }
+            Instance::new(
+                protos[proto as usize].clone(),
+                proto,
+                s.to_world,
+                motion.unwrap_or(Vec3::ZERO),
+            )
+        });
+        let geom = match (&s.shape, instanced) {
+            (_, Some(i)) => ShapeGeom::Instance(Box::new(i)),
+            (Shape::Mesh(m), None) => mesh_geom(m, &s.to_world),
+            (Shape::Rectangle, None) => mesh_geom(&rectangle_mesh(), &s.to_world),
+            (Shape::Cube, None) => mesh_geom(&cube_mesh(), &s.to_world),
+            (Shape::Sphere { center, radius }, None)
                 if scene::is_similarity(&s.to_world)
                     && (desc.textures.is_empty() || no_rotation(&s.to_world)) =>
             {
@@ -657,7 +710,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                     radius: r,
                 }
             }
-            Shape::Sphere { center, radius } => {
+            (Shape::Sphere { center, radius }, None) => {
                 // Non-uniform scale or shear: an ellipsoid, the unit sphere of this frame (also a
                 // rotated textured sphere, whose uv turns with it).
                 let frame = s.to_world
@@ -673,7 +726,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                     }
                 }
             }
-            Shape::Disk => {
+            (Shape::Disk, None) => {
                 let n = (Mat3::from_mat4(s.to_world).inverse().transpose() * Vec3::Z)
                     .normalize_or_zero();
                 ShapeGeom::Disk {
@@ -681,13 +734,27 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
                     normal: n,
                 }
             }
-            Shape::InfinitePlane { point, normal } => {
+            (Shape::InfinitePlane { point, normal }, None) => {
                 let nm = Mat3::from_mat4(s.to_world).inverse().transpose();
                 ShapeGeom::Plane {
                     point: s.to_world.transform_point3(*point).into(),
                     normal: (nm * *normal).normalize_or_zero().into(),
                 }
             }
+        };
+        // A moving shape that is not already an instance: its own prototype, in world space
+        // at time 0, moved by the instance's translation.
+        let geom = match (geom, motion) {
+            (ShapeGeom::Instance(i), _) => ShapeGeom::Instance(i),
+            (g, Some(m)) => {
+                let proto = protos.len() as u32;
+                protos.push(g.clone());
+                match Instance::new(g, proto, Mat4::IDENTITY, m) {
+                    Some(i) => ShapeGeom::Instance(Box::new(i)),
+                    None => unreachable!("the identity is invertible"),
+                }
+            }
+            (g, None) => g,
         };
         shapes.push(ShapeInfo {
             geom,
@@ -709,8 +776,21 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
             },
         });
     }
+    if motion_ignored {
+        warnings.push(format!(
+            "{}: warning: motion blur of emitters and infinite planes is not supported; they stay at their time-0 place",
+            desc.source.display()
+        ));
+    }
+    let has_motion = shapes
+        .iter()
+        .any(|s| matches!(&s.geom, ShapeGeom::Instance(i) if i.motion != Vec3::ZERO));
     let triangle_count = shapes.iter().map(|s| s.geom.triangle_count()).sum();
-    let accel = Accel::build(shapes.iter().map(|s| s.geom.accel_shape()).collect());
+    let accel = Accel::build_instanced(
+        shapes.iter().map(|s| s.geom.accel_shape()).collect(),
+        protos.iter().map(ShapeGeom::accel_shape).collect(),
+    );
+    drop(protos);
     let bounds = accel.bounds();
 
     let mut textures = desc
@@ -727,7 +807,6 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();
 
-    let mut warnings = Vec::new();
     let has_cutouts = shapes.iter().any(|s| s.opacity.is_some());
     let is_mask = |id: &MaterialId| {
         matches!(
@@ -825,6 +904,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Scene, BuildError>
         bounds,
         triangle_count,
         has_cutouts,
+        has_motion,
     };
     scene.light_sampler = LightSampler::new(selection, &scene);
     Ok(scene)

@@ -96,10 +96,7 @@ fn scene_estimate(desc: &SceneDesc, n: u64, seed: u64) -> Result<MeanVar, TestEr
                     (pick.next_u32() % w).min(w - 1),
                     (pick.next_u32() % h).min(h - 1),
                 );
-                sampler.start_pixel_sample(px, k as u32);
-                let p_film = px.as_vec2() + sampler.next_2d();
-                let u_lens = sampler.next_2d();
-                let cray = scene.camera.generate_ray(p_film, u_lens);
+                let (_, cray) = crate::render::camera_sample(&scene, &mut sampler, px, k as u32);
                 let v = luminance(integrator.li(&scene, &cray, &mut sampler));
                 mv.push(if v.is_finite() { v } else { 0.0 });
             }

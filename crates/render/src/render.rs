@@ -78,6 +78,7 @@ impl RenderObserver for Silent {}
 
 /// Sets `sampler` up for sample `index` of `pixel` and draws its film position (uniform in
 /// the pixel) and camera ray.
+#[inline]
 pub fn camera_sample(
     scene: &Scene,
     sampler: &mut Sampler,
@@ -87,7 +88,19 @@ pub fn camera_sample(
     sampler.start_pixel_sample(pixel, index);
     let p_film = pixel.as_vec2() + sampler.next_2d();
     let u_lens = sampler.next_2d();
-    (p_film, scene.camera.generate_ray(p_film, u_lens))
+    let mut cray = scene.camera.generate_ray(p_film, u_lens);
+    if scene.has_motion {
+        // Motion blur: one time per camera sample, uniform over the shutter. Only scenes
+        // with moving shapes draw it, so static ones keep their random number streams.
+        cray.ray.time = shutter_time(sampler);
+    }
+    (p_film, cray)
+}
+
+/// The time of a camera sample (motion blur), out of line: static scenes never call it.
+#[inline(never)]
+fn shutter_time(sampler: &mut Sampler) -> f32 {
+    sampler.next_1d()
 }
 
 /// Render sample indices `[s0, s1)` of every pixel of one tile (positions uniform in each

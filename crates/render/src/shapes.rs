@@ -16,7 +16,7 @@ use crate::accel::{AccelShape, Hit};
 use crate::geometry::Ray;
 use glam::Mat3A;
 
-use crate::math::{Frame, Mat4, PI, Vec2, Vec3, normalize_or_zero_fast, rsqrt};
+use crate::math::{Frame, Mat3, Mat4, PI, Vec2, Vec3, normalize_or_zero_fast, rsqrt};
 
 /// γ(n) of Higham / pbrt: a bound on the relative error of n floating-point operations.
 #[inline]
@@ -50,6 +50,8 @@ pub enum ShapeGeom {
         point: Vec3,
         normal: Vec3,
     },
+    /// An instance of a shared prototype mesh, or a moving shape (see [`Instance`]).
+    Instance(Box<Instance>),
 }
 
 impl ShapeGeom {
@@ -75,6 +77,11 @@ impl ShapeGeom {
                 point: *point,
                 normal: *normal,
             },
+            ShapeGeom::Instance(i) => AccelShape::Instance {
+                proto: i.proto,
+                to_world: i.to_world,
+                motion: i.motion,
+            },
         }
     }
 
@@ -98,14 +105,95 @@ impl ShapeGeom {
             }
             ShapeGeom::Ellipsoid(e) => e.area,
             ShapeGeom::Plane { .. } => f32::INFINITY,
+            ShapeGeom::Instance(i) => match &i.base {
+                ShapeGeom::Mesh {
+                    positions, indices, ..
+                } => indices
+                    .iter()
+                    .map(|t| {
+                        let [a, b, c] =
+                            t.map(|k| i.to_world.transform_point3a(positions[k as usize]));
+                        0.5 * (b - a).cross(c - a).length()
+                    })
+                    .sum(),
+                // Moving shapes: a translation keeps the area.
+                base => base.area(),
+            },
         }
     }
 
+    /// Triangles of the shape (an instance counts its prototype's).
     pub fn triangle_count(&self) -> usize {
         match self {
             ShapeGeom::Mesh { indices, .. } => indices.len(),
+            ShapeGeom::Instance(i) => i.base.triangle_count(),
             _ => 0,
         }
+    }
+}
+
+/// A shape seen through a placement (an instance of a prototype mesh) and moving by a
+/// translation over the shutter: at time τ its world geometry is `to_world(x) + τ·motion`.
+///
+/// Hits are found in the prototype's space (`accel`'s two-level part); the interaction is
+/// computed from the hit triangle's vertices mapped to world space with the same arithmetic
+/// the flattened copy of the mesh uses, so shading is the same as for a copy (up to the
+/// rounding of the barycentrics, which the object-space test finds). The error bound adds the
+/// rounding of mapping the spawned ray back into the prototype's space.
+#[derive(Clone, Debug)]
+pub struct Instance {
+    /// A prototype mesh in its object space (its arrays shared by every instance of it), or
+    /// for a moving shape that is not instanced, the shape itself at time 0 (`to_world` the
+    /// identity).
+    pub base: ShapeGeom,
+    /// Index of the accelerator's bottom-level tree for `base`.
+    pub proto: u32,
+    pub to_world: Mat4,
+    /// Inverse transpose of `to_world`'s linear part (object normal → world normal).
+    pub normal_matrix: Mat3,
+    /// `to_world` mirrors: the winding is reversed, as `build`'s flattened meshes do.
+    pub mirror: bool,
+    /// World translation over the shutter interval [0, 1].
+    pub motion: Vec3,
+    /// |linear part| of `to_world` and of its inverse, and |translation of the inverse|, for
+    /// the error bound.
+    abs_m: Mat3A,
+    abs_inv: Mat3A,
+    abs_inv_t: Vec3,
+}
+
+impl Instance {
+    /// `None` for a singular or non-finite placement.
+    pub fn new(base: ShapeGeom, proto: u32, to_world: Mat4, motion: Vec3) -> Option<Instance> {
+        let inv = to_world.inverse();
+        let det = Mat3::from_mat4(to_world).determinant();
+        if det == 0.0 || !det.is_finite() || !inv.is_finite() || !to_world.is_finite() {
+            return None;
+        }
+        let abs = |m: Mat3A| Mat3A::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+        Some(Instance {
+            base,
+            proto,
+            to_world,
+            normal_matrix: Mat3::from_mat4(to_world).inverse().transpose(),
+            mirror: det < 0.0,
+            motion: if motion.is_finite() {
+                motion
+            } else {
+                Vec3::ZERO
+            },
+            abs_m: abs(Mat3A::from_mat4(to_world)),
+            abs_inv: abs(Mat3A::from_mat4(inv)),
+            abs_inv_t: Vec3::from_vec4(inv.w_axis).abs(),
+        })
+    }
+
+    /// Added to a world point's error bound: the rounding of the shift by `τ·motion` and of
+    /// the map into the prototype's space that the next query applies (generously, γ₈).
+    #[inline]
+    fn extra_error(&self, p: Vec3, shift: Vec3) -> Vec3 {
+        let a = p.abs() + shift.abs();
+        gamma(8) * (self.abs_m * (self.abs_inv * a + self.abs_inv_t) + a)
     }
 }
 
@@ -199,6 +287,8 @@ pub struct SurfaceInteraction {
     pub t: f32,
     pub shape: u32,
     pub prim: u32,
+    /// The time of the ray that found it (see [`Ray::time`]); rays spawned here keep it.
+    pub time: f32,
 }
 
 impl SurfaceInteraction {
@@ -214,7 +304,11 @@ impl SurfaceInteraction {
     /// A ray leaving the surface in direction `d`, origin offset to the side `d` points to.
     #[inline]
     pub fn spawn_ray(&self, d: Vec3) -> Ray {
-        Ray::new(offset_ray_origin(self.p, self.p_error, self.ng, d), d)
+        Ray::at_time(
+            offset_ray_origin(self.p, self.p_error, self.ng, d),
+            d,
+            self.time,
+        )
     }
 
     /// A ray towards `target` and the parameter range (0, t_max) that stops just short of it
@@ -222,7 +316,7 @@ impl SurfaceInteraction {
     #[inline]
     pub fn spawn_ray_to(&self, target: Vec3) -> (Ray, f32) {
         let o = offset_ray_origin(self.p, self.p_error, self.ng, target - self.p);
-        (Ray::new(o, target - o), 1.0 - SHADOW_EPSILON)
+        (Ray::at_time(o, target - o, self.time), 1.0 - SHADOW_EPSILON)
     }
 
     /// Like `spawn_ray_to`, but towards another surface point, offsetting both ends.
@@ -230,7 +324,7 @@ impl SurfaceInteraction {
     pub fn spawn_ray_to_surface(&self, p: Vec3, p_error: Vec3, n: Vec3) -> (Ray, f32) {
         let o = offset_ray_origin(self.p, self.p_error, self.ng, p - self.p);
         let t = offset_ray_origin(p, p_error, n, o - p);
-        (Ray::new(o, t - o), 1.0 - SHADOW_EPSILON)
+        (Ray::at_time(o, t - o, self.time), 1.0 - SHADOW_EPSILON)
     }
 }
 
@@ -368,56 +462,27 @@ pub fn interaction(
     reads: Reads,
 ) -> SurfaceInteraction {
     let wo = -ray.d * rsqrt(ray.d.length_squared());
-    let (p, p_error, mut ng, mut ns, dpdu, uv) = match geom {
+    let (p, p_error, ng, ns, dpdu, uv) = match geom {
         ShapeGeom::Mesh {
             positions,
             normals,
             uvs,
             indices,
         } => {
-            let [i0, i1, i2] = indices[hit.prim as usize].map(|i| i as usize);
-            let (p0, p1, p2) = (positions[i0], positions[i1], positions[i2]);
-            let (b1, b2) = (hit.u, hit.v);
-            let b0 = 1.0 - b1 - b2;
-            let p = b0 * p0 + b1 * p1 + b2 * p2;
-            let p_error = gamma(7) * ((b0 * p0).abs() + (b1 * p1).abs() + (b2 * p2).abs());
-            let e1 = p1 - p0;
-            let e2 = p2 - p0;
-            let ng = normalize_or_zero_fast(e1.cross(e2));
-            let uv = match uvs {
-                Some(t) if reads.uv => b0 * t[i0] + b1 * t[i1] + b2 * t[i2],
-                _ => Vec2::new(b1, b2),
-            };
-            if normals.is_none() && (uvs.is_none() || !reads.tangent) {
-                // Flat mesh without uvs (the common case for OBJ/PLY without `vt`/`vn`), or
-                // one whose tangent does not matter: the shading frame is the geometric one,
-                // with `s` along the first edge, which is already orthogonal to `ng`, so no
-                // Gram–Schmidt step is needed.
-                return flat_interaction(p, p_error, ng, e1, uv, wo, hit, flip);
-            }
-            let dpdu = match uvs {
-                Some(t) if reads.tangent => {
-                    let (t0, t1, t2) = (t[i0], t[i1], t[i2]);
-                    let du1 = t1 - t0;
-                    let du2 = t2 - t0;
-                    let det = du1.x * du2.y - du1.y * du2.x;
-                    if det.abs() > 1e-12 {
-                        (e1 * du2.y - e2 * du1.y) / det
-                    } else {
-                        e1
-                    }
-                }
-                _ => e1,
-            };
-            let ns = match normals {
-                Some(n) => {
-                    // `normalize_or`: comparing with zero component by component is a branch on
-                    // the normal's direction, which the predictor cannot learn.
-                    (b0 * n[i0] + b1 * n[i1] + b2 * n[i2]).normalize_or(ng)
-                }
-                None => ng,
-            };
-            (p, p_error, ng, ns, dpdu, uv)
+            let idx = indices[hit.prim as usize].map(|i| i as usize);
+            let p = idx.map(|i| positions[i]);
+            return mesh_interaction(
+                p,
+                idx,
+                normals.as_deref(),
+                |n| n,
+                uvs.as_deref(),
+                hit,
+                wo,
+                ray.time,
+                flip,
+                reads,
+            );
         }
         ShapeGeom::Sphere { center, radius } => {
             let raw = ray.at(hit.t);
@@ -459,7 +524,26 @@ pub fn interaction(
             let uv = Vec2::new((p - *point).dot(frame.s), (p - *point).dot(frame.t));
             (p, p_error, *normal, *normal, frame.s, uv)
         }
+        ShapeGeom::Instance(i) => return instance_interaction(i, hit, ray, flip, reads),
     };
+    finish_interaction(p, p_error, ng, ns, dpdu, uv, wo, hit, ray.time, flip)
+}
+
+/// The common tail of [`interaction`]: orientation and the shading frame.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn finish_interaction(
+    p: Vec3,
+    p_error: Vec3,
+    mut ng: Vec3,
+    mut ns: Vec3,
+    dpdu: Vec3,
+    uv: Vec2,
+    wo: Vec3,
+    hit: &Hit,
+    time: f32,
+    flip: bool,
+) -> SurfaceInteraction {
     if flip {
         ng = -ng;
         ns = -ns;
@@ -479,7 +563,131 @@ pub fn interaction(
         t: hit.t,
         shape: hit.shape,
         prim: hit.prim,
+        time,
     }
+}
+
+/// The interaction on the world-space triangle `p` (vertices `idx` of the mesh, for the
+/// normals, mapped by `normal_to_world`, and uvs).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn mesh_interaction(
+    [p0, p1, p2]: [Vec3; 3],
+    [i0, i1, i2]: [usize; 3],
+    normals: Option<&[Vec3]>,
+    normal_to_world: impl Fn(Vec3) -> Vec3,
+    uvs: Option<&[Vec2]>,
+    hit: &Hit,
+    wo: Vec3,
+    time: f32,
+    flip: bool,
+    reads: Reads,
+) -> SurfaceInteraction {
+    let (b1, b2) = (hit.u, hit.v);
+    let b0 = 1.0 - b1 - b2;
+    let p = b0 * p0 + b1 * p1 + b2 * p2;
+    let p_error = gamma(7) * ((b0 * p0).abs() + (b1 * p1).abs() + (b2 * p2).abs());
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let ng = normalize_or_zero_fast(e1.cross(e2));
+    let uv = match uvs {
+        Some(t) if reads.uv => b0 * t[i0] + b1 * t[i1] + b2 * t[i2],
+        _ => Vec2::new(b1, b2),
+    };
+    if normals.is_none() && (uvs.is_none() || !reads.tangent) {
+        // Flat mesh without uvs (the common case for OBJ/PLY without `vt`/`vn`), or
+        // one whose tangent does not matter: the shading frame is the geometric one,
+        // with `s` along the first edge, which is already orthogonal to `ng`, so no
+        // Gram–Schmidt step is needed.
+        return flat_interaction(p, p_error, ng, e1, uv, wo, hit, time, flip);
+    }
+    let dpdu = match uvs {
+        Some(t) if reads.tangent => {
+            let (t0, t1, t2) = (t[i0], t[i1], t[i2]);
+            let du1 = t1 - t0;
+            let du2 = t2 - t0;
+            let det = du1.x * du2.y - du1.y * du2.x;
+            if det.abs() > 1e-12 {
+                (e1 * du2.y - e2 * du1.y) / det
+            } else {
+                e1
+            }
+        }
+        _ => e1,
+    };
+    let ns = match normals {
+        Some(n) => {
+            // `normalize_or`: comparing with zero component by component is a branch on
+            // the normal's direction, which the predictor cannot learn.
+            (b0 * normal_to_world(n[i0])
+                + b1 * normal_to_world(n[i1])
+                + b2 * normal_to_world(n[i2]))
+            .normalize_or(ng)
+        }
+        None => ng,
+    };
+    finish_interaction(p, p_error, ng, ns, dpdu, uv, wo, hit, time, flip)
+}
+
+/// [`interaction`] on an [`Instance`]: out of line, so that ordinary shapes' code is as
+/// before.
+#[inline(never)]
+fn instance_interaction(
+    inst: &Instance,
+    hit: &Hit,
+    ray: &Ray,
+    flip: bool,
+    reads: Reads,
+) -> SurfaceInteraction {
+    let shift = inst.motion * ray.time;
+    let mut si = match &inst.base {
+        ShapeGeom::Mesh {
+            positions,
+            normals,
+            uvs,
+            indices,
+        } => {
+            // The world triangle as the flattened copy stores it (with its winding reversed
+            // under a mirroring placement, the barycentrics following).
+            let [a, b, c] = indices[hit.prim as usize].map(|i| i as usize);
+            let (idx, h) = if inst.mirror {
+                (
+                    [a, c, b],
+                    Hit {
+                        u: hit.v,
+                        v: hit.u,
+                        ..*hit
+                    },
+                )
+            } else {
+                ([a, b, c], *hit)
+            };
+            let p = idx.map(|i| inst.to_world.transform_point3a(positions[i]) + shift);
+            let wo = -ray.d * rsqrt(ray.d.length_squared());
+            mesh_interaction(
+                p,
+                idx,
+                normals.as_deref(),
+                |n| (inst.normal_matrix * n).normalize_or_zero(),
+                uvs.as_deref(),
+                &h,
+                wo,
+                ray.time,
+                flip,
+                reads,
+            )
+        }
+        // A moving shape that is not a mesh instance (`to_world` is the identity): hit at its
+        // time-0 place by the ray shifted back.
+        base => {
+            let local = Ray::at_time(ray.o - shift, ray.d, ray.time);
+            let mut si = interaction(base, hit, &local, flip, reads);
+            si.p += shift;
+            si
+        }
+    };
+    si.p_error += inst.extra_error(si.p, shift);
+    si
 }
 
 /// [`interaction`] for a triangle without shading normals or uvs: shading frame = geometric
@@ -494,6 +702,7 @@ fn flat_interaction(
     uv: Vec2,
     wo: Vec3,
     hit: &Hit,
+    time: f32,
     flip: bool,
 ) -> SurfaceInteraction {
     let n = if flip { -ng } else { ng };
@@ -521,6 +730,7 @@ fn flat_interaction(
         t: hit.t,
         shape: hit.shape,
         prim: hit.prim,
+        time,
     }
 }
 

@@ -13,6 +13,7 @@ use scene::{
 
 fn shape(shape: Shape, to_world: Mat4) -> ShapeDesc {
     ShapeDesc {
+        motion: None,
         shape,
         to_world,
         material: None,

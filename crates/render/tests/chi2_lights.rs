@@ -50,6 +50,7 @@ fn base() -> SceneDesc {
 fn emitting(shape: Shape, to_world: Mat4) -> SceneDesc {
     let mut d = base();
     d.shapes.push(ShapeDesc {
+        motion: None,
         shape,
         to_world,
         material: None,

@@ -32,6 +32,7 @@ fn furnace_with_fov(material: Material, fov: f32) -> (f64, f64) {
         loc: Default::default(),
     });
     desc.shapes.push(ShapeDesc {
+        motion: None,
         shape: Shape::Sphere {
             center: Vec3::ZERO,
             radius: 1.0,

@@ -111,6 +111,9 @@ pub struct ShapeDesc {
     pub emission: Option<AreaEmission>,
     /// Flip the shading and geometric normals (Mitsuba `flip_normals`).
     pub flip_normals: bool,
+    /// Motion blur: the shape moves by `τ·motion` (world space, after `to_world`) at time τ
+    /// of the shutter interval [0, 1] (CENG795 `MotionBlur`). `None`: static.
+    pub motion: Option<Vec3>,
     pub name: Option<String>,
     pub loc: Loc,
 }

@@ -188,3 +188,74 @@ fn spot_lights_use_the_course_falloff() {
         .expect("a spot light");
     assert_eq!(spot, (30.0, 10.0, scene::SpotFalloff::Cosine4));
 }
+
+#[test]
+fn motion_blur_and_instances_of_the_dynamic_cornell_box() {
+    let Some(dir) = shared() else { return };
+    let s = load(&dir.join("json/hw3/cornellbox_boxes_dynamic.json")).unwrap();
+    // The MeshInstance moves by "0 0 4" over the shutter; nothing else moves.
+    let moving: Vec<_> = s.shapes.iter().filter(|sh| sh.motion.is_some()).collect();
+    assert_eq!(moving.len(), 1);
+    assert_eq!(moving[0].motion, Some(glam::Vec3::new(0.0, 0.0, 4.0)));
+    // It shares the base mesh (so the renderer instances it).
+    let meshes: Vec<_> = s
+        .shapes
+        .iter()
+        .filter_map(|sh| match &sh.shape {
+            Shape::Mesh(m) if m.triangle_count() == 12 => Some(m.clone()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(meshes.len(), 2);
+    assert!(std::sync::Arc::ptr_eq(&meshes[0], &meshes[1]));
+    assert!(
+        s.warnings.iter().all(|w| !w.message.contains("MotionBlur")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
+fn a_ply_used_twice_is_read_once() {
+    let dir = std::env::temp_dir().join(format!("ceng795-ply-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+               property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+               end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    std::fs::write(dir.join("t.ply"), ply).unwrap();
+    let mesh = |id: u32, mode: &str| {
+        format!(
+            r#"{{ "_id": "{id}", "_shadingMode": "{mode}", "Faces": {{ "_plyFile": "t.ply" }} }}"#
+        )
+    };
+    let json = format!(
+        r#"{{ "Scene": {{ "Cameras": {{ "Camera": {{ "_id": "1", "Position": "0 0 5",
+        "Gaze": "0 0 -1", "Up": "0 1 0", "NearPlane": "-1 1 -1 1", "NearDistance": "1",
+        "ImageResolution": "8 8", "ImageName": "a.png" }} }},
+        "Materials": {{ "Material": {{ "_id": "1", "DiffuseReflectance": "1 1 1" }} }},
+        "Objects": {{ "Mesh": [{}, {}, {}] }} }} }}"#,
+        mesh(1, "flat"),
+        mesh(2, "flat"),
+        mesh(3, "smooth")
+    );
+    std::fs::write(dir.join("s.json"), json).unwrap();
+    let s = load(&dir.join("s.json")).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    let m: Vec<_> = s
+        .shapes
+        .iter()
+        .map(|sh| match &sh.shape {
+            Shape::Mesh(m) => m.clone(),
+            _ => panic!("mesh expected"),
+        })
+        .collect();
+    assert!(
+        std::sync::Arc::ptr_eq(&m[0], &m[1]),
+        "same file and mode: shared"
+    );
+    assert!(
+        !std::sync::Arc::ptr_eq(&m[0], &m[2]),
+        "smooth shading: its own mesh"
+    );
+    assert!(m[0].normals.is_empty() && !m[2].normals.is_empty());
+}

@@ -827,3 +827,82 @@ fn mitsuba_cbox_values() {
     assert!(matches!(e.radiance, ColorParam::Const(c) if c == Vec3::new(18.387, 10.9873, 2.75357)));
     assert_eq!(lum.to_world.w_axis, Vec4::new(0.0, -0.5, 0.0, 1.0));
 }
+
+// ---------------------------------------------------------------------------------------------
+// Shape groups and instances
+
+const TRI_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+fn group_scene(instances: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <shape type="shapegroup" id="g">
+        <shape type="obj">
+            <string name="filename" value="tri.obj"/>
+            <transform name="to_world"><translate x="1"/></transform>
+        </shape>
+        <shape type="sphere"><float name="radius" value="0.5"/></shape>
+    </shape>
+    {instances}
+</scene>"#
+    )
+}
+
+#[test]
+fn shapegroup_instances_share_meshes_and_compose_transforms() {
+    let text = group_scene(
+        r#"<shape type="instance" id="a">
+        <ref id="g"/>
+        <transform name="to_world"><scale x="2" y="3" z="1"/></transform>
+    </shape>
+    <shape type="instance">
+        <ref id="g"/>
+        <transform name="to_world"><rotate y="1" angle="90"/></transform>
+    </shape>"#,
+    );
+    let path = write_scene(&[("scene.xml", &text), ("tri.obj", TRI_OBJ)]);
+    let s = match load(&path, &LoadOptions::default()) {
+        Ok(Document::Scene(s)) => *s,
+        other => panic!("{:?}", other.err()),
+    };
+    // The group declaration adds nothing; each instance adds the group's two shapes.
+    assert_eq!(s.shapes.len(), 4);
+    let (Shape::Mesh(m0), Shape::Mesh(m1)) = (&s.shapes[0].shape, &s.shapes[2].shape) else {
+        panic!("meshes expected first in each instance");
+    };
+    assert!(std::sync::Arc::ptr_eq(m0, m1), "the mesh is shared");
+    assert!(matches!(s.shapes[1].shape, Shape::Sphere { .. }));
+    let t = Mat4::from_translation(Vec3::X);
+    assert_mat(
+        s.shapes[0].to_world,
+        Mat4::from_scale(Vec3::new(2.0, 3.0, 1.0)) * t,
+    );
+    assert_mat(
+        s.shapes[1].to_world,
+        Mat4::from_scale(Vec3::new(2.0, 3.0, 1.0)),
+    );
+    assert_mat(
+        s.shapes[2].to_world,
+        Mat4::from_rotation_y(90f32.to_radians()) * t,
+    );
+    assert_eq!(s.shapes[0].name.as_deref(), Some("a"));
+}
+
+#[test]
+fn shapegroup_errors() {
+    let e = load_err(
+        r#"<scene version="3.0.0">
+    <shape type="shapegroup" id="g"><shape type="sphere"/></shape>
+    <shape type="instance"><transform name="to_world"><scale value="2"/></transform></shape>
+</scene>"#,
+    );
+    assert!(e.message.contains("exactly one shapegroup"), "{e}");
+    let e = load_err(
+        r#"<scene version="3.0.0">
+    <shape type="shapegroup" id="g">
+        <shape type="shapegroup"><shape type="sphere"/></shape>
+    </shape>
+</scene>"#,
+    );
+    assert!(e.message.contains("another shapegroup"), "{e}");
+}

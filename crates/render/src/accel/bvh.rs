@@ -261,6 +261,13 @@ impl WideBvh {
         out
     }
 
+    /// Bytes of nodes, packets and ids.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node>()
+            + self.packets.len() * size_of::<Packet>()
+            + self.ids.len() * size_of::<[[u32; 2]; 4]>()
+    }
+
     /// Traversal stack entries needed (see the `stack_need` field).
     fn stack_need(&self) -> usize {
         self.stack_need as usize
@@ -674,20 +681,20 @@ fn transformed_packet(
 
 /// A binary tree in obvhs's layout (children of an inner node at `first_index` and
 /// `first_index + 1`; leaves index `prim_indices`).
-struct Tree2 {
-    nodes: Vec<Bvh2Node>,
-    prim_indices: Vec<u32>,
+pub(crate) struct Tree2 {
+    pub(crate) nodes: Vec<Bvh2Node>,
+    pub(crate) prim_indices: Vec<u32>,
 }
 
 impl Tree2 {
-    fn from_bvh2(b: Bvh2) -> Tree2 {
+    pub(crate) fn from_bvh2(b: Bvh2) -> Tree2 {
         Tree2 {
             nodes: b.nodes,
             prim_indices: b.primitive_indices,
         }
     }
 
-    fn single_leaf(aabbs: &[Aabb]) -> Tree2 {
+    pub(crate) fn single_leaf(aabbs: &[Aabb]) -> Tree2 {
         let bb = aabbs.iter().fold(Aabb::INVALID, |a, b| a.union(b));
         Tree2 {
             nodes: vec![Bvh2Node::new(bb, aabbs.len() as u32, 0)],
@@ -696,7 +703,7 @@ impl Tree2 {
     }
 
     /// Fallback: a balanced tree by object-median splits on the largest centroid axis.
-    fn median(aabbs: &[Aabb]) -> Tree2 {
+    pub(crate) fn median(aabbs: &[Aabb]) -> Tree2 {
         let mut t = Tree2 {
             nodes: vec![Bvh2Node::new(Aabb::INVALID, 0, 0)],
             prim_indices: (0..aabbs.len() as u32).collect(),
@@ -750,7 +757,11 @@ impl Tree2 {
         order
     }
 
-    fn depth(&self) -> u32 {
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Bvh2Node>() + self.prim_indices.len() * 4
+    }
+
+    pub(crate) fn depth(&self) -> u32 {
         self.preorder().iter().map(|&(_, d)| d).max().unwrap_or(0)
     }
 

@@ -33,15 +33,15 @@
 //! both scene classes we care about: a single 1M-triangle mesh (the top level of a two-level tree
 //! would be one useless node) and small scenes of a few shapes, whose meshes may overlap in
 //! space — a top level over per-shape boxes cannot separate overlapping meshes, whereas the flat
-//! tree splits them primitive by primitive. The cost is build time for scenes that reuse
-//! geometry, which is exactly what instancing is for.
+//! tree splits them primitive by primitive. Scenes that reuse geometry would pay in build
+//! time and memory, which is what the instance level below is for.
 //!
-//! Path to instancing: the BVH's leaves hold a closed set of `bvh::Packet`s. Instancing adds a
-//! `Packet::Instance { blas: u32, to_object: Affine3A }` variant and a `Vec<WideBvh>` of bottom-level
-//! trees: the top-level tree is built exactly like today over instance boxes (plus any
-//! non-instanced geometry), and the instance packet transforms the ray and runs the same
-//! traversal in its bottom-level tree with its own fixed-size stack; `Hit` would gain an
-//! `instance` field. Nothing in the traversal or the primitive tests has to change.
+//! Instancing (two levels): shapes reusing one prototype, and moving shapes, are
+//! [`AccelShape::Instance`]s of bottom-level trees built by [`Accel::build_instanced`]; they
+//! live in a second, top-level tree queried after the flat one (module `instance`), so the
+//! flat tree's leaf dispatch and traversal are exactly as without instancing, and scenes
+//! without instances skip the second level with one test. A hit on an instance reports the
+//! instance's shape index and the prototype's primitive index.
 //!
 //! # Choice of tree
 //! obvhs' own CWBVH (8-wide, 8-bit quantised boxes, Ylitie et al. 2017) is a GPU-oriented
@@ -69,6 +69,7 @@
 //! hit and ~260 per shadow ray.
 
 mod bvh;
+mod instance;
 pub mod prim;
 
 use std::sync::Arc;
@@ -78,6 +79,7 @@ use obvhs::aabb::Aabb;
 use crate::geometry::Ray;
 use crate::math::{Mat3, Mat4, Vec3, Vec3A};
 use bvh::{Prim, WideBvh};
+use glam::Affine3A;
 
 /// A shape as the acceleration structure sees it.
 #[derive(Clone, Debug)]
@@ -105,6 +107,13 @@ pub enum AccelShape {
         point: Vec3,
         normal: Vec3,
     },
+    /// Prototype `proto` of [`Accel::build_instanced`] placed by `to_world` at time 0 and
+    /// moving by `motion` per unit of [`Ray::time`] (zero for a static instance).
+    Instance {
+        proto: u32,
+        to_world: Mat4,
+        motion: Vec3,
+    },
 }
 
 /// A ray hit.
@@ -127,6 +136,9 @@ pub struct Accel {
     bvh: WideBvh,
     planes: Vec<(Vec3, Vec3, u32)>,
     bounds: (Vec3, Vec3),
+    /// Instances and moving shapes; `None` when there are none, so that ordinary scenes pay
+    /// one test of a pointer per query.
+    top: Option<Box<instance::TopLevel>>,
 }
 
 impl Accel {
@@ -136,89 +148,108 @@ impl Accel {
     /// # Panics
     /// Beyond 2²⁷ leaf packets (≈ 500M triangles), which the node encoding cannot address.
     pub fn build(shapes: Vec<AccelShape>) -> Accel {
+        Accel::build_instanced(shapes, Vec::new())
+    }
+
+    /// [`Accel::build`] with prototypes: `protos` are shapes in their own object space (no
+    /// planes, no instances), each given one bottom-level tree, which the
+    /// [`AccelShape::Instance`]s of `shapes` refer to by index. Instances of a missing
+    /// prototype, or with a singular or non-finite placement, are skipped.
+    pub fn build_instanced(shapes: Vec<AccelShape>, protos: Vec<AccelShape>) -> Accel {
         let mut prims = Vec::new();
         let mut ids = Vec::new();
         let mut aabbs = Vec::new();
         let mut planes = Vec::new();
+        let mut insts = Vec::new();
+        let mut inst_boxes = Vec::new();
         for (s, shape) in shapes.iter().enumerate() {
-            let s = s as u32;
-            match shape {
-                AccelShape::Triangles { positions, indices } => {
-                    prims.reserve(indices.len());
-                    ids.reserve(indices.len());
-                    aabbs.reserve(indices.len());
-                    for (t, tri) in indices.iter().enumerate() {
-                        let get = |i: u32| positions.get(i as usize).copied();
-                        let (Some(p0), Some(p1), Some(p2)) =
-                            (get(tri[0]), get(tri[1]), get(tri[2]))
-                        else {
-                            continue;
-                        };
-                        // Zero-area triangles have no normal: a sliver hit after the ray's shear
-                        // would give shading a NaN frame, so they are dropped here.
-                        let n = (p1 - p0).cross(p2 - p0);
-                        if !(p0.is_finite() && p1.is_finite() && p2.is_finite())
-                            || n == Vec3::ZERO
-                            || !n.is_finite()
-                        {
-                            continue;
-                        }
-                        prims.push(Prim::Tri([p0, p1, p2]));
-                        ids.push([s, t as u32]);
-                        aabbs.push(Aabb::new(p0.min(p1).min(p2), p0.max(p1).max(p2)));
-                    }
+            if let &AccelShape::Instance {
+                proto,
+                to_world,
+                motion,
+            } = shape
+            {
+                let (Some(to_object), true) = (invertible(&to_world), motion.is_finite()) else {
+                    continue;
+                };
+                if proto as usize >= protos.len() {
+                    continue;
                 }
-                &AccelShape::Sphere { center, radius } => {
-                    if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
-                        continue;
-                    }
-                    prims.push(Prim::Sphere { center, radius });
-                    ids.push([s, 0]);
-                    aabbs.push(Aabb::new(center - radius, center + radius));
-                }
-                &AccelShape::Disk { to_world } => {
-                    let Some(to_object) = invertible(&to_world) else {
-                        continue;
-                    };
-                    let mut bb = Aabb::INVALID;
-                    for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
-                        bb.extend(to_world.transform_point3a(Vec3A::new(x, y, 0.0)));
-                    }
-                    prims.push(Prim::Disk { to_object });
-                    ids.push([s, 0]);
-                    aabbs.push(bb);
-                }
-                &AccelShape::Ellipsoid { to_world } => {
-                    let Some(to_object) = invertible(&to_world) else {
-                        continue;
-                    };
-                    prims.push(Prim::Ellipsoid { to_object });
-                    ids.push([s, 0]);
-                    let (lo, hi) = ellipsoid_bounds(&to_world);
-                    aabbs.push(Aabb::new(lo, hi));
-                }
-                &AccelShape::Plane { point, normal } => {
-                    if normal.is_finite() && point.is_finite() && normal != Vec3::ZERO {
-                        planes.push((point, normal, s));
-                    }
-                }
+                insts.push(instance::Inst {
+                    to_object: Affine3A::from_mat4(to_object),
+                    motion,
+                    blas: proto,
+                    shape: s as u32,
+                });
+                continue;
             }
+            add_prims(
+                shape,
+                s as u32,
+                &mut prims,
+                &mut ids,
+                &mut aabbs,
+                &mut planes,
+            );
         }
-        let bounds = if aabbs.is_empty() {
-            (Vec3::ZERO, Vec3::ZERO)
-        } else {
-            let bb = aabbs.iter().fold(Aabb::INVALID, |a, b| a.union(b));
+        let blas: Vec<instance::Blas> = protos
+            .iter()
+            .map(|p| {
+                let (mut pp, mut pi, mut pa, mut pl) =
+                    (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+                add_prims(p, 0, &mut pp, &mut pi, &mut pa, &mut pl);
+                let bounds = pa.iter().fold(Aabb::INVALID, |a, b| a.union(b));
+                instance::Blas {
+                    bvh: WideBvh::build(&pp, &pi, &pa),
+                    bounds,
+                }
+            })
+            .collect();
+        // Instances of empty prototypes (all geometry invalid) have nothing to hit.
+        insts.retain(|i| {
+            blas[i.blas as usize]
+                .bounds
+                .min
+                .cmple(blas[i.blas as usize].bounds.max)
+                .all()
+        });
+        for i in &insts {
+            let to_world = i.to_object.inverse();
+            inst_boxes.push(instance::instance_box(
+                &blas[i.blas as usize].bounds,
+                &to_world,
+                i.motion,
+            ));
+        }
+        let top = instance::TopLevel::build(blas, insts, inst_boxes).map(Box::new);
+        let mut bb = aabbs.iter().fold(Aabb::INVALID, |a, b| a.union(b));
+        if let Some(t) = &top {
+            bb = bb.union(&t.bounds());
+        }
+        let bounds = if bb.min.cmple(bb.max).all() {
             (bb.min, bb.max)
+        } else {
+            (Vec3::ZERO, Vec3::ZERO)
         };
         let bvh = WideBvh::build(&prims, &ids, &aabbs);
         Accel {
             bvh,
             planes,
             bounds,
+            top,
         }
     }
 
+    /// Bottom-level trees (prototypes) and bytes they, the instances and the top level hold;
+    /// `(0, 0)` without instances.
+    pub fn instancing_stats(&self) -> (usize, usize) {
+        self.top
+            .as_ref()
+            .map_or((0, 0), |t| (t.blas_count(), t.memory_bytes()))
+    }
+
     /// The closest hit with `0 < t < t_max`.
+    #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         if !ray_ok(ray, t_max) {
             return None;
@@ -230,6 +261,9 @@ impl Accel {
             u: h.u,
             v: h.v,
         });
+        if let Some(top) = &self.top {
+            best = instances_closest(top, ray, t_max, best);
+        }
         let mut t_max = best.map_or(t_max, |h| h.t);
         for &(point, normal, shape) in &self.planes {
             if let Some(t) = prim::intersect_plane(ray, point, normal, t_max) {
@@ -247,6 +281,7 @@ impl Accel {
     }
 
     /// Whether anything is hit with `0 < t < t_max`.
+    #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         if !ray_ok(ray, t_max) {
             return false;
@@ -255,6 +290,10 @@ impl Accel {
             .iter()
             .any(|&(p, n, _)| prim::intersect_plane(ray, p, n, t_max).is_some())
             || self.bvh.occluded(ray, t_max)
+            || self
+                .top
+                .as_ref()
+                .is_some_and(|t| instances_occluded(t, ray, t_max))
     }
 
     /// Bounds `(min, max)` of the bounded shapes (planes excluded); `(0, 0)` if there are none.
@@ -271,6 +310,105 @@ fn ray_ok(ray: &Ray, t_max: f32) -> bool {
     let z = (ray.o - ray.o) + (ray.d - ray.d);
     // `cmpne(..).any()`: one mask test, where `!=` would branch on each component.
     t_max > 0.0 && z.x + z.y + z.z == 0.0 && ray.d.cmpne(Vec3::ZERO).any()
+}
+
+/// The closest of `best` and the instances' hits: out of line, so that the queries of scenes
+/// without instances stay as small as before (they are inlined into the integrators).
+#[inline(never)]
+fn instances_closest(
+    top: &instance::TopLevel,
+    ray: &Ray,
+    t_max: f32,
+    best: Option<Hit>,
+) -> Option<Hit> {
+    let t_max = best.map_or(t_max, |h| h.t);
+    match top.intersect(ray, t_max) {
+        Some(h) => Some(Hit {
+            t: h.t,
+            shape: h.shape,
+            prim: h.prim,
+            u: h.u,
+            v: h.v,
+        }),
+        None => best,
+    }
+}
+
+#[inline(never)]
+fn instances_occluded(top: &instance::TopLevel, ray: &Ray, t_max: f32) -> bool {
+    top.occluded(ray, t_max)
+}
+
+/// Appends the bounded primitives of `shape` (as shape `s`) or its plane.
+fn add_prims(
+    shape: &AccelShape,
+    s: u32,
+    prims: &mut Vec<Prim>,
+    ids: &mut Vec<[u32; 2]>,
+    aabbs: &mut Vec<Aabb>,
+    planes: &mut Vec<(Vec3, Vec3, u32)>,
+) {
+    match shape {
+        AccelShape::Triangles { positions, indices } => {
+            prims.reserve(indices.len());
+            ids.reserve(indices.len());
+            aabbs.reserve(indices.len());
+            for (t, tri) in indices.iter().enumerate() {
+                let get = |i: u32| positions.get(i as usize).copied();
+                let (Some(p0), Some(p1), Some(p2)) = (get(tri[0]), get(tri[1]), get(tri[2])) else {
+                    continue;
+                };
+                // Zero-area triangles have no normal: a sliver hit after the ray's shear
+                // would give shading a NaN frame, so they are dropped here.
+                let n = (p1 - p0).cross(p2 - p0);
+                if !(p0.is_finite() && p1.is_finite() && p2.is_finite())
+                    || n == Vec3::ZERO
+                    || !n.is_finite()
+                {
+                    continue;
+                }
+                prims.push(Prim::Tri([p0, p1, p2]));
+                ids.push([s, t as u32]);
+                aabbs.push(Aabb::new(p0.min(p1).min(p2), p0.max(p1).max(p2)));
+            }
+        }
+        &AccelShape::Sphere { center, radius } => {
+            if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
+                return;
+            }
+            prims.push(Prim::Sphere { center, radius });
+            ids.push([s, 0]);
+            aabbs.push(Aabb::new(center - radius, center + radius));
+        }
+        &AccelShape::Disk { to_world } => {
+            let Some(to_object) = invertible(&to_world) else {
+                return;
+            };
+            let mut bb = Aabb::INVALID;
+            for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+                bb.extend(to_world.transform_point3a(Vec3A::new(x, y, 0.0)));
+            }
+            prims.push(Prim::Disk { to_object });
+            ids.push([s, 0]);
+            aabbs.push(bb);
+        }
+        &AccelShape::Ellipsoid { to_world } => {
+            let Some(to_object) = invertible(&to_world) else {
+                return;
+            };
+            prims.push(Prim::Ellipsoid { to_object });
+            ids.push([s, 0]);
+            let (lo, hi) = ellipsoid_bounds(&to_world);
+            aabbs.push(Aabb::new(lo, hi));
+        }
+        &AccelShape::Plane { point, normal } => {
+            if normal.is_finite() && point.is_finite() && normal != Vec3::ZERO {
+                planes.push((point, normal, s));
+            }
+        }
+        // Instances are placed by `Accel::build_instanced`; one inside a prototype is ignored.
+        AccelShape::Instance { .. } => {}
+    }
 }
 
 /// The inverse of a finite, non-singular placement (`None`: the shape is skipped).

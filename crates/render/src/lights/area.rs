@@ -129,7 +129,8 @@ impl LightModel for AreaLight {
                     target: ShadowTarget::Surface { p, p_error, n },
                 });
             }
-            ShapeGeom::Plane { .. } => return None,
+            // Emitters are never instanced nor moving (`build` flattens them).
+            ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => return None,
         };
         let to = p - r.p;
         let d2 = to.length_squared();
@@ -253,7 +254,8 @@ impl LightModel for AreaLight {
                     Some(any(lo, hi))
                 }
             },
-            ShapeGeom::Plane { .. } => None,
+            // Emitters are never instanced nor moving (`build` flattens them).
+            ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => None,
         }
     }
 }

@@ -443,6 +443,9 @@ struct Builder {
     /// Radiance is in 0–255 display units (no camera has a `Tonemap`).
     display_units: bool,
     meshes: HashMap<u32, BaseMesh>,
+    /// PLY meshes read so far, by file and shading mode: a file used by several objects is
+    /// read once and shared (the renderer instances shared meshes).
+    plys: HashMap<(PathBuf, bool), Arc<TriMesh>>,
     /// Unsupported features met, reported once at the end.
     unsupported: Vec<String>,
     max_depth: u32,
@@ -468,6 +471,7 @@ impl Builder {
             textured: HashMap::new(),
             display_units: true,
             meshes: HashMap::new(),
+            plys: HashMap::new(),
             unsupported: Vec::new(),
             max_depth: 6,
         }
@@ -1116,6 +1120,7 @@ impl Builder {
                         .ok_or_else(|| self.ctx.err(nn, "zero normal"))?;
                     let radiance = self.ctx.vec3(self.ctx.req(n, "Radiance")?)?;
                     self.desc.shapes.push(ShapeDesc {
+                        motion: None,
                         shape: Shape::Rectangle,
                         to_world: frame * Mat4::from_scale(Vec3::new(size * 0.5, size * 0.5, 1.0)),
                         material: None,
@@ -1254,9 +1259,12 @@ impl Builder {
 
     fn objects(&mut self, o: &Node) -> Result<()> {
         for (key, n) in o.entries() {
-            if n.child("MotionBlur").is_some() {
-                self.unsupported("MotionBlur");
-            }
+            // The course's motion blur: a world translation over the shutter interval.
+            let motion = n
+                .child("MotionBlur")
+                .map(|m| self.ctx.vec3(m))
+                .transpose()?;
+            let first = self.desc.shapes.len();
             match key.as_str() {
                 "Mesh" | "LightMesh" => self.mesh(n, key == "LightMesh")?,
                 "MeshInstance" => self.instance(n)?,
@@ -1328,6 +1336,9 @@ impl Builder {
                 k if k.starts_with('_') => {}
                 _ => self.warn(n, format!("unknown object '{key}' ignored")),
             }
+            for s in &mut self.desc.shapes[first..] {
+                s.motion = motion;
+            }
         }
         Ok(())
     }
@@ -1341,6 +1352,7 @@ impl Builder {
         emission: Option<AreaEmission>,
     ) {
         self.desc.shapes.push(ShapeDesc {
+            motion: None,
             shape,
             to_world,
             material,
@@ -1354,8 +1366,14 @@ impl Builder {
     fn mesh(&mut self, n: &Node, light: bool) -> Result<()> {
         let faces = self.ctx.req(n, "Faces")?;
         let smooth = self.shading_smooth(n)?;
+        let mut ply_key = None;
         let mut mesh = if let Some(ply) = faces.child("_plyFile") {
             let p = self.dir.join(self.ctx.text(ply)?.trim());
+            ply_key = Some((p.clone(), smooth));
+            if let Some(m) = ply_key.as_ref().and_then(|k| self.plys.get(k)) {
+                let m = m.clone();
+                return self.push_mesh(n, m, light);
+            }
             let mut m = read_ply(&p)
                 .map_err(|e| self.ctx.err(ply, format!("cannot load PLY file: {e}")))?;
             if smooth && m.normals.is_empty() {
@@ -1384,6 +1402,14 @@ impl Builder {
         }
         mesh.normals.retain(|_| smooth);
         let mesh = Arc::new(mesh);
+        if let Some(k) = ply_key {
+            self.plys.insert(k, mesh.clone());
+        }
+        self.push_mesh(n, mesh, light)
+    }
+
+    /// Places a mesh object (`Mesh` / `LightMesh`) and records it for `MeshInstance`s.
+    fn push_mesh(&mut self, n: &Node, mesh: Arc<TriMesh>, light: bool) -> Result<()> {
         let to_world = self.transform_list(n.child("Transformations"))?;
         let material = self.object_material(n)?;
         let emission = self.emission(n, light)?;

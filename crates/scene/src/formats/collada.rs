@@ -441,6 +441,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let loc = self.loc(inst);
         let first = bound.values().next().copied();
         let shape_for = |shape: Shape, mat: Option<Mat>| ShapeDesc {
+            motion: None,
             shape,
             to_world: m,
             material: mat.map(|m| m.id),
@@ -1021,6 +1022,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     loc: loc.clone(),
                 });
                 self.desc.shapes.push(ShapeDesc {
+                    motion: None,
                     shape: Shape::Rectangle,
                     to_world,
                     material: Some(black),

@@ -449,6 +449,7 @@ impl Parser<'_> {
                 loc: l.loc(0),
             });
         self.desc.shapes.push(ShapeDesc {
+            motion: None,
             shape,
             to_world,
             material: Some(material),
@@ -720,6 +721,7 @@ impl Parser<'_> {
             loc: l.loc(l.toks[0].col),
         });
         self.desc.shapes.push(ShapeDesc {
+            motion: None,
             shape: Shape::Rectangle,
             to_world,
             material: Some(black),

@@ -295,6 +295,7 @@ pub fn square_light(
     let to_world =
         Mat4::from_scale_rotation_translation(Vec3::new(0.5 * size, 0.5 * size, 1.0), rot, center);
     Some(ShapeDesc {
+        motion: None,
         shape: Shape::Rectangle,
         to_world,
         material: None,
@@ -440,6 +441,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
             None => (None, file_loc.clone()),
         };
         desc.shapes.push(ShapeDesc {
+            motion: None,
             shape: Shape::Mesh(Arc::new(submesh(mesh, tris))),
             to_world: Mat4::IDENTITY,
             material,

@@ -189,6 +189,10 @@ pub struct SceneBuilder<'c, 's> {
     top_sampler: Option<SamplerDesc>,
     sensor_has_sampler: Vec<bool>,
     has_integrator: bool,
+    /// The shapes of each `shapegroup` met so far (by element), in the group's space.
+    groups: HashMap<*const Elem, Vec<ShapeDesc>>,
+    /// Inside a `shapegroup`: nested groups and instances are refused, as in Mitsuba 3.
+    in_group: bool,
 }
 
 impl<'c, 's> SceneBuilder<'c, 's> {
@@ -205,6 +209,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             top_sampler: None,
             sensor_has_sampler: Vec::new(),
             has_integrator: false,
+            groups: HashMap::new(),
+            in_group: false,
         }
     }
 
@@ -787,7 +793,101 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     // -----------------------------------------------------------------------------------------
     // Shapes
 
+    /// The shapes of the `shapegroup` `pl` (built on first use; a group declared in the scene
+    /// adds nothing by itself).
+    fn shape_group(&mut self, pl: &Plugin<'s>) -> Result<&[ShapeDesc]> {
+        let key: *const Elem = pl.elem;
+        if !self.groups.contains_key(&key) {
+            if self.in_group {
+                return Err(err(
+                    pl.loc(),
+                    "a shapegroup cannot contain another shapegroup",
+                ));
+            }
+            let first = self.scene.shapes.len();
+            self.in_group = true;
+            let built = (|| {
+                for c in &pl.children {
+                    match c.elem.tag.as_str() {
+                        "shape" | "mesh" => {
+                            let cp = self.ctx.plugin(c.elem)?;
+                            self.shape(&cp)?;
+                        }
+                        other => {
+                            return Err(err(
+                                &c.loc,
+                                format!("<{other}> cannot be nested in a shapegroup"),
+                            ));
+                        }
+                    }
+                }
+                Ok(())
+            })();
+            self.in_group = false;
+            built?;
+            let shapes = self.scene.shapes.split_off(first);
+            self.ctx.finish(pl);
+            self.groups.insert(key, shapes);
+        }
+        Ok(&self.groups[&key])
+    }
+
+    /// A Mitsuba `instance`: every shape of the referenced `shapegroup` placed by the
+    /// instance's `to_world` (their meshes stay shared: the renderer instances them).
+    fn instance(&mut self, pl: &Plugin<'s>) -> Result<()> {
+        if self.in_group {
+            return Err(err(pl.loc(), "a shapegroup cannot contain an instance"));
+        }
+        let to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let to_world = if to_world.is_finite() {
+            to_world
+        } else {
+            Mat4::IDENTITY
+        };
+        let mut groups = pl
+            .children
+            .iter()
+            .filter(|c| c.elem.tag == "shape" && c.elem.value("type") == Some("shapegroup"));
+        let (Some(group), None) = (groups.next(), groups.next()) else {
+            return Err(err(
+                pl.loc(),
+                "an instance needs exactly one shapegroup (<ref id=\"...\"/>)",
+            ));
+        };
+        if let Some(other) = pl
+            .children
+            .iter()
+            .find(|c| !(c.elem.tag == "shape" && c.elem.value("type") == Some("shapegroup")))
+        {
+            return Err(err(
+                &other.loc,
+                format!("<{}> cannot be nested in an instance", other.elem.tag),
+            ));
+        }
+        let gp = self.ctx.plugin(group.elem)?;
+        let name = pl.elem.value("id").map(str::to_string);
+        let loc = pl.loc().clone();
+        let placed: Vec<ShapeDesc> = self
+            .shape_group(&gp)?
+            .iter()
+            .map(|s| ShapeDesc {
+                to_world: to_world * s.to_world,
+                name: name.clone().or_else(|| s.name.clone()),
+                loc: loc.clone(),
+                ..s.clone()
+            })
+            .collect();
+        self.scene.shapes.extend(placed);
+        self.ctx.finish(pl);
+        Ok(())
+    }
+
     fn shape(&mut self, pl: &Plugin<'s>) -> Result<()> {
+        match pl.ty.as_str() {
+            "shapegroup" => return self.shape_group(pl).map(|_| ()),
+            "instance" => return self.instance(pl),
+            _ => {}
+        }
         let mut to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
         let shape = match pl.ty.as_str() {
             "obj" | "ply" => {
@@ -816,14 +916,17 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "rectangle" => Shape::Rectangle,
             "disk" => Shape::Disk,
             "cube" => Shape::Cube,
-            "serialized" | "shapegroup" | "instance" => {
+            "serialized" => {
                 return Err(err(
                     pl.loc(),
                     format!("{} '{}' is not supported", pl.elem.tag, pl.ty),
                 ));
             }
             _ => {
-                return Err(unknown_type(pl, "obj, ply, sphere, rectangle, disk, cube"));
+                return Err(unknown_type(
+                    pl,
+                    "obj, ply, sphere, rectangle, disk, cube, shapegroup, instance",
+                ));
             }
         };
         if !to_world.is_finite() {
@@ -871,6 +974,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             .or_else(|| pl.elem.value("name"))
             .map(str::to_string);
         self.scene.shapes.push(ShapeDesc {
+            motion: None,
             shape,
             to_world,
             material,
