@@ -215,7 +215,7 @@ impl Scene {
     }
 
     /// Whether anything is hit with 0 < t < `t_max` (cut-outs skipped as in `intersect`).
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         if self.has_cutouts {
             self.intersect(ray, t_max).is_some()

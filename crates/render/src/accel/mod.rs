@@ -24,7 +24,8 @@
 //!   Gems ch. 7) and the `q = -(b ± √Δ)/2` root pair, robust for distant and grazing rays.
 //! - Disks: the ray is mapped to object space by the inverse of `to_world` (any invertible
 //!   affine map, non-uniform scale included); `t` is invariant under that map.
-//! - Planes: unbounded, so kept out of the BVH and tested linearly after it.
+//! - Planes: unbounded, so kept out of the BVH and tested linearly after it (and after the
+//!   instances).
 //!
 //! # Structure: why one flat BVH
 //! Everything bounded (every triangle of every mesh, every sphere and disk) goes into a single
@@ -39,8 +40,9 @@
 //! Instancing (two levels): shapes reusing one prototype, and moving shapes, are
 //! [`AccelShape::Instance`]s of bottom-level trees built by [`Accel::build_instanced`]; they
 //! live in a second, top-level tree queried after the flat one (module `instance`), so the
-//! flat tree's leaf dispatch and traversal are exactly as without instancing, and scenes
-//! without instances skip the second level with one test. A hit on an instance reports the
+//! flat tree's leaf dispatch and traversal are exactly as without instancing. The top level
+//! and the infinite planes are tested out of line (`Beside`); scenes with neither skip both
+//! with one test. A hit on an instance reports the
 //! instance's shape index and the prototype's primitive index.
 //!
 //! # Choice of tree
@@ -134,11 +136,57 @@ pub struct Hit {
 /// The scene's acceleration structure. See the module documentation.
 pub struct Accel {
     bvh: WideBvh,
-    planes: Vec<(Vec3, Vec3, u32)>,
     bounds: (Vec3, Vec3),
-    /// Instances and moving shapes; `None` when there are none, so that ordinary scenes pay
-    /// one test of a pointer per query.
-    top: Option<Box<instance::TopLevel>>,
+    /// What is tested beside the flat tree: infinite planes and the instance level. `None`
+    /// when there is neither, so that such scenes pay one test of a pointer per query (as
+    /// they paid one test of the plane list's length before instancing).
+    beside: Option<Box<Beside>>,
+}
+
+/// Planes and instances (see [`Accel::beside`]), queried out of line.
+struct Beside {
+    planes: Vec<(Vec3, Vec3, u32)>,
+    /// Instances and moving shapes.
+    top: Option<instance::TopLevel>,
+}
+
+impl Beside {
+    /// The closest of `best` and the hits on instances and planes.
+    #[inline(never)]
+    fn closest(&self, ray: &Ray, t_max: f32, mut best: Option<Hit>) -> Option<Hit> {
+        let mut t_max = best.map_or(t_max, |h| h.t);
+        if let Some(h) = self.top.as_ref().and_then(|t| t.intersect(ray, t_max)) {
+            t_max = h.t;
+            best = Some(Hit {
+                t: h.t,
+                shape: h.shape,
+                prim: h.prim,
+                u: h.u,
+                v: h.v,
+            });
+        }
+        for &(point, normal, shape) in &self.planes {
+            if let Some(t) = prim::intersect_plane(ray, point, normal, t_max) {
+                t_max = t;
+                best = Some(Hit {
+                    t,
+                    shape,
+                    prim: 0,
+                    u: 0.0,
+                    v: 0.0,
+                });
+            }
+        }
+        best
+    }
+
+    #[inline(never)]
+    fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.planes
+            .iter()
+            .any(|&(p, n, _)| prim::intersect_plane(ray, p, n, t_max).is_some())
+            || self.top.as_ref().is_some_and(|t| t.occluded(ray, t_max))
+    }
 }
 
 impl Accel {
@@ -221,7 +269,7 @@ impl Accel {
                 i.motion,
             ));
         }
-        let top = instance::TopLevel::build(blas, insts, inst_boxes).map(Box::new);
+        let top = instance::TopLevel::build(blas, insts, inst_boxes);
         let mut bb = aabbs.iter().fold(Aabb::INVALID, |a, b| a.union(b));
         if let Some(t) = &top {
             bb = bb.union(&t.bounds());
@@ -232,19 +280,21 @@ impl Accel {
             (Vec3::ZERO, Vec3::ZERO)
         };
         let bvh = WideBvh::build(&prims, &ids, &aabbs);
+        let beside =
+            (!planes.is_empty() || top.is_some()).then(|| Box::new(Beside { planes, top }));
         Accel {
             bvh,
-            planes,
             bounds,
-            top,
+            beside,
         }
     }
 
     /// Bottom-level trees (prototypes) and bytes they, the instances and the top level hold;
     /// `(0, 0)` without instances.
     pub fn instancing_stats(&self) -> (usize, usize) {
-        self.top
+        self.beside
             .as_ref()
+            .and_then(|b| b.top.as_ref())
             .map_or((0, 0), |t| (t.blas_count(), t.memory_bytes()))
     }
 
@@ -254,30 +304,17 @@ impl Accel {
         if !ray_ok(ray, t_max) {
             return None;
         }
-        let mut best = self.bvh.intersect(ray, t_max).map(|h| Hit {
+        let best = self.bvh.intersect(ray, t_max).map(|h| Hit {
             t: h.t,
             shape: h.shape,
             prim: h.prim,
             u: h.u,
             v: h.v,
         });
-        if let Some(top) = &self.top {
-            best = instances_closest(top, ray, t_max, best);
+        match &self.beside {
+            None => best,
+            Some(b) => b.closest(ray, t_max, best),
         }
-        let mut t_max = best.map_or(t_max, |h| h.t);
-        for &(point, normal, shape) in &self.planes {
-            if let Some(t) = prim::intersect_plane(ray, point, normal, t_max) {
-                t_max = t;
-                best = Some(Hit {
-                    t,
-                    shape,
-                    prim: 0,
-                    u: 0.0,
-                    v: 0.0,
-                });
-            }
-        }
-        best
     }
 
     /// Whether anything is hit with `0 < t < t_max`.
@@ -286,14 +323,8 @@ impl Accel {
         if !ray_ok(ray, t_max) {
             return false;
         }
-        self.planes
-            .iter()
-            .any(|&(p, n, _)| prim::intersect_plane(ray, p, n, t_max).is_some())
-            || self.bvh.occluded(ray, t_max)
-            || self
-                .top
-                .as_ref()
-                .is_some_and(|t| instances_occluded(t, ray, t_max))
+        self.bvh.occluded(ray, t_max)
+            || self.beside.as_ref().is_some_and(|b| b.occluded(ray, t_max))
     }
 
     /// Bounds `(min, max)` of the bounded shapes (planes excluded); `(0, 0)` if there are none.
@@ -310,33 +341,6 @@ fn ray_ok(ray: &Ray, t_max: f32) -> bool {
     let z = (ray.o - ray.o) + (ray.d - ray.d);
     // `cmpne(..).any()`: one mask test, where `!=` would branch on each component.
     t_max > 0.0 && z.x + z.y + z.z == 0.0 && ray.d.cmpne(Vec3::ZERO).any()
-}
-
-/// The closest of `best` and the instances' hits: out of line, so that the queries of scenes
-/// without instances stay as small as before (they are inlined into the integrators).
-#[inline(never)]
-fn instances_closest(
-    top: &instance::TopLevel,
-    ray: &Ray,
-    t_max: f32,
-    best: Option<Hit>,
-) -> Option<Hit> {
-    let t_max = best.map_or(t_max, |h| h.t);
-    match top.intersect(ray, t_max) {
-        Some(h) => Some(Hit {
-            t: h.t,
-            shape: h.shape,
-            prim: h.prim,
-            u: h.u,
-            v: h.v,
-        }),
-        None => best,
-    }
-}
-
-#[inline(never)]
-fn instances_occluded(top: &instance::TopLevel, ray: &Ray, t_max: f32) -> bool {
-    top.occluded(ray, t_max)
 }
 
 /// Appends the bounded primitives of `shape` (as shape `s`) or its plane.
