@@ -247,7 +247,7 @@ impl RtMaterial {
                                 IdealLobe::Dielectric { eta: ior }
                             }
                         };
-                        Bsdf::Course(CourseMaterial::new(
+                        Bsdf::from(CourseMaterial::new(
                             phong,
                             lobe,
                             i.reflectance.into(),
