@@ -10,7 +10,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use render::build::{BuildOptions, Scene, build};
+use render::build::{BuildOptions, build};
 use render::geometry::Ray;
 use render::integrators::Integrator;
 use render::integrators::path::{
@@ -18,6 +18,7 @@ use render::integrators::path::{
 };
 use render::math::{UVec2, Vec3};
 use render::sampling::Sampler;
+use render::world::Scene;
 use scene::Document;
 
 use crate::{Failure, load_scene, parse_define, print_warnings};

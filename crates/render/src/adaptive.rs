@@ -17,13 +17,13 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use crate::build::Scene;
 use crate::film::image::Image;
 use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec3};
 use crate::render::{Progress, RenderObserver, RenderOptions, camera_sample};
 use crate::sampling::Sampler;
+use crate::world::Scene;
 
 /// Confidence-interval factor: 95 % two-sided for a normal mean.
 pub const Z_95: f64 = 1.96;

@@ -17,12 +17,12 @@
 
 use rayon::prelude::*;
 
-use crate::build::Scene;
 use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::path::{Contribution, PathConfig, PathRecorder, li_recorded};
 use crate::math::{UVec2, Vec3};
 use crate::render::camera_sample;
 use crate::sampling::Sampler;
+use crate::world::Scene;
 
 /// The layers besides beauty; they sum to it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,6 +1,6 @@
 //! Penumbra's renderer: everything that runs per ray.
 //!
-//! Data flow: `build` turns a `scene::SceneDesc` into a [`build::Scene`] (BVH, textures,
+//! Data flow: `build` turns a `scene::SceneDesc` into a [`world::Scene`] (BVH, textures,
 //! camera, film settings), `render` runs an integrator over tiles and passes into a film.
 
 pub mod accel;
@@ -24,3 +24,4 @@ pub mod sampling;
 pub mod shapes;
 pub mod stats;
 pub mod textures;
+pub mod world;

@@ -16,10 +16,10 @@ use crate::bsdf::{
     NoriMicrofacet, PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic,
     RoughPlasticTables, ThinDielectric,
 };
-use crate::build::Scene;
 use crate::math::{Frame, PVec3, Vec3};
 use crate::shapes::SurfaceInteraction;
 use crate::textures::TexCoord;
+use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct RtMaterial {

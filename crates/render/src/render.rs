@@ -12,12 +12,12 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use crate::build::Scene;
 use crate::camera::CameraRay;
 use crate::film::{Film, FilmTile, Filter};
 use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec2};
 use crate::sampling::Sampler;
+use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct RenderOptions {

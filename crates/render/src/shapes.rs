@@ -422,7 +422,7 @@ fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
 }
 
 /// What shading at a shape reads of its interactions beyond position and normals, fixed at
-/// build time (see [`crate::build::ShapeInfo`]); [`interaction`] skips computing the rest.
+/// build time (see [`crate::world::ShapeInfo`]); [`interaction`] skips computing the rest.
 /// Mitsuba's ray flags serve the same purpose.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Reads {

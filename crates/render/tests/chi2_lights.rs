@@ -8,11 +8,12 @@
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
-use render::build::{BuildOptions, Scene, build};
+use render::build::{BuildOptions, build};
 use render::film::Image;
 use render::geometry::Ray;
 use render::lights::Receiver;
 use render::stats::{Chi2Config, chi2_test, sidak};
+use render::world::Scene;
 use scene::{
     AreaEmission, Camera, ColorParam, Emitter, EmitterDesc, EnvMapping, FilterDesc, FovAxis,
     Projection, SamplerDesc, SceneDesc, Sensor, Shape, ShapeDesc, TriMesh,

@@ -12,11 +12,12 @@
 
 use std::path::PathBuf;
 
-use render::build::{BuildOptions, Scene, build};
+use render::build::{BuildOptions, build};
 use render::compare::{CompareOptions, Reference, TestImages, compare_with};
 use render::film::Image;
 use render::integrators::Integrator;
 use render::render::{RenderOptions, Silent, render};
+use render::world::Scene;
 use scene::{Document, IntegratorDesc, PathDesc};
 
 /// An octahedron with smooth normals, placed four times: the base mesh (rotated), an instance

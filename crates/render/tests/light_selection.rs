@@ -20,13 +20,14 @@
 use std::path::PathBuf;
 
 use glam::Vec3;
-use render::build::{BuildOptions, Scene, build};
+use render::build::{BuildOptions, build};
 use render::compare::{CompareOptions, Reference, TestImages, compare_with};
 use render::film::Image;
 use render::geometry::Ray;
 use render::lights::Receiver;
 use render::render::render_desc;
 use render::stats::{Pcg32, sidak};
+use render::world::Scene;
 use scene::{Document, LightSelection, LoadOptions, SceneDesc};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 

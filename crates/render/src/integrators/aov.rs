@@ -1,11 +1,11 @@
 //! Arbitrary-output-variable integrators: normals, albedo, depth, ambient occlusion.
 //! They prove loaders, geometry, cameras and film right before any light transport exists.
 
-use crate::build::Scene;
 use crate::camera::CameraRay;
 use crate::math::{Frame, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::warp::square_to_cosine_hemisphere;
+use crate::world::Scene;
 
 pub fn normals(scene: &Scene, cray: &CameraRay) -> Vec3 {
     scene

@@ -3,11 +3,11 @@
 //! on the sample-count-weighted densities.
 
 use crate::bsdf::TransportMode;
-use crate::build::Scene;
 use crate::camera::CameraRay;
 use crate::lights::Receiver;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::world::Scene;
 
 fn power(a: f32, b: f32) -> f32 {
     let w = a * a / (a * a + b * b);

@@ -12,10 +12,10 @@ use scene::{IntegratorDesc, NoriIntegrator};
 
 use self::path::{Combine, PathConfig};
 
-use crate::build::Scene;
 use crate::camera::CameraRay;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::world::Scene;
 
 /// The integrators this build can run.
 #[derive(Clone, Debug)]

@@ -19,7 +19,6 @@ use scene::{DirectionSampling, RussianRoulette};
 
 use crate::accel::Hit;
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
-use crate::build::Scene;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
 use crate::lights::{Light, Receiver};
@@ -27,6 +26,7 @@ use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::{Sampler, warp};
 use crate::shapes::SurfaceInteraction;
 use crate::textures::TexCoord;
+use crate::world::Scene;
 
 /// How emission found by BSDF-sampled rays is weighted against emitter sampling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

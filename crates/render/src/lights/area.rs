@@ -15,12 +15,12 @@ use scene::ColorParam;
 use super::bvh::LightBounds;
 use super::select::{mean_radiance, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
-use crate::build::Scene;
 use crate::math::{Frame, PI, Vec2, Vec3, rsqrt};
 use crate::sampling::distrib::Distribution1D;
 use crate::sampling::warp;
 use crate::shapes::{Ellipsoid, ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
 use crate::textures::TexCoord;
+use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct AreaLight {

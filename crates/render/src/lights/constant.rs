@@ -3,10 +3,10 @@
 
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
-use crate::build::Scene;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
+use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct ConstantLight {

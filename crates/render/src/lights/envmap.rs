@@ -7,12 +7,12 @@ use scene::EnvMapping;
 
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
-use crate::build::Scene;
 use crate::film::Image;
 use crate::math::{INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
 use crate::sampling::distrib::Distribution2D;
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
+use crate::world::Scene;
 
 #[derive(Debug)]
 pub struct EnvMap {

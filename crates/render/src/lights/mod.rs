@@ -25,10 +25,10 @@ pub use envmap::EnvMap;
 pub use point::PointLight;
 pub use spot::SpotLight;
 
-use crate::build::Scene;
 use crate::geometry::Ray;
 use crate::math::{Vec2, Vec3};
 use crate::shapes::SurfaceInteraction;
+use crate::world::Scene;
 
 /// A point on an emitter with what it sends towards the receiver.
 #[derive(Clone, Copy, Debug)]

@@ -3,8 +3,8 @@
 use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
-use crate::build::Scene;
 use crate::math::{PI, Vec2, Vec3};
+use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct PointLight {

@@ -10,10 +10,10 @@
 
 use scene::{ColorParam, LightSelection};
 
-use crate::build::Scene;
 use crate::math::{Vec2, Vec3};
 use crate::sampling::distrib::AliasTable;
 use crate::textures::TexCoord;
+use crate::world::Scene;
 
 use super::Receiver;
 use super::bvh::{LightBounds, LightBvh};

@@ -5,8 +5,8 @@
 use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
-use crate::build::Scene;
 use crate::math::{Mat3, Mat4, PI, Vec2, Vec3};
+use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct SpotLight {

@@ -1,0 +1,229 @@
+//! The runtime scene: world-space geometry and its accelerator, materials, textures, lights,
+//! the camera and the render settings, with the queries integrators make of them (closest
+//! hit, occlusion, parameters at a hit, light selection). Built by [`crate::build`]; the
+//! integrators, lights and materials read it and never the builder.
+
+use scene::{ColorParam, FloatParam, IntegratorDesc, MaterialId, SamplerDesc};
+
+use crate::accel::{Accel, Hit};
+use crate::camera::Camera;
+use crate::geometry::Ray;
+use crate::lights::select::LightSampler;
+use crate::lights::{Light, Receiver};
+use crate::materials::RtMaterial;
+use crate::math::Vec3;
+use crate::sampling::sampler::{mix64, u64_to_unit};
+use crate::shapes::{Reads, ShapeGeom, SurfaceInteraction, interaction};
+use crate::textures::{TexCoord, Texture};
+
+#[derive(Clone, Debug)]
+pub struct ShapeInfo {
+    pub geom: ShapeGeom,
+    pub material: Option<MaterialId>,
+    pub emission: Option<ColorParam>,
+    pub flip_normals: bool,
+    /// Alpha cut-out (the shape's material is a `mask`): the probability that a ray hitting
+    /// the surface stops there. See [`Scene::intersect`].
+    pub opacity: Option<FloatParam>,
+    /// What shading reads of this shape's interactions beyond position and normals.
+    pub reads: Reads,
+}
+
+/// The lights of one shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeLights {
+    None,
+    /// One light for the whole shape.
+    Whole(u32),
+    /// One light per triangle: triangle `t` is light `first + t`.
+    PerTriangle {
+        first: u32,
+        count: u32,
+    },
+}
+
+pub struct Scene {
+    pub accel: Accel,
+    pub shapes: Vec<ShapeInfo>,
+    pub materials: Vec<RtMaterial>,
+    /// Findings of the build step worth telling the user (unsupported features).
+    pub warnings: Vec<String>,
+    pub textures: Vec<Texture>,
+    pub camera: Camera,
+    pub film: scene::Film,
+    pub sampler: SamplerDesc,
+    pub integrator: IntegratorDesc,
+    pub background: Option<Vec3>,
+    /// A texture over the image seen by escaping camera rays (CENG795 `replace_background`).
+    pub background_texture: Option<u32>,
+    /// Whether any material is [`Material::Unlit`] (only then does the path loop look).
+    pub has_unlit: bool,
+    /// Sum of the scene's ambient terms ([`scene::Emitter::Ambient`]), used by Whitted.
+    pub ambient: Vec3,
+    pub lights: Vec<Light>,
+    /// The light(s) of each shape; see [`Scene::shape_light`].
+    pub shape_lights: Vec<ShapeLights>,
+    /// How `sample_light` chooses.
+    pub light_sampler: LightSampler,
+    /// Lights seen by escaping rays (environment).
+    pub infinite_lights: Vec<u32>,
+    /// Bounds of the bounded geometry.
+    pub bounds: (Vec3, Vec3),
+    pub triangle_count: usize,
+    /// Whether any shape has an [`ShapeInfo::opacity`] (only then do queries look at it).
+    pub has_cutouts: bool,
+    /// Whether any shape moves (only then do camera rays draw a time).
+    pub has_motion: bool,
+}
+
+impl Scene {
+    /// Closest surface hit along `ray` with 0 < t < `t_max`. Alpha cut-outs are skipped as
+    /// pbrt-v4 does: a hit on a shape with opacity α < 1 counts with probability α, decided by
+    /// a hash of the ray and the primitive (so the decision is the same for every query of the
+    /// same ray), and the search goes on from the far side of a skipped surface.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceInteraction> {
+        self.surface(ray, t_max, self.hit(ray, t_max), |si| si.copied())
+    }
+
+    /// The closest primitive hit along `ray` with 0 < t < `t_max`, before cut-outs are
+    /// considered: [`Scene::surface`] turns it into what [`Scene::intersect`] returns.
+    #[inline]
+    pub fn hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.accel.intersect(ray, t_max)
+    }
+
+    /// `f` applied to the surface interaction of `hit`, the result of [`Scene::hit`] for the
+    /// same `ray` and `t_max` (cut-outs skipped as [`Scene::intersect`] does). The interaction
+    /// is computed in place and lent to `f`: the hot loops would otherwise copy its 144 bytes
+    /// once or twice per hit.
+    #[inline(always)]
+    pub fn surface<R>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        hit: Option<Hit>,
+        f: impl FnOnce(Option<&SurfaceInteraction>) -> R,
+    ) -> R {
+        let Some(hit) = hit else {
+            return f(None);
+        };
+        let shape = &self.shapes[hit.shape as usize];
+        let si = interaction(&shape.geom, &hit, ray, shape.flip_normals, shape.reads);
+        if shape.opacity.is_none() {
+            return f(Some(&si));
+        }
+        f(self.skip_cutouts(ray, t_max, hit, si).as_ref())
+    }
+
+    /// The first hit from `hit` (on a shape with an opacity) on that is not cut out (see
+    /// [`Scene::intersect`]).
+    #[cold]
+    fn skip_cutouts(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut hit: Hit,
+        mut si: SurfaceInteraction,
+    ) -> Option<SurfaceInteraction> {
+        let key = ray_hash(ray);
+        let (mut cur, mut t_left) = (*ray, t_max);
+        // Bounded: a ray crosses each primitive at most once (plus spheres' second side).
+        for _ in 0..4096 {
+            let shape = &self.shapes[hit.shape as usize];
+            let Some(opacity) = &shape.opacity else {
+                return Some(si);
+            };
+            let alpha = self.float(opacity, si.tex());
+            let u = u64_to_unit(mix64(key ^ ((hit.shape as u64) << 32 | hit.prim as u64)));
+            if alpha >= 1.0 || u < alpha {
+                return Some(si);
+            }
+            // Cut out: continue from the far side, in the same direction and parameter units.
+            t_left -= hit.t;
+            cur = si.spawn_ray(cur.d);
+            if t_left <= 0.0 {
+                return None;
+            }
+            hit = self.accel.intersect(&cur, t_left)?;
+            let shape = &self.shapes[hit.shape as usize];
+            si = interaction(&shape.geom, &hit, &cur, shape.flip_normals, shape.reads);
+        }
+        None
+    }
+
+    /// Choose one light for next-event estimation at receiver `r`: its index, the light and
+    /// the probability of that choice (`None` when no light can be chosen). Uniform (as
+    /// Mitsuba), by power or with the light BVH, as the scene's light selection says.
+    #[inline]
+    pub fn sample_light(&self, u: f32, r: &Receiver) -> Option<(u32, &Light, f32)> {
+        let (i, pmf) = self.light_sampler.sample(u, r, self.lights.len())?;
+        Some((i, &self.lights[i as usize], pmf))
+    }
+
+    /// Probability that `sample_light` picks light `light` at receiver `r`.
+    #[inline]
+    pub fn light_pmf(&self, r: &Receiver, light: u32) -> f32 {
+        self.light_sampler.pmf(r, light, self.lights.len())
+    }
+
+    /// The light that emits at `si` (the emitting shape's light, or with light selection by
+    /// power or BVH the light of its triangle), if any.
+    #[inline]
+    pub fn shape_light(&self, si: &SurfaceInteraction) -> Option<u32> {
+        match self.shape_lights.get(si.shape as usize)? {
+            ShapeLights::None => None,
+            ShapeLights::Whole(l) => Some(*l),
+            ShapeLights::PerTriangle { first, count } => {
+                (si.prim < *count).then_some(*first + si.prim)
+            }
+        }
+    }
+
+    /// Whether anything is hit with 0 < t < `t_max` (cut-outs skipped as in `intersect`).
+    #[inline(always)]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.has_cutouts {
+            self.intersect(ray, t_max).is_some()
+        } else {
+            self.accel.occluded(ray, t_max)
+        }
+    }
+
+    /// The value of a colour parameter at `uv`. Constants are inline; texture lookups stay
+    /// behind a call, so that constants (most parameters) cost no call in the hot loops.
+    #[inline(always)]
+    pub fn color(&self, p: &ColorParam, at: TexCoord) -> Vec3 {
+        match p {
+            ColorParam::Const(c) => (*c).into(),
+            ColorParam::Texture(t) => self.texture(t.0, at),
+        }
+    }
+
+    /// [`Scene::color`] for a float parameter.
+    #[inline(always)]
+    pub fn float(&self, p: &FloatParam, at: TexCoord) -> f32 {
+        match p {
+            FloatParam::Const(c) => *c,
+            FloatParam::Texture(t) => self.texture(t.0, at).x,
+        }
+    }
+
+    #[inline(never)]
+    fn texture(&self, t: u32, at: TexCoord) -> Vec3 {
+        self.textures[t as usize].eval(at)
+    }
+
+    /// A representative reflectance colour at `si` (the `albedo` AOV).
+    pub fn albedo(&self, si: &SurfaceInteraction) -> Vec3 {
+        self.bsdf_at(si).map_or(Vec3::ZERO, |(b, _)| b.albedo())
+    }
+}
+
+/// A 64-bit hash of a ray's origin and direction (the cut-out decision's randomness).
+fn ray_hash(ray: &Ray) -> u64 {
+    let bits = |v: Vec3| {
+        (v.x.to_bits() as u64) ^ (v.y.to_bits() as u64) << 21 ^ (v.z.to_bits() as u64) << 42
+    };
+    mix64(bits(ray.o) ^ mix64(bits(ray.d)))
+}
