@@ -366,8 +366,7 @@ fn step_sign(o: f32) -> i32 {
 /// side of `w`, rounding away from the surface.
 ///
 /// Branch-free: which way each coordinate is rounded depends on the sign of the offset, which
-/// a branch predictor cannot guess (it was 13 % of all mispredicted branches of a path-traced
-/// Cornell box).
+/// a branch predictor cannot guess.
 #[inline]
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(p_error);

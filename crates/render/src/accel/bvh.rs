@@ -5,7 +5,7 @@
 //!
 //! Why 8-wide even on a 4-wide ISA: incoherent rays on large meshes are bound by the latency
 //! of dependent node fetches; a wider node halves the depth, and its four cache lines load in
-//! parallel. On the 1M-triangle benchmark 8-wide was ~20% faster than 4-wide (SSE2 build).
+//! parallel (figures in `bench/README.md`, "Accelerator").
 //!
 //! Construction: obvhs builds a binary BVH (PLOC, Meister & Bittner 2018, followed by SAH
 //! reinsertion optimisation, Meister & Bittner 2017); we collapse it into the wide tree by
@@ -42,9 +42,7 @@ pub(crate) const LEAF_MAX: u32 = 8;
 /// Scenes with at most this many primitives use [`SMALL_LEAF_MAX`] instead: their tree fits
 /// in cache, so traversal is bound by arithmetic rather than by node fetches, and their
 /// primitives are typically large (walls, boxes, area lights) with boxes that overlap much of
-/// the scene. In Mitsuba's Cornell box (36 triangles, rays mostly starting inside the box)
-/// leaves of 8 cost 3.3 packet tests per closest-hit ray and 2.6 per shadow ray; leaves of 2
-/// cost 1.1 and 0.4 for ~20% more node visits, -21% instructions per rendered sample.
+/// the scene: small leaves trade a few more node visits for far fewer packet tests.
 const SMALL_SCENE: usize = 4096;
 const SMALL_LEAF_MAX: u32 = 2;
 
@@ -232,9 +230,8 @@ impl WideBvh {
                 SortPrecision::U64,
                 3,
             );
-            // Batch ratio 0.4 rather than obvhs' "medium" 0.05: on the 1M-triangle benchmark it
-            // doubles the build time (~1 s → ~2 s on 2 cores) for ~8% faster traversal, the
-            // right trade for an offline renderer.
+            // Batch ratio 0.4 rather than obvhs' "medium" 0.05: a slower build for faster
+            // traversal, the right trade for an offline renderer.
             ReinsertionOptimizer::default().run(&mut bvh2, 0.4, None);
             let t = Tree2::from_bvh2(bvh2);
             // PLOC trees are shallow in practice; a degenerate input (e.g. thousands of

@@ -52,23 +52,8 @@
 //! PLOC construction and reinsertion) and own the traversal layout. `benches/accel.rs` measures
 //! ours, obvhs' stock CWBVH and (with `--features embree`) Embree 3 in the same run.
 //!
-//! # Performance (1M-triangle bumpy sphere, 1M incoherent rays, 2 threads, measured on an SSE2
-//! baseline build, before builds targeted the host processor)
-//! Measured in one run with `benches/accel.rs` (per CPU-second, the machine being shared):
-//! ~1.6× obvhs' stock CWBVH traversal for closest hits and ~1.3× for occlusion; ~0.5× Embree 3
-//! for closest hits and ~0.6× for occlusion (Embree dispatches to AVX2 at run time; building
-//! this crate with `-C target-cpu=native` brought us to ~0.6×). Build: ~2 s on 2 cores, ~1.6×
-//! Embree's high-quality build. Traversal is bound by the latency of node and leaf fetches
-//! (~7 nodes and ~2.5 leaf packets per closest-hit ray).
-//!
-//! Small scenes are bound by arithmetic instead, and the per-ray set-up (reciprocal direction,
-//! shear constants, splats) is a large share of a query. Instructions per ray (callgrind,
-//! `bench-cbox`, a 36-triangle Cornell box, path tracing at 16 spp): closest hit ~630 in the
-//! BVH plus ~65 in the `Accel` wrapper, of which ~175 are set-up and result, ~85 per 8-wide
-//! node (1.4 per ray) and ~250 in leaves (1.1 leaves per ray); shadow rays ~350 (SSE2
-//! build). Built for the host (AVX2) with the 8-wide node test in one `f32x8` operation per
-//! plane and the triangle constants of shadow rays made at their first leaf: ~510 per closest
-//! hit and ~260 per shadow ray.
+//! Speed: `benches/accel.rs` against obvhs' CWBVH and Embree; figures and their history in
+//! `bench/README.md` ("Accelerator").
 
 mod bvh;
 mod instance;

@@ -228,7 +228,7 @@ impl FilmTile {
 
     /// Forgets every sample, keeping the bounds and the storage (drivers reuse one tile per
     /// region from pass to pass: freeing and reallocating them each pass cost a page fault per
-    /// 4 KiB of film, 4 % of a render's CPU time in system time).
+    /// 4 KiB of film).
     pub fn clear(&mut self) {
         self.pixels.fill(PixelSums::default());
         self.samples = 0;

@@ -353,7 +353,7 @@ impl Parallelogram {
     /// A uniform point: its triangle and its barycentrics `(b₁, b₂)` in that triangle's vertex
     /// order (`p = (1 − b₁ − b₂) p₀ + b₁ p₁ + b₂ p₂`).
     /// Always inlined: out of line, its result went through memory and the caller stalled
-    /// reading it back (a time profile showed 7 % of `sample_li` on that load).
+    /// reading it back.
     #[inline(always)]
     pub fn sample(&self, u: Vec2) -> (usize, Vec2) {
         let tri = (u.x + u.y > 1.0) as usize;
