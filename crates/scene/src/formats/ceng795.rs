@@ -46,7 +46,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use crate::formats::common::look_at;
+use crate::formats::common::{finite_floats, look_at};
 use crate::formats::ply::read_ply;
 use crate::model::*;
 use crate::textpos::TextIndex;
@@ -315,15 +315,7 @@ impl Ctx {
             .ok_or_else(|| self.err(n, "expected a value (text or '_data')"))
     }
     fn floats(&self, n: &Node) -> Result<Vec<f32>> {
-        self.text(n)?
-            .split_whitespace()
-            .map(|t| {
-                t.parse::<f32>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| self.err(n, format!("'{t}' is not a finite number")))
-            })
-            .collect()
+        finite_floats(self.text(n)?).map_err(|m| self.err(n, m))
     }
     fn float(&self, n: &Node) -> Result<f32> {
         let v = self.floats(n)?;

@@ -162,16 +162,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
     }
 
     fn floats(&self, n: Node) -> Result<Vec<f32>> {
-        n.text()
-            .unwrap_or("")
-            .split_ascii_whitespace()
-            .map(|t| {
-                t.parse::<f32>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| self.err(n, format!("'{t}' is not a finite number")))
-            })
-            .collect()
+        super::common::finite_floats(n.text().unwrap_or("")).map_err(|m| self.err(n, m))
     }
 
     fn float(&self, n: Node) -> Result<f32> {

@@ -27,3 +27,16 @@ pub fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
         origin.extend(1.0),
     ))
 }
+
+/// The whitespace-separated numbers of `text`, every one finite; the error names the first
+/// word that is not (the caller adds where it was).
+pub fn finite_floats(text: &str) -> std::result::Result<Vec<f32>, String> {
+    text.split_whitespace()
+        .map(|t| {
+            t.parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("'{t}' is not a finite number"))
+        })
+        .collect()
+}
