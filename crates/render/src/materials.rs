@@ -8,7 +8,7 @@
 
 use std::sync::Arc;
 
-use scene::{ColorParam, CourseIdealKind, FloatParam, Material, MicrofacetDistribution};
+use scene::{ColorParam, CourseIdealKind, FloatParam, Material};
 
 use crate::bsdf::Microfacet;
 use crate::bsdf::{
@@ -28,13 +28,6 @@ pub struct RtMaterial {
     pub ambient: Vec3,
     /// Rough plastic's tables (depend only on α, the distribution and η).
     pub rough_plastic: Option<Arc<RoughPlasticTables>>,
-}
-
-pub fn microfacet_type(d: MicrofacetDistribution) -> MicrofacetType {
-    match d {
-        MicrofacetDistribution::Ggx => MicrofacetType::Ggx,
-        MicrofacetDistribution::Beckmann => MicrofacetType::Beckmann,
-    }
 }
 
 /// Evaluates colour and scalar parameters (textures) at a surface point.
@@ -80,7 +73,7 @@ impl RtMaterial {
                 ext_ior,
                 ..
             } => Some(Arc::new(RoughPlasticTables::new(
-                Microfacet::isotropic(microfacet_type(*distribution), *alpha),
+                Microfacet::isotropic(MicrofacetType::from(*distribution), *alpha),
                 int_ior / ext_ior,
             ))),
             _ => None,
@@ -121,7 +114,7 @@ impl RtMaterial {
                 k,
                 specular_reflectance,
             } => Bsdf::RoughConductor(RoughConductor::new(
-                microfacet_type(*distribution),
+                MicrofacetType::from(*distribution),
                 alpha(p.float(alpha_u, at)),
                 alpha(p.float(alpha_v, at)),
                 (*eta).into(),
@@ -161,7 +154,7 @@ impl RtMaterial {
                 specular_transmittance,
             } => {
                 let mut d = RoughDielectric::new(
-                    microfacet_type(*distribution),
+                    MicrofacetType::from(*distribution),
                     alpha(p.float(alpha_u, at)),
                     alpha(p.float(alpha_v, at)),
                     *int_ior,
@@ -195,7 +188,7 @@ impl RtMaterial {
             } => {
                 let tables = self.rough_plastic.clone()?;
                 Bsdf::RoughPlastic(RoughPlastic::with_tables(
-                    Microfacet::isotropic(microfacet_type(*distribution), alpha(*a)),
+                    Microfacet::isotropic(MicrofacetType::from(*distribution), alpha(*a)),
                     int_ior / ext_ior,
                     tables,
                     p.color(diffuse_reflectance, at),
