@@ -26,6 +26,8 @@ use crate::sampling::warp::square_to_uniform_disk_concentric;
 pub struct Camera {
     kind: Kind,
     to_world: Mat4,
+    /// The inverse of `to_world` (for [`Camera::film_uv`]).
+    to_camera: Mat4,
     /// Full film resolution (the crop window does not change the projection).
     resolution: Vec2,
     /// tan(fov_x / 2) and tan(fov_x / 2) / aspect: the half extents of the z = 1 image plane.
@@ -107,6 +109,7 @@ impl Camera {
                 return Camera {
                     kind: Kind::Perspective,
                     to_world: desc.to_world,
+                    to_camera: desc.to_world.inverse(),
                     resolution: Vec2::new(width as f32, height as f32),
                     half_extent: Vec2::new(0.5 * (right - left), 0.5 * (top - bottom)),
                     centre: Vec2::new(-0.5 * (left + right), 0.5 * (bottom + top)),
@@ -122,6 +125,7 @@ impl Camera {
         Camera {
             kind,
             to_world: desc.to_world,
+            to_camera: desc.to_world.inverse(),
             resolution: Vec2::new(width as f32, height as f32),
             half_extent: Vec2::new(tan_x, tan_x / aspect),
             centre: Vec2::ZERO,
@@ -188,7 +192,7 @@ impl Camera {
     /// through: the inverse of [`Self::generate_ray`] for the lens centre. CENG795's
     /// `replace_background` spreads a texture over the image with it.
     pub fn film_uv(&self, origin: Vec3, d: Vec3) -> Vec2 {
-        let inv = self.to_world.inverse();
+        let inv = &self.to_camera;
         let p = match self.kind {
             Kind::Orthographic => {
                 let q = inv.transform_point3a(origin);
