@@ -50,6 +50,21 @@ struct Setup<'a> {
     square_z: f32,
 }
 
+impl Default for Setup<'_> {
+    /// The untextured square filling a 9×9 image.
+    fn default() -> Self {
+        Setup {
+            textures: "",
+            object_textures: "",
+            res: (9, 9),
+            material: "",
+            shift: (0.0, 0.0),
+            zoom: 1.0,
+            square_z: 0.0,
+        }
+    }
+}
+
 fn scene_json(s: &Setup) -> String {
     let (w, h) = s.res;
     let half_x = 0.4 * s.zoom;
@@ -140,10 +155,7 @@ fn nearest_image_texture_reproduces_its_texels() {
         textures,
         object_textures: "1",
         res: (w, h),
-        material: "",
-        shift: (0.0, 0.0),
-        zoom: 1.0,
-        square_z: 0.0,
+        ..Setup::default()
     };
     std::fs::write(&file, scene_json(&setup)).unwrap();
     let out = dir.join("out.png");
@@ -201,11 +213,8 @@ fn shading_decals_change_what_they_name() {
         let setup = Setup {
             textures: &textures,
             object_textures: "1",
-            res: (9, 9),
             material,
-            shift: (0.0, 0.0),
-            zoom: 1.0,
-            square_z: 0.0,
+            ..Setup::default()
         };
         let got = centre(&render_pixels(&load_in(&dir, &setup)));
         assert!(close(got, want, 0.05), "{decal}{extra}: {got} vs {want}");
@@ -232,12 +241,9 @@ fn background_texture_fills_the_image() {
     // No object lists the map: only background (the square is behind the camera).
     let setup = Setup {
         textures,
-        object_textures: "",
         res: (w, h),
-        material: "",
-        shift: (0.0, 0.0),
-        zoom: 1.0,
         square_z: 20.0,
+        ..Setup::default()
     };
     let img = render_pixels(&load_in(&dir, &setup));
     for j in 0..h {
@@ -261,11 +267,7 @@ fn normal_map_tilts_the_normal() {
     let setup = Setup {
         textures: &textures,
         object_textures: "1",
-        res: (9, 9),
-        material: "",
-        shift: (0.0, 0.0),
-        zoom: 1.0,
-        square_z: 0.0,
+        ..Setup::default()
     };
     let got = centre(&render_pixels(&load_in(&dir, &setup)));
     let n =
@@ -290,11 +292,7 @@ fn image_bump_map_tilts_the_normal() {
     let setup = Setup {
         textures,
         object_textures: "1",
-        res: (9, 9),
-        material: "",
-        shift: (0.0, 0.0),
-        zoom: 1.0,
-        square_z: 0.0,
+        ..Setup::default()
     };
     let got = centre(&render_pixels(&load_in(&dir, &setup)));
     let want = kd_e() * 0.8;
@@ -318,11 +316,9 @@ fn solid_textures_at_known_points() {
         let setup = Setup {
             textures,
             object_textures: "1",
-            res: (9, 9),
-            material: "",
             shift,
             zoom,
-            square_z: 0.0,
+            ..Setup::default()
         };
         render_pixels(&load_in(&dir, &setup))
     };
