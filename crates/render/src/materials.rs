@@ -1,213 +1,354 @@
-//! Materials at run time: scene materials plus what is precomputed once per material (rough
-//! plastic's Fresnel tables), and the per-hit construction of a [`Bsdf`] with its textures
-//! evaluated at the hit.
+//! Materials at run time, resolved once by the builder: no material ids, no chains of
+//! `twosided`/`normalmap`/`mask` to walk per hit, no scene-description enum to match.
 //!
-//! `twosided` is resolved here: when the viewer is on the back side, the shading frame is
-//! flipped and the back (or front) material is used, as Mitsuba does. Shapes without a material
-//! get Mitsuba's default, a one-sided diffuse of reflectance 0.5 — or, on an emitter, none.
+//! A [`RtMaterial`] is a [`Layer`]: shading-frame perturbations (normal and bump maps, in
+//! order) followed either by the scattering model ([`MaterialKind`], or none for `null`) or
+//! by a two-sided split into a front and a back layer. On the back side of a two-sided
+//! material the shading frame is flipped, as Mitsuba's `twosided` does; the back layer of a
+//! `twosided` with one nested material is the front one. Shapes without a material get
+//! Mitsuba's default, a one-sided diffuse of reflectance 0.5 — or, on an emitter, none.
 
 use std::sync::Arc;
 
-use scene::{ColorParam, CourseIdealKind, FloatParam, Material};
+use scene::PhongModel;
 
-use crate::bsdf::Microfacet;
 use crate::bsdf::{
-    Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, MicrofacetType,
+    Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, Microfacet, MicrofacetType,
     NoriMicrofacet, PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic,
     RoughPlasticTables, ThinDielectric,
 };
-use crate::math::{Frame, PVec3, Vec3};
+use crate::math::{Frame, Vec3};
 use crate::shapes::SurfaceInteraction;
-use crate::textures::TexCoord;
-use crate::world::Scene;
+use crate::textures::{ColorRef, FloatRef, Params, TexCoord, TexRef, Textures};
 
+/// A material as the renderer uses it.
 #[derive(Clone, Debug)]
 pub struct RtMaterial {
-    pub material: Material,
+    pub surface: Layer,
     /// Ambient reflectance (the Whitted integrator's ambient term).
     pub ambient: Vec3,
-    /// Rough plastic's tables (depend only on α, the distribution and η).
-    pub rough_plastic: Option<Arc<RoughPlasticTables>>,
+    /// Beer–Lambert absorption coefficient inside (a course dielectric with `absorption`),
+    /// applied by the path tracer over segments inside the shape.
+    pub absorption: Option<Vec3>,
+    /// The colour an unlit surface (CENG795 `replace_all`) shows; it scatters nothing.
+    pub unlit: Option<ColorRef>,
 }
 
-/// Evaluates colour and scalar parameters (textures) at a surface point.
-pub trait Params {
-    fn color(&self, p: &ColorParam, at: TexCoord) -> Vec3;
-    fn float(&self, p: &FloatParam, at: TexCoord) -> f32;
+/// Frame perturbations, then a scattering model or a two-sided split.
+#[derive(Clone, Debug)]
+pub struct Layer {
+    pub perturbs: Box<[Perturb]>,
+    pub then: Then,
 }
 
-impl Params for Scene {
-    fn color(&self, p: &ColorParam, at: TexCoord) -> Vec3 {
-        Scene::color(self, p, at)
-    }
-    fn float(&self, p: &FloatParam, at: TexCoord) -> f32 {
-        Scene::float(self, p, at)
-    }
+#[derive(Clone, Debug)]
+pub enum Then {
+    /// The scattering model (`None`: the surface does not scatter, as `null`).
+    Model(Option<MaterialKind>),
+    /// Front (`[0]`) and back (`[1]`) layers of a two-sided material.
+    Sides(Box<[Layer; 2]>),
 }
 
-/// Parameters without textures (statistical tests of single BSDFs); a texture reads as 0.5.
-pub struct ConstantParams;
+/// A change of the shading frame before scattering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Perturb {
+    /// Tangent-space normal map: the texture's RGB in [0,1] encodes the normal 2·c − 1.
+    NormalMap { texture: u32 },
+    /// Bump map: the normal tilts against the texture's height gradient times `factor`.
+    BumpMap { texture: u32, factor: f32 },
+}
 
-impl Params for ConstantParams {
-    fn color(&self, p: &ColorParam, _at: TexCoord) -> Vec3 {
-        match p {
-            ColorParam::Const(c) => (*c).into(),
-            ColorParam::Texture(_) => Vec3::splat(0.5),
-        }
-    }
-    fn float(&self, p: &FloatParam, _at: TexCoord) -> f32 {
-        match p {
-            FloatParam::Const(c) => *c,
-            FloatParam::Texture(_) => 0.5,
-        }
-    }
+/// A scattering model with its parameters, evaluated into a [`Bsdf`] at each hit.
+#[derive(Clone, Debug)]
+pub enum MaterialKind {
+    Diffuse {
+        reflectance: ColorRef,
+    },
+    Conductor {
+        eta: Vec3,
+        k: Vec3,
+        specular: ColorRef,
+    },
+    Mirror {
+        reflectance: ColorRef,
+    },
+    RoughConductor {
+        distribution: MicrofacetType,
+        alpha_u: FloatRef,
+        alpha_v: FloatRef,
+        eta: Vec3,
+        k: Vec3,
+        specular: ColorRef,
+    },
+    Dielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        reflectance: ColorRef,
+        transmittance: ColorRef,
+    },
+    ThinDielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        reflectance: ColorRef,
+        transmittance: ColorRef,
+    },
+    RoughDielectric {
+        distribution: MicrofacetType,
+        alpha_u: FloatRef,
+        alpha_v: FloatRef,
+        int_ior: f32,
+        ext_ior: f32,
+        reflectance: ColorRef,
+        transmittance: ColorRef,
+    },
+    Plastic {
+        diffuse: ColorRef,
+        specular: ColorRef,
+        int_ior: f32,
+        ext_ior: f32,
+        nonlinear: bool,
+    },
+    RoughPlastic {
+        microfacet: Microfacet,
+        eta: f32,
+        /// Tables that depend only on α, the distribution and η: computed once.
+        tables: Arc<RoughPlasticTables>,
+        diffuse: ColorRef,
+        specular: ColorRef,
+        nonlinear: bool,
+    },
+    /// Untextured: the BSDF itself.
+    NoriMicrofacet(NoriMicrofacet),
+    /// The CENG795 Phong family, with the ideal lobe of a course mirror, conductor or
+    /// dielectric on top when `ideal` is set.
+    Phong {
+        model: PhongModel,
+        normalized: bool,
+        kd_fresnel: bool,
+        exponent: f32,
+        diffuse: ColorRef,
+        specular: ColorRef,
+        ior: f32,
+        absorption: f32,
+        ideal: Option<CourseLobe>,
+    },
+}
+
+/// The ideal lobe of a course material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CourseLobe {
+    pub lobe: IdealLobe,
+    pub reflectance: Vec3,
+    pub roughness: f32,
 }
 
 impl RtMaterial {
-    pub fn new(material: Material, ambient: Vec3) -> RtMaterial {
-        let rough_plastic = match &material {
-            Material::RoughPlastic {
-                distribution,
-                alpha,
-                int_ior,
-                ext_ior,
-                ..
-            } => Some(Arc::new(RoughPlasticTables::new(
-                Microfacet::isotropic(MicrofacetType::from(*distribution), *alpha),
-                int_ior / ext_ior,
-            ))),
-            _ => None,
-        };
+    /// Mitsuba's default material: one-sided diffuse 0.5.
+    pub fn default_diffuse() -> RtMaterial {
+        RtMaterial::plain(MaterialKind::Diffuse {
+            reflectance: TexRef::Const(Vec3::splat(0.5)),
+        })
+    }
+
+    /// A one-sided material of one model, with no ambient term.
+    pub fn plain(kind: MaterialKind) -> RtMaterial {
         RtMaterial {
-            material,
-            ambient,
-            rough_plastic,
+            surface: Layer {
+                perturbs: Box::new([]),
+                then: Then::Model(Some(kind)),
+            },
+            ambient: Vec3::ZERO,
+            absorption: None,
+            unlit: None,
+        }
+    }
+
+    /// The scattering model at `si` and the shading frame it lives in (perturbed by normal
+    /// and bump maps, flipped on the back side of a two-sided material); `None` when the
+    /// surface does not scatter.
+    #[inline]
+    pub fn resolve(
+        &self,
+        textures: &Textures,
+        si: &SurfaceInteraction,
+    ) -> Option<(&MaterialKind, Frame)> {
+        let mut frame = si.shading;
+        let mut layer = &self.surface;
+        loop {
+            for p in &layer.perturbs {
+                frame = p.apply(textures, si.tex(), frame);
+            }
+            match &layer.then {
+                Then::Model(kind) => return kind.as_ref().map(|k| (k, frame)),
+                Then::Sides(sides) => {
+                    if si.wo.dot(frame.n) < 0.0 {
+                        frame = Frame {
+                            s: frame.s,
+                            t: -frame.t,
+                            n: -frame.n,
+                        };
+                        layer = &sides[1];
+                    } else {
+                        layer = &sides[0];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Whether shading is unchanged when the tangent frame turns about the normal: no
+    /// perturbation and no anisotropic roughness on either side. Interaction may then take
+    /// the tangent from a triangle edge instead of the uv parameterisation (see
+    /// [`crate::shapes::interaction`]); only the mapping of random numbers to directions
+    /// changes, not any distribution.
+    pub fn isotropic(&self) -> bool {
+        fn layer(l: &Layer) -> bool {
+            l.perturbs.is_empty()
+                && match &l.then {
+                    Then::Model(k) => k.as_ref().is_none_or(MaterialKind::isotropic),
+                    Then::Sides(s) => layer(&s[0]) && layer(&s[1]),
+                }
+        }
+        layer(&self.surface)
+    }
+}
+
+impl Perturb {
+    #[inline]
+    fn apply(&self, textures: &Textures, at: TexCoord, frame: Frame) -> Frame {
+        match *self {
+            Perturb::NormalMap { texture } => {
+                let c = textures.get(texture).eval(at);
+                let local = (c * 2.0 - Vec3::ONE).normalize_or_zero();
+                if local.z > 0.0 {
+                    let n = frame.to_world(local).normalize();
+                    Frame::from_normal_tangent(n, frame.s)
+                } else {
+                    frame
+                }
+            }
+            Perturb::BumpMap { texture, factor } => {
+                let g = textures.get(texture).height_gradient(at, frame.s, frame.t);
+                let n = frame.n;
+                let tilted = (n - factor * (g - g.dot(n) * n)).normalize_or(n);
+                Frame::from_normal_tangent(tilted, frame.s)
+            }
         }
     }
 }
 
-impl RtMaterial {
-    /// The BSDF of this material with its parameters evaluated at `at` (`None` for `null`,
-    /// `unlit` and an unresolved `twosided`, `normalmap` or `bumpmap`).
-    pub fn bsdf<P: Params>(&self, p: &P, at: TexCoord) -> Option<Bsdf> {
-        let bsdf = match &self.material {
-            Material::Diffuse { reflectance } => {
+impl MaterialKind {
+    fn isotropic(&self) -> bool {
+        match self {
+            MaterialKind::RoughConductor {
+                alpha_u, alpha_v, ..
+            }
+            | MaterialKind::RoughDielectric {
+                alpha_u, alpha_v, ..
+            } => alpha_u == alpha_v,
+            _ => true,
+        }
+    }
+
+    /// The BSDF with its parameters evaluated at `at`.
+    pub fn bsdf<P: Params>(&self, p: &P, at: TexCoord) -> Bsdf {
+        match self {
+            MaterialKind::Diffuse { reflectance } => {
                 Bsdf::Diffuse(Diffuse::new(p.color(reflectance, at)))
             }
-            Material::Conductor {
-                eta,
-                k,
-                specular_reflectance,
-            } => Bsdf::Conductor(Conductor::new(
-                (*eta).into(),
-                (*k).into(),
-                p.color(specular_reflectance, at),
-            )),
-            Material::Mirror { reflectance } => {
+            MaterialKind::Conductor { eta, k, specular } => {
+                Bsdf::Conductor(Conductor::new(*eta, *k, p.color(specular, at)))
+            }
+            MaterialKind::Mirror { reflectance } => {
                 Bsdf::Conductor(Conductor::mirror(p.color(reflectance, at)))
             }
-            Material::RoughConductor {
+            MaterialKind::RoughConductor {
                 distribution,
                 alpha_u,
                 alpha_v,
                 eta,
                 k,
-                specular_reflectance,
+                specular,
             } => Bsdf::RoughConductor(RoughConductor::new(
-                MicrofacetType::from(*distribution),
+                *distribution,
                 alpha(p.float(alpha_u, at)),
                 alpha(p.float(alpha_v, at)),
-                (*eta).into(),
-                (*k).into(),
-                p.color(specular_reflectance, at),
+                *eta,
+                *k,
+                p.color(specular, at),
             )),
-            Material::Dielectric {
+            MaterialKind::Dielectric {
                 int_ior,
                 ext_ior,
-                specular_reflectance,
-                specular_transmittance,
-                ..
+                reflectance,
+                transmittance,
             } => {
                 let mut d = Dielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(specular_reflectance, at);
-                d.specular_transmittance = p.color(specular_transmittance, at);
+                d.specular_reflectance = p.color(reflectance, at);
+                d.specular_transmittance = p.color(transmittance, at);
                 Bsdf::Dielectric(d)
             }
-            Material::ThinDielectric {
+            MaterialKind::ThinDielectric {
                 int_ior,
                 ext_ior,
-                specular_reflectance,
-                specular_transmittance,
+                reflectance,
+                transmittance,
             } => {
                 let mut d = ThinDielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(specular_reflectance, at);
-                d.specular_transmittance = p.color(specular_transmittance, at);
+                d.specular_reflectance = p.color(reflectance, at);
+                d.specular_transmittance = p.color(transmittance, at);
                 Bsdf::ThinDielectric(d)
             }
-            Material::RoughDielectric {
+            MaterialKind::RoughDielectric {
                 distribution,
                 alpha_u,
                 alpha_v,
                 int_ior,
                 ext_ior,
-                specular_reflectance,
-                specular_transmittance,
+                reflectance,
+                transmittance,
             } => {
                 let mut d = RoughDielectric::new(
-                    MicrofacetType::from(*distribution),
+                    *distribution,
                     alpha(p.float(alpha_u, at)),
                     alpha(p.float(alpha_v, at)),
                     *int_ior,
                     *ext_ior,
                 );
-                d.specular_reflectance = p.color(specular_reflectance, at);
-                d.specular_transmittance = p.color(specular_transmittance, at);
+                d.specular_reflectance = p.color(reflectance, at);
+                d.specular_transmittance = p.color(transmittance, at);
                 Bsdf::RoughDielectric(d)
             }
-            Material::Plastic {
-                diffuse_reflectance,
-                specular_reflectance,
+            MaterialKind::Plastic {
+                diffuse,
+                specular,
                 int_ior,
                 ext_ior,
                 nonlinear,
             } => Bsdf::Plastic(Plastic::new(
-                p.color(diffuse_reflectance, at),
-                p.color(specular_reflectance, at),
+                p.color(diffuse, at),
+                p.color(specular, at),
                 *int_ior,
                 *ext_ior,
                 *nonlinear,
             )),
-            Material::RoughPlastic {
-                distribution,
-                alpha: a,
-                diffuse_reflectance,
-                specular_reflectance,
-                int_ior,
-                ext_ior,
+            MaterialKind::RoughPlastic {
+                microfacet,
+                eta,
+                tables,
+                diffuse,
+                specular,
                 nonlinear,
-            } => {
-                let tables = self.rough_plastic.clone()?;
-                Bsdf::RoughPlastic(RoughPlastic::with_tables(
-                    Microfacet::isotropic(MicrofacetType::from(*distribution), alpha(*a)),
-                    int_ior / ext_ior,
-                    tables,
-                    p.color(diffuse_reflectance, at),
-                    p.color(specular_reflectance, at),
-                    *nonlinear,
-                ))
-            }
-            Material::NoriMicrofacet {
-                alpha: a,
-                int_ior,
-                ext_ior,
-                kd,
-            } => Bsdf::NoriMicrofacet(NoriMicrofacet::new(
-                alpha(*a),
-                *int_ior,
-                *ext_ior,
-                (*kd).into(),
+            } => Bsdf::RoughPlastic(RoughPlastic::with_tables(
+                *microfacet,
+                *eta,
+                tables.clone(),
+                p.color(diffuse, at),
+                p.color(specular, at),
+                *nonlinear,
             )),
-            Material::PhongFamily {
+            MaterialKind::NoriMicrofacet(b) => Bsdf::NoriMicrofacet(*b),
+            MaterialKind::Phong {
                 model,
                 normalized,
                 kd_fresnel,
@@ -230,259 +371,19 @@ impl RtMaterial {
                 .with_absorption(*ior, *absorption);
                 match ideal {
                     None => Bsdf::PhongFamily(phong),
-                    Some(i) => {
-                        let lobe = match i.kind {
-                            CourseIdealKind::Mirror => IdealLobe::Mirror,
-                            CourseIdealKind::Conductor { eta, k } => {
-                                IdealLobe::Conductor { eta, k }
-                            }
-                            CourseIdealKind::Dielectric { ior, .. } => {
-                                IdealLobe::Dielectric { eta: ior }
-                            }
-                        };
-                        Bsdf::from(CourseMaterial::new(
-                            phong,
-                            lobe,
-                            i.reflectance.into(),
-                            i.roughness,
-                        ))
-                    }
+                    Some(i) => Bsdf::from(CourseMaterial::new(
+                        phong,
+                        i.lobe,
+                        i.reflectance,
+                        i.roughness,
+                    )),
                 }
             }
-            Material::Null
-            | Material::Unlit { .. }
-            | Material::TwoSided { .. }
-            | Material::NormalMap { .. }
-            | Material::BumpMap { .. }
-            | Material::Mask { .. } => return None,
-        };
-        Some(bsdf)
-    }
-}
-
-/// Whether shading with material `id` is unchanged when the tangent frame turns about the
-/// normal: no normal map and no anisotropic roughness anywhere in its `twosided`/`mask` chain
-/// (`None`, Mitsuba's default diffuse, is). Interaction may then take the tangent from a
-/// triangle edge instead of the uv parameterisation (see [`crate::shapes::interaction`]); only
-/// the mapping of random numbers to directions changes, not any distribution. An unknown id
-/// counts as not isotropic.
-pub fn isotropic(materials: &[scene::MaterialDesc], id: Option<scene::MaterialId>) -> bool {
-    let Some(id) = id else { return true };
-    let mut todo = vec![id];
-    // The ids walked so far: chains are a few materials long, and a set sized by the material
-    // count would make the per-shape call quadratic over the scene.
-    let mut seen: Vec<u32> = Vec::new();
-    let same = |a: &FloatParam, b: &FloatParam| match (a, b) {
-        (FloatParam::Const(a), FloatParam::Const(b)) => a == b,
-        (FloatParam::Texture(a), FloatParam::Texture(b)) => a == b,
-        _ => false,
-    };
-    while let Some(id) = todo.pop() {
-        let Some(m) = materials.get(id.0 as usize) else {
-            return false;
-        };
-        if seen.contains(&id.0) {
-            continue;
-        }
-        seen.push(id.0);
-        match &m.material {
-            Material::TwoSided { front, back } => todo.extend(std::iter::once(*front).chain(*back)),
-            Material::Mask { nested, .. } => todo.push(*nested),
-            Material::NormalMap { .. } | Material::BumpMap { .. } => return false,
-            Material::RoughConductor {
-                alpha_u, alpha_v, ..
-            }
-            | Material::RoughDielectric {
-                alpha_u, alpha_v, ..
-            } => {
-                if !same(alpha_u, alpha_v) {
-                    return false;
-                }
-            }
-            Material::Diffuse { .. }
-            | Material::Conductor { .. }
-            | Material::Mirror { .. }
-            | Material::Dielectric { .. }
-            | Material::ThinDielectric { .. }
-            | Material::Plastic { .. }
-            | Material::RoughPlastic { .. }
-            | Material::NoriMicrofacet { .. }
-            | Material::PhongFamily { .. }
-            | Material::Unlit { .. }
-            | Material::Null => {}
         }
     }
-    true
 }
 
 /// Mitsuba clamps roughness away from 0 to keep the microfacet models finite.
-fn alpha(a: f32) -> f32 {
+pub fn alpha(a: f32) -> f32 {
     a.max(1e-4)
-}
-
-impl Scene {
-    /// The BSDF at `si` and the shading frame it lives in (flipped for the back side of a
-    /// two-sided material). `None`: the surface does not scatter (null material).
-    /// The Beer–Lambert absorption coefficient inside the material at `si` (a smooth
-    /// dielectric with `absorption`), evaluated when a path enters it.
-    pub fn interior_absorption(&self, si: &SurfaceInteraction) -> Option<Vec3> {
-        let id = self.shapes[si.shape as usize].material?;
-        match &self.materials[id.0 as usize].material {
-            Material::Dielectric {
-                absorption: Some(sigma),
-                ..
-            }
-            | Material::PhongFamily {
-                ideal:
-                    Some(scene::CourseIdeal {
-                        kind:
-                            CourseIdealKind::Dielectric {
-                                absorption: Some(sigma),
-                                ..
-                            },
-                        ..
-                    }),
-                ..
-            } if *sigma != PVec3::ZERO => Some((*sigma).into()),
-            _ => None,
-        }
-    }
-
-    /// The colour an [`Material::Unlit`] surface shows at `si` (`None` for other materials).
-    pub fn unlit_color(&self, si: &SurfaceInteraction) -> Option<Vec3> {
-        let id = self.shapes[si.shape as usize].material?;
-        match &self.materials[id.0 as usize].material {
-            Material::Unlit { color } => Some(self.color(color, si.tex())),
-            _ => None,
-        }
-    }
-
-    /// The ambient reflectance of the material at `si` (`None` without a material).
-    pub fn ambient_reflectance(&self, si: &SurfaceInteraction) -> Option<Vec3> {
-        let id = self.shapes[si.shape as usize].material?;
-        Some(self.materials[id.0 as usize].ambient)
-    }
-
-    pub fn bsdf_at(&self, si: &SurfaceInteraction) -> Option<(Bsdf, Frame)> {
-        let mut frame = si.shading;
-        let shape = &self.shapes[si.shape as usize];
-        let Some(mut id) = shape.material else {
-            // Mitsuba's default: diffuse 0.5, but black (non-scattering) on emitters.
-            return (shape.emission.is_none())
-                .then(|| (Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))), frame));
-        };
-        // Bounded walk: a longer twosided chain than the material count is a cycle.
-        let mut mat = None;
-        for _ in 0..=self.materials.len() {
-            let m = &self.materials[id.0 as usize];
-            match &m.material {
-                Material::TwoSided { front, back } => {
-                    if si.wo.dot(frame.n) < 0.0 {
-                        frame = Frame {
-                            s: frame.s,
-                            t: -frame.t,
-                            n: -frame.n,
-                        };
-                        id = back.unwrap_or(*front);
-                    } else {
-                        id = *front;
-                    }
-                }
-                Material::NormalMap { nested, texture } => {
-                    let c = self.textures[texture.0 as usize].eval(si.tex());
-                    let local = (c * 2.0 - Vec3::ONE).normalize_or_zero();
-                    if local.z > 0.0 {
-                        let n = frame.to_world(local).normalize();
-                        frame = Frame::from_normal_tangent(n, frame.s);
-                    }
-                    id = *nested;
-                }
-                Material::BumpMap {
-                    nested,
-                    texture,
-                    factor,
-                } => {
-                    let t = &self.textures[texture.0 as usize];
-                    let g = t.height_gradient(si.tex(), frame.s, frame.t);
-                    let n = frame.n;
-                    let tilted = (n - *factor * (g - g.dot(n) * n)).normalize_or(n);
-                    frame = Frame::from_normal_tangent(tilted, frame.s);
-                    id = *nested;
-                }
-                // The opacity acts in `Scene::intersect` (a cut-out is never hit).
-                Material::Mask { nested, .. } => id = *nested,
-                _ => {
-                    mat = Some(m);
-                    break;
-                }
-            }
-        }
-        let bsdf = mat?.bsdf(self, si.tex())?;
-        Some((bsdf, frame))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use scene::{MaterialDesc, MaterialId, MicrofacetDistribution, Rgb};
-
-    fn desc(material: Material) -> MaterialDesc {
-        MaterialDesc {
-            material,
-            ambient: Default::default(),
-            name: None,
-            loc: Default::default(),
-        }
-    }
-
-    fn rough(alpha_u: f32, alpha_v: f32) -> Material {
-        Material::RoughConductor {
-            distribution: MicrofacetDistribution::Ggx,
-            alpha_u: FloatParam::Const(alpha_u),
-            alpha_v: FloatParam::Const(alpha_v),
-            eta: Rgb::splat(1.5),
-            k: Rgb::splat(0.0),
-            specular_reflectance: ColorParam::Const(Rgb::splat(1.0)),
-        }
-    }
-
-    #[test]
-    fn isotropy_follows_the_whole_chain() {
-        let diffuse = Material::Diffuse {
-            reflectance: ColorParam::Const(Rgb::splat(0.5)),
-        };
-        let mats = [
-            desc(diffuse),         // 0
-            desc(rough(0.1, 0.1)), // 1
-            desc(rough(0.1, 0.3)), // 2
-            desc(Material::TwoSided {
-                front: MaterialId(0),
-                back: Some(MaterialId(2)),
-            }), // 3
-            desc(Material::NormalMap {
-                nested: MaterialId(0),
-                texture: scene::TextureId(0),
-            }), // 4
-            desc(Material::Mask {
-                nested: MaterialId(1),
-                opacity: FloatParam::Const(0.5),
-            }), // 5
-            desc(Material::TwoSided {
-                front: MaterialId(6),
-                back: None,
-            }), // 6: a cycle
-            desc(Material::Mask {
-                nested: MaterialId(4),
-                opacity: FloatParam::Const(0.5),
-            }), // 7
-        ];
-        let iso = |id: Option<u32>| isotropic(&mats, id.map(MaterialId));
-        assert!(iso(None), "Mitsuba's default diffuse");
-        assert!(iso(Some(0)) && iso(Some(1)) && iso(Some(5)) && iso(Some(6)));
-        assert!(!iso(Some(2)), "alpha_u != alpha_v");
-        assert!(!iso(Some(3)), "anisotropic back side");
-        assert!(!iso(Some(4)) && !iso(Some(7)), "normal map");
-        assert!(!iso(Some(99)), "unknown id");
-    }
 }

@@ -18,11 +18,11 @@ use scene::{MaterialId, SceneDesc, TestDesc, TestKind};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::build::{BuildError, BuildOptions, build};
 use crate::integrators::{Integrator, UnsupportedIntegrator};
-use crate::materials::{ConstantParams, RtMaterial};
 use crate::math::{UVec2, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::warp::square_to_cosine_hemisphere;
 use crate::stats::{Chi2Config, MeanVar, Pcg32, chi2_test, sidak};
+use crate::textures::ConstantParams;
 
 #[derive(Clone, Debug)]
 pub struct CaseResult {
@@ -68,8 +68,8 @@ fn bsdf_of(desc: &SceneDesc, id: MaterialId) -> Result<Bsdf, TestError> {
         .materials
         .get(id.0 as usize)
         .ok_or_else(|| TestError::Malformed(format!("material {} does not exist", id.0)))?;
-    RtMaterial::new(m.material.clone(), m.ambient.into())
-        .bsdf(&ConstantParams, Default::default())
+    crate::build::material_kind(&m.material)
+        .map(|k| k.bsdf(&ConstantParams, Default::default()))
         .ok_or_else(|| {
             TestError::Malformed(format!(
                 "{}: a {} material cannot be tested on its own",

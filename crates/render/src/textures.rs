@@ -31,6 +31,83 @@ impl TexCoord {
     }
 }
 
+/// A parameter at run time: a constant, or the index of a texture evaluated at the hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TexRef<T> {
+    Const(T),
+    Texture(u32),
+}
+
+/// A colour parameter (reflectance, radiance, ...).
+pub type ColorRef = TexRef<Vec3>;
+/// A scalar parameter (roughness, opacity, ...); a texture's first channel.
+pub type FloatRef = TexRef<f32>;
+
+/// Evaluates parameters at a surface point.
+pub trait Params {
+    fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3;
+    fn float(&self, p: &FloatRef, at: TexCoord) -> f32;
+}
+
+/// The scene's textures, indexed by [`TexRef::Texture`].
+#[derive(Clone, Debug, Default)]
+pub struct Textures(Vec<Texture>);
+
+impl Textures {
+    pub fn new(list: Vec<Texture>) -> Textures {
+        Textures(list)
+    }
+
+    /// Texture `t` (an index a [`TexRef`] or a material names; the builder checks them).
+    #[inline]
+    pub fn get(&self, t: u32) -> &Texture {
+        &self.0[t as usize]
+    }
+
+    /// Texture lookups stay behind a call, so that constants (most parameters) cost no call
+    /// in the hot loops.
+    #[inline(never)]
+    fn eval(&self, t: u32, at: TexCoord) -> Vec3 {
+        self.0[t as usize].eval(at)
+    }
+}
+
+impl Params for Textures {
+    #[inline(always)]
+    fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3 {
+        match p {
+            TexRef::Const(c) => *c,
+            TexRef::Texture(t) => self.eval(*t, at),
+        }
+    }
+
+    #[inline(always)]
+    fn float(&self, p: &FloatRef, at: TexCoord) -> f32 {
+        match p {
+            TexRef::Const(c) => *c,
+            TexRef::Texture(t) => self.eval(*t, at).x,
+        }
+    }
+}
+
+/// Parameters without textures (statistical tests of single BSDFs); a texture reads as 0.5.
+pub struct ConstantParams;
+
+impl Params for ConstantParams {
+    fn color(&self, p: &ColorRef, _at: TexCoord) -> Vec3 {
+        match p {
+            TexRef::Const(c) => *c,
+            TexRef::Texture(_) => Vec3::splat(0.5),
+        }
+    }
+    fn float(&self, p: &FloatRef, _at: TexCoord) -> f32 {
+        match p {
+            TexRef::Const(c) => *c,
+            TexRef::Texture(_) => 0.5,
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub enum Texture {
     Constant(Vec3),

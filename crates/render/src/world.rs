@@ -3,28 +3,31 @@
 //! hit, occlusion, parameters at a hit, light selection). Built by [`crate::build`]; the
 //! integrators, lights and materials read it and never the builder.
 
-use scene::{ColorParam, FloatParam, IntegratorDesc, MaterialId, SamplerDesc};
+use scene::{IntegratorDesc, SamplerDesc};
 
 use crate::accel::{Accel, Hit};
+use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::lights::select::LightSampler;
 use crate::lights::{Light, Receiver};
 use crate::materials::RtMaterial;
-use crate::math::Vec3;
+use crate::math::{Frame, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
 use crate::shapes::{Reads, ShapeGeom, SurfaceInteraction, interaction};
-use crate::textures::{TexCoord, Texture};
+use crate::textures::{ColorRef, FloatRef, Params, TexCoord, Textures};
 
 #[derive(Clone, Debug)]
 pub struct ShapeInfo {
     pub geom: ShapeGeom,
-    pub material: Option<MaterialId>,
-    pub emission: Option<ColorParam>,
+    /// Index into [`Scene::materials`]; `None` on an emitter without a material (it does not
+    /// scatter).
+    pub material: Option<u32>,
+    pub emission: Option<ColorRef>,
     pub flip_normals: bool,
     /// Alpha cut-out (the shape's material is a `mask`): the probability that a ray hitting
     /// the surface stops there. See [`Scene::intersect`].
-    pub opacity: Option<FloatParam>,
+    pub opacity: Option<FloatRef>,
     /// What shading reads of this shape's interactions beyond position and normals.
     pub reads: Reads,
 }
@@ -48,7 +51,7 @@ pub struct Scene {
     pub materials: Vec<RtMaterial>,
     /// Findings of the build step worth telling the user (unsupported features).
     pub warnings: Vec<String>,
-    pub textures: Vec<Texture>,
+    pub textures: Textures,
     pub camera: Camera,
     pub film: scene::Film,
     pub sampler: SamplerDesc,
@@ -56,9 +59,9 @@ pub struct Scene {
     pub background: Option<Vec3>,
     /// A texture over the image seen by escaping camera rays (CENG795 `replace_background`).
     pub background_texture: Option<u32>,
-    /// Whether any material is [`Material::Unlit`] (only then does the path loop look).
+    /// Whether any material is unlit (only then does the path loop look).
     pub has_unlit: bool,
-    /// Sum of the scene's ambient terms ([`scene::Emitter::Ambient`]), used by Whitted.
+    /// Sum of the scene's ambient lights, used by Whitted.
     pub ambient: Vec3,
     pub lights: Vec<Light>,
     /// The light(s) of each shape; see [`Scene::shape_light`].
@@ -190,28 +193,47 @@ impl Scene {
         }
     }
 
-    /// The value of a colour parameter at `uv`. Constants are inline; texture lookups stay
-    /// behind a call, so that constants (most parameters) cost no call in the hot loops.
+    /// The value of a colour parameter at `at`.
     #[inline(always)]
-    pub fn color(&self, p: &ColorParam, at: TexCoord) -> Vec3 {
-        match p {
-            ColorParam::Const(c) => (*c).into(),
-            ColorParam::Texture(t) => self.texture(t.0, at),
-        }
+    pub fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3 {
+        self.textures.color(p, at)
     }
 
-    /// [`Scene::color`] for a float parameter.
+    /// [`Scene::color`] for a scalar parameter.
     #[inline(always)]
-    pub fn float(&self, p: &FloatParam, at: TexCoord) -> f32 {
-        match p {
-            FloatParam::Const(c) => *c,
-            FloatParam::Texture(t) => self.texture(t.0, at).x,
-        }
+    pub fn float(&self, p: &FloatRef, at: TexCoord) -> f32 {
+        self.textures.float(p, at)
     }
 
-    #[inline(never)]
-    fn texture(&self, t: u32, at: TexCoord) -> Vec3 {
-        self.textures[t as usize].eval(at)
+    #[inline]
+    fn material(&self, si: &SurfaceInteraction) -> Option<&RtMaterial> {
+        let id = self.shapes[si.shape as usize].material?;
+        Some(&self.materials[id as usize])
+    }
+
+    /// The BSDF at `si` and the shading frame it lives in (see [`RtMaterial::resolve`]).
+    /// `None`: the surface does not scatter.
+    #[inline]
+    pub fn bsdf_at(&self, si: &SurfaceInteraction) -> Option<(Bsdf, Frame)> {
+        let (kind, frame) = self.material(si)?.resolve(&self.textures, si)?;
+        Some((kind.bsdf(&self.textures, si.tex()), frame))
+    }
+
+    /// The Beer–Lambert absorption coefficient inside the material at `si`, applied when a
+    /// path travels inside it.
+    pub fn interior_absorption(&self, si: &SurfaceInteraction) -> Option<Vec3> {
+        self.material(si)?.absorption
+    }
+
+    /// The colour an unlit surface shows at `si` (`None` for other materials).
+    pub fn unlit_color(&self, si: &SurfaceInteraction) -> Option<Vec3> {
+        let c = self.material(si)?.unlit.as_ref()?;
+        Some(self.color(c, si.tex()))
+    }
+
+    /// The ambient reflectance of the material at `si` (`None` without a material).
+    pub fn ambient_reflectance(&self, si: &SurfaceInteraction) -> Option<Vec3> {
+        Some(self.material(si)?.ambient)
     }
 
     /// A representative reflectance colour at `si` (the `albedo` AOV).

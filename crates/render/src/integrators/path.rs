@@ -573,7 +573,7 @@ fn vertex(
                 }
                 if let Some(t) = scene.background_texture {
                     let uv = scene.camera.film_uv(st.ray.o, st.ray.d);
-                    l += scene.textures[t as usize].eval(TexCoord::uv(uv));
+                    l += scene.textures.get(t).eval(TexCoord::uv(uv));
                 }
             }
             if l != Vec3::ZERO {

@@ -10,7 +10,6 @@
 use std::sync::Arc;
 
 use glam::Mat3A;
-use scene::ColorParam;
 
 use super::bvh::LightBounds;
 use super::select::{mean_radiance, omni};
@@ -19,13 +18,13 @@ use crate::math::{Frame, PI, Vec2, Vec3, rsqrt};
 use crate::sampling::distrib::Distribution1D;
 use crate::sampling::warp;
 use crate::shapes::{Ellipsoid, ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
-use crate::textures::TexCoord;
+use crate::textures::{ColorRef, TexCoord, TexRef};
 use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct AreaLight {
     pub shape: u32,
-    pub radiance: ColorParam,
+    pub radiance: ColorRef,
     pub two_sided: bool,
     /// How a point is placed on a mesh lit as a whole (meshes only).
     pub triangles: Option<MeshSampling>,
@@ -45,7 +44,7 @@ impl LightModel for AreaLight {
         let info = &scene.shapes[self.shape as usize];
         let flip = if info.flip_normals { -1.0 } else { 1.0 };
         // The sampled point's uv only feeds a radiance texture.
-        let textured = matches!(self.radiance, ColorParam::Texture(_));
+        let textured = matches!(self.radiance, TexRef::Texture(_));
         let (p, p_error, n, uv, pdf) = match &info.geom {
             ShapeGeom::Sphere { center, radius } => {
                 return sample_sphere(
@@ -371,7 +370,7 @@ fn sample_sphere(
     radius: f32,
     flip: f32,
     two_sided: bool,
-    radiance: &ColorParam,
+    radiance: &ColorRef,
     r: &Receiver,
     u: Vec2,
 ) -> Option<LightSample> {
@@ -414,7 +413,7 @@ fn sample_sphere(
         // Sampled the inside of the sphere from outside (or vice versa): no emission.
         return None;
     }
-    let uv = if matches!(radiance, ColorParam::Texture(_)) {
+    let uv = if matches!(radiance, TexRef::Texture(_)) {
         sphere_uv(n_out)
     } else {
         Vec2::ZERO

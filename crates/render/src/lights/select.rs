@@ -8,11 +8,11 @@
 //! bounding radius r: π r²·E (directional), 4π·π r²·L̄ (constant and environment maps, L̄ the
 //! solid-angle mean). Textured emitters use the mean of an 8×8 grid of texture lookups.
 
-use scene::{ColorParam, LightSelection};
+use scene::LightSelection;
 
 use crate::math::{Vec2, Vec3};
 use crate::sampling::distrib::AliasTable;
-use crate::textures::TexCoord;
+use crate::textures::{ColorRef, TexCoord, TexRef};
 use crate::world::Scene;
 
 use super::Receiver;
@@ -32,10 +32,10 @@ pub(super) fn mean(c: Vec3) -> f32 {
 }
 
 /// Mean radiance of an emitter's colour over its texture space.
-pub(super) fn mean_radiance(scene: &Scene, c: &ColorParam) -> f32 {
+pub(super) fn mean_radiance(scene: &Scene, c: &ColorRef) -> f32 {
     match c {
-        ColorParam::Const(c) => mean((*c).into()),
-        ColorParam::Texture(_) => {
+        TexRef::Const(c) => mean(*c),
+        TexRef::Texture(_) => {
             const N: usize = 8;
             let mut sum = 0.0;
             for i in 0..N * N {
