@@ -22,8 +22,8 @@
 
 use std::path::PathBuf;
 
+use build::{BuildOptions, build};
 use clap::ArgAction;
-use render::build::{BuildOptions, build};
 use render::film::Image;
 use render::image_io::{srgb_to_linear, write_image};
 use render::integrators::Integrator;
@@ -328,12 +328,11 @@ fn render_with_layers(
     dev: &(dyn Fn(&mut Image) + Sync),
 ) -> Result<(), Failure> {
     crate::check_outputs(&job.outputs)?;
-    let scene = build(desc, &job.build).map_err(Failure::input)?;
+    let build::Built { scene, integrator } = build(desc, &job.build).map_err(Failure::input)?;
     for w in &scene.warnings {
         eprintln!("{w}");
     }
-    let Integrator::Path(cfg) = Integrator::from_desc(&scene.integrator).map_err(Failure::input)?
-    else {
+    let Integrator::Path(cfg) = integrator else {
         return Err(Failure::other("render layers need a path-style integrator"));
     };
     let pool = rayon::ThreadPoolBuilder::new()

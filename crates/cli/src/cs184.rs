@@ -33,8 +33,8 @@
 
 use std::path::{Path, PathBuf};
 
+use build::BuildOptions;
 use render::adaptive::AdaptiveSettings;
-use render::build::BuildOptions;
 use scene::formats::collada::cs184_path;
 use scene::{
     Camera, CropWindow, Document, Emitter, EmitterDesc, EnvMapping, FovAxis, IntegratorDesc, Loc,

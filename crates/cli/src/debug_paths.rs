@@ -10,7 +10,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use render::build::{BuildOptions, build};
+use build::{BuildOptions, build};
 use render::geometry::Ray;
 use render::integrators::Integrator;
 use render::integrators::path::{
@@ -151,9 +151,8 @@ impl PathRecorder for Collector {
     }
 }
 
-fn trace(scene: &Scene, args: &Args) -> Result<Collector, Failure> {
-    let Integrator::Path(cfg) = Integrator::from_desc(&scene.integrator).map_err(Failure::input)?
-    else {
+fn trace(scene: &Scene, integrator: &Integrator, args: &Args) -> Result<Collector, Failure> {
+    let Integrator::Path(cfg) = integrator else {
         return Err(Failure::input(
             "debug-paths needs a path-tracing integrator (the scene asks for an AOV or `direct`)",
         ));
@@ -192,7 +191,7 @@ fn trace(scene: &Scene, args: &Args) -> Result<Collector, Failure> {
         // The renderer's own camera sample (film position, lens, and shutter time when
         // something moves), so the paths are those of the render.
         let (_, cray) = render::render::camera_sample(scene, &mut sampler, UVec2::new(x, y), index);
-        li_recorded(scene, &cray, &mut sampler, &cfg, &mut rec);
+        li_recorded(scene, &cray, &mut sampler, cfg, &mut rec);
     }
     Ok(rec)
 }
@@ -295,7 +294,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
             }
         },
     };
-    let scene = build(
+    let built = build(
         &desc,
         &BuildOptions {
             seed: args.seed,
@@ -303,7 +302,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         },
     )
     .map_err(Failure::input)?;
-    let c = trace(&scene, &args)?;
+    let c = trace(&built.scene, &built.integrator, &args)?;
     let text = if format == "json" { json(&c) } else { ply(&c) };
     // Write beside the target, then rename: never a half-written file.
     let mut tmp = args.output.clone().into_os_string();

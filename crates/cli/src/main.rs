@@ -14,12 +14,11 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+use build::{BuildOptions, build};
 use clap::{Parser, Subcommand};
 use render::adaptive::{AdaptiveSettings, render_adaptive};
-use render::build::{BuildOptions, build};
 use render::film::{Film, Image};
 use render::image_io::{write_image, write_image_tonemapped};
-use render::integrators::Integrator;
 use render::render::{Progress, RenderObserver, RenderOptions, render};
 use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
 
@@ -773,7 +772,7 @@ pub(crate) fn render_scene_with(
     }
 
     let start = std::time::Instant::now();
-    let scene = build(desc, &job.build).map_err(Failure::input)?;
+    let build::Built { scene, integrator } = build(desc, &job.build).map_err(Failure::input)?;
     if !job.quiet {
         eprintln!(
             "built the scene (BVH, lights) in {:.3} s",
@@ -783,7 +782,6 @@ pub(crate) fn render_scene_with(
     for w in &scene.warnings {
         eprintln!("{w}");
     }
-    let integrator = Integrator::from_desc(&scene.integrator).map_err(Failure::input)?;
 
     let cancel = Arc::new(AtomicBool::new(false));
     {
@@ -869,7 +867,7 @@ pub(crate) fn render_scene_with(
     }
     // A depth AOV holds distances: as 8-bit PNG anything beyond 1 was white. PNGs get the
     // depths divided by the largest one (said once); EXR, PFM and HDR keep the distances.
-    let depth_png = matches!(scene.integrator, IntegratorDesc::Depth).then(|| {
+    let depth_png = matches!(integrator, render::integrators::Integrator::Depth).then(|| {
         let far = image
             .pixels
             .iter()
@@ -927,7 +925,7 @@ fn cmd_test(files: &[PathBuf], seed: u64) -> Result<(), Failure> {
                 f.display()
             )));
         };
-        let report = render::nori_tests::run(&test, seed).map_err(Failure::input)?;
+        let report = build::nori_tests::run(&test, seed).map_err(Failure::input)?;
         println!(
             "{}: {} with {} case(s), per-case level {:.3e}",
             f.display(),

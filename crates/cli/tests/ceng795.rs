@@ -11,11 +11,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use render::build::BuildOptions;
+use build::BuildOptions;
+use build::render_desc;
 use render::compare::{CompareOptions, Reference, TestImages, compare_with};
 use render::film::Image;
 use render::image_io::read_image;
-use render::render::render_desc;
 use render::stats::{sidak, t_test};
 use scene::{Document, LoadOptions, SceneDesc};
 use statrs::distribution::{ContinuousCDF, StudentsT};

@@ -11,9 +11,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use render::build::BuildOptions;
+use build::BuildOptions;
+use build::render_desc;
 use render::math::Vec3;
-use render::render::render_desc;
 use scene::{Document, LoadOptions, SceneDesc};
 
 const E: f32 = 100.0;

@@ -5,12 +5,12 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-use render::build::{BuildOptions, build};
+use build::render_desc;
+use build::{BuildOptions, build};
 use render::compare::{Reference, TestImages, compare};
 use render::film::Image;
 use render::integrators::Integrator;
 use render::layers::render_layers;
-use render::render::render_desc;
 use scene::{Document, IntegratorDesc, LoadOptions, PathDesc, SceneDesc};
 
 fn penumbra() -> Command {
@@ -182,7 +182,7 @@ fn load(path: &Path) -> SceneDesc {
 #[test]
 fn layers_sum_to_beauty() {
     let desc = load(&ours("showcase.txt"));
-    let scene = build(
+    let build::Built { scene, integrator } = build(
         &desc,
         &BuildOptions {
             spp: Some(4),
@@ -192,7 +192,7 @@ fn layers_sum_to_beauty() {
         },
     )
     .unwrap();
-    let Integrator::Path(cfg) = Integrator::from_desc(&scene.integrator).unwrap() else {
+    let Integrator::Path(cfg) = integrator else {
         panic!("path integrator expected")
     };
     let films = render_layers(&scene, &cfg, 4, 8);

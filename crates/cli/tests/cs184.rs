@@ -5,11 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use build::{BuildOptions, build};
 use render::adaptive::{AdaptiveSettings, render_adaptive};
-use render::build::{BuildOptions, build};
 use render::compare::{Reference, TestImages, compare};
 use render::film::Image;
-use render::integrators::Integrator;
 use render::render::{RenderOptions, Silent, render};
 use scene::formats::collada::cs184_path;
 use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
@@ -33,7 +32,7 @@ fn integrator(hemisphere: bool) -> IntegratorDesc {
 }
 
 fn render_one(desc: &SceneDesc, integ: &IntegratorDesc, spp: u32, seed: u64) -> Image {
-    let scene = build(
+    let build::Built { scene, integrator } = build(
         desc,
         &BuildOptions {
             spp: Some(spp),
@@ -44,7 +43,6 @@ fn render_one(desc: &SceneDesc, integ: &IntegratorDesc, spp: u32, seed: u64) -> 
         },
     )
     .unwrap();
-    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
     let opts = RenderOptions {
         spp,
         ..Default::default()
@@ -111,7 +109,7 @@ fn adaptive_sampling_reaches_the_same_mean() {
     let mut total = 0u64;
     let test: Vec<Image> = (0..16)
         .map(|s| {
-            let scene = build(
+            let build::Built { scene, integrator } = build(
                 &dae,
                 &BuildOptions {
                     spp: Some(64),
@@ -122,7 +120,6 @@ fn adaptive_sampling_reaches_the_same_mean() {
                 },
             )
             .unwrap();
-            let integrator = Integrator::from_desc(&scene.integrator).unwrap();
             let opts = RenderOptions {
                 spp: 64,
                 ..Default::default()
@@ -148,7 +145,10 @@ fn adaptive_sampling_reaches_the_same_mean() {
 #[test]
 fn adaptive_sampling_is_deterministic_across_thread_counts() {
     let dae = load("scenes/cs184/floor_sphere.dae");
-    let scene = build(
+    let build::Built {
+        scene,
+        integrator: integ,
+    } = build(
         &dae,
         &BuildOptions {
             spp: Some(32),
@@ -159,7 +159,6 @@ fn adaptive_sampling_is_deterministic_across_thread_counts() {
         },
     )
     .unwrap();
-    let integ = Integrator::from_desc(&scene.integrator).unwrap();
     let settings = AdaptiveSettings {
         batch: 4,
         tolerance: 0.2,

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::film::image::Image;
-use crate::film::{Film, FilmTile, Filter};
+use crate::film::{Film, FilmTile};
 use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec3};
 use crate::render::{Progress, RenderObserver, RenderOptions, camera_sample};
@@ -130,8 +130,8 @@ pub fn render_adaptive(
     observer: &dyn RenderObserver,
 ) -> AdaptiveOutcome {
     let start = Instant::now();
-    let filter = Filter::new(&scene.film.filter);
-    let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop, filter);
+    let f = &scene.film;
+    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
     let max_spp = opts.spp.max(1);
     let batch = settings.batch.max(1);
     let template = Sampler::new(scene.sampler.kind, max_spp, scene.sampler.seed);

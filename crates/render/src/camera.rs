@@ -16,7 +16,7 @@
 //! - `Window`: a pinhole whose image is a given window [l, r] × [b, t] of the z = 1 plane
 //!   (right and up in image terms, so x_cam = −(l + s_x (r − l)), y_cam = t − s_y (t − b)).
 
-use scene::{FovAxis, Projection};
+use base::{FovAxis, Projection};
 
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec2, Vec3};
@@ -79,9 +79,19 @@ pub fn fov_x_degrees(fov: f32, axis: FovAxis, aspect: f32) -> f32 {
 }
 
 impl Camera {
-    pub fn new(desc: &scene::Camera, width: u32, height: u32) -> Camera {
+    /// A camera with `projection`, camera-to-world `to_world` (looking along local +z, +y up,
+    /// +x to the image's left: Mitsuba's convention) and clip distances, for a film of
+    /// `width` × `height` pixels.
+    pub fn new(
+        projection: &Projection,
+        to_world: Mat4,
+        near_clip: f32,
+        far_clip: f32,
+        width: u32,
+        height: u32,
+    ) -> Camera {
         let aspect = width as f32 / height as f32;
-        let (kind, fov_x) = match desc.projection {
+        let (kind, fov_x) = match *projection {
             Projection::Perspective { fov, fov_axis } => (
                 Kind::Perspective,
                 Some(fov_x_degrees(fov, fov_axis, aspect)),
@@ -108,13 +118,13 @@ impl Camera {
                 // Camera x points to the image's left: the window's right is −x.
                 return Camera {
                     kind: Kind::Perspective,
-                    to_world: desc.to_world,
-                    to_camera: desc.to_world.inverse(),
+                    to_world,
+                    to_camera: to_world.inverse(),
                     resolution: Vec2::new(width as f32, height as f32),
                     half_extent: Vec2::new(0.5 * (right - left), 0.5 * (top - bottom)),
                     centre: Vec2::new(-0.5 * (left + right), 0.5 * (bottom + top)),
-                    near_clip: desc.near_clip,
-                    far_clip: desc.far_clip,
+                    near_clip,
+                    far_clip,
                 };
             }
         };
@@ -124,13 +134,13 @@ impl Camera {
         };
         Camera {
             kind,
-            to_world: desc.to_world,
-            to_camera: desc.to_world.inverse(),
+            to_world,
+            to_camera: to_world.inverse(),
             resolution: Vec2::new(width as f32, height as f32),
             half_extent: Vec2::new(tan_x, tan_x / aspect),
             centre: Vec2::ZERO,
-            near_clip: desc.near_clip,
-            far_clip: desc.far_clip,
+            near_clip,
+            far_clip,
         }
     }
 
@@ -222,18 +232,15 @@ mod tests {
     #[test]
     fn film_uv_inverts_generate_ray() {
         let cam = Camera::new(
-            &scene::Camera {
-                projection: Projection::Window {
-                    left: -0.3,
-                    right: 0.5,
-                    bottom: -0.2,
-                    top: 0.4,
-                },
-                to_world: Mat4::from_rotation_y(0.3)
-                    * Mat4::from_translation(scene::Vec3::new(1.0, 2.0, 3.0)),
-                near_clip: 0.0,
-                far_clip: 1e4,
+            &Projection::Window {
+                left: -0.3,
+                right: 0.5,
+                bottom: -0.2,
+                top: 0.4,
             },
+            Mat4::from_rotation_y(0.3) * Mat4::from_translation(glam::Vec3::new(1.0, 2.0, 3.0)),
+            0.0,
+            1e4,
             64,
             48,
         );
@@ -241,15 +248,6 @@ mod tests {
             let r = cam.generate_ray(Vec2::new(x, y), Vec2::ZERO);
             let uv = cam.film_uv(r.ray.o, r.ray.d);
             assert!((uv - Vec2::new(x / 64.0, y / 48.0)).length() < 1e-5, "{uv}");
-        }
-    }
-
-    fn desc(projection: Projection) -> scene::Camera {
-        scene::Camera {
-            projection,
-            to_world: Mat4::IDENTITY,
-            near_clip: 0.0,
-            far_clip: 1e4,
         }
     }
 
@@ -274,10 +272,13 @@ mod tests {
     #[test]
     fn image_left_is_camera_plus_x_and_top_is_plus_y() {
         let cam = Camera::new(
-            &desc(Projection::Perspective {
+            &Projection::Perspective {
                 fov: 90.0,
                 fov_axis: FovAxis::X,
-            }),
+            },
+            Mat4::IDENTITY,
+            0.0,
+            1e4,
             100,
             50,
         );
@@ -290,20 +291,26 @@ mod tests {
     #[test]
     fn thin_lens_rays_meet_on_the_focal_plane() {
         let cam = Camera::new(
-            &desc(Projection::ThinLens {
+            &Projection::ThinLens {
                 fov: 40.0,
                 fov_axis: FovAxis::X,
                 aperture_radius: 0.3,
                 focus_distance: 5.0,
-            }),
+            },
+            Mat4::IDENTITY,
+            0.0,
+            1e4,
             64,
             64,
         );
         let pin = Camera::new(
-            &desc(Projection::Perspective {
+            &Projection::Perspective {
                 fov: 40.0,
                 fov_axis: FovAxis::X,
-            }),
+            },
+            Mat4::IDENTITY,
+            0.0,
+            1e4,
             64,
             64,
         );
@@ -325,13 +332,11 @@ mod tests {
 
     #[test]
     fn near_clip_moves_the_origin_along_the_axis() {
-        let mut d = desc(Projection::Perspective {
+        let p = Projection::Perspective {
             fov: 60.0,
             fov_axis: FovAxis::X,
-        });
-        d.near_clip = 2.0;
-        d.far_clip = 10.0;
-        let cam = Camera::new(&d, 32, 32);
+        };
+        let cam = Camera::new(&p, Mat4::IDENTITY, 2.0, 10.0, 32, 32);
         let cr = cam.generate_ray(Vec2::new(3.0, 7.0), Vec2::ZERO);
         assert!((cr.ray.o.z - 2.0).abs() < 1e-5);
         assert!((cr.ray.at(cr.t_max).z - 10.0).abs() < 1e-4);
@@ -343,15 +348,14 @@ mod tests {
     #[test]
     fn window_rays_pass_through_their_points() {
         let (l, r, b, t) = (-0.7f32, 0.3, -0.2, 0.6);
-        let mut d = desc(Projection::Window {
+        let p = Projection::Window {
             left: l,
             right: r,
             bottom: b,
             top: t,
-        });
-        d.near_clip = 1.5;
+        };
         let (w, h) = (40u32, 25u32);
-        let cam = Camera::new(&d, w, h);
+        let cam = Camera::new(&p, Mat4::IDENTITY, 1.5, 1e4, w, h);
         for p in [
             Vec3::new(0.1, 0.2, 3.0),
             Vec3::new(-1.2, -0.3, 5.0),

@@ -142,7 +142,7 @@ pub fn read_image_with(path: &Path, decode: Decode) -> Result<Image, ImageError>
 /// Reads an image and its alpha channel (1 where the file has none). Alpha is never decoded
 /// (it is linear coverage in every format).
 pub fn read_image_alpha(path: &Path, decode: Decode) -> Result<(Image, Vec<f32>), ImageError> {
-    let bytes = scene::read_file(path).map_err(|e| ImageError::io(path, e))?;
+    let bytes = base::read_file(path).map_err(|e| ImageError::io(path, e))?;
     if bytes.starts_with(&EXR_MAGIC) {
         return read_exr(path, bytes);
     }
@@ -163,12 +163,10 @@ pub fn read_image_alpha(path: &Path, decode: Decode) -> Result<(Image, Vec<f32>)
 pub fn write_image_tonemapped(
     path: &Path,
     img: &Image,
-    tonemap: Option<&scene::Tonemap>,
+    tonemap: Option<&base::Tonemap>,
 ) -> Result<(), ImageError> {
     match tonemap {
-        Some(scene::Tonemap::DisplayUnits)
-            if extension(path) == "png" && !img.pixels.is_empty() =>
-        {
+        Some(base::Tonemap::DisplayUnits) if extension(path) == "png" && !img.pixels.is_empty() => {
             // The radiance already is the 8-bit value: round and clamp it, nothing else.
             let quantize = |v: f32| (v.clamp(0.0, 255.0) + 0.5) as u8;
             let bytes = encode_png_with(img, quantize).map_err(|e| ImageError::encode(path, e))?;

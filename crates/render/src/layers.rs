@@ -17,7 +17,7 @@
 
 use rayon::prelude::*;
 
-use crate::film::{Film, FilmTile, Filter};
+use crate::film::{Film, FilmTile};
 use crate::integrators::path::{Contribution, PathConfig, PathRecorder, li_recorded};
 use crate::math::{UVec2, Vec3};
 use crate::render::camera_sample;
@@ -93,7 +93,7 @@ pub fn render_layers(scene: &Scene, cfg: &PathConfig, spp: u32, tile_size: u32) 
             scene.film.width,
             scene.film.height,
             scene.film.crop,
-            Filter::new(&scene.film.filter),
+            scene.film.filter,
         )
     };
     let mut beauty = new_film();

@@ -1,12 +1,12 @@
 //! Penumbra's renderer: everything that runs per ray.
 //!
-//! Data flow: `build` turns a `scene::SceneDesc` into a [`world::Scene`] (BVH, textures,
+//! Data flow: the `penumbra-build` crate turns a scene description into a [`world::Scene`] (BVH, textures,
 //! camera, film settings), `render` runs an integrator over tiles and passes into a film.
 
 pub mod accel;
 pub mod adaptive;
 pub mod bsdf;
-pub mod build;
+
 pub mod camera;
 pub mod compare;
 pub mod film;
@@ -17,7 +17,7 @@ pub mod layers;
 pub mod lights;
 pub mod materials;
 pub mod math;
-pub mod nori_tests;
+
 pub mod post;
 pub mod render;
 pub mod sampling;

@@ -10,7 +10,7 @@
 
 use std::sync::Arc;
 
-use scene::PhongModel;
+use base::PhongModel;
 
 use crate::bsdf::{
     Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, Microfacet, MicrofacetType,

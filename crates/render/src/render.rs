@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::camera::CameraRay;
-use crate::film::{Film, FilmTile, Filter};
+use crate::film::{Film, FilmTile};
 use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec2};
 use crate::sampling::Sampler;
@@ -131,13 +131,7 @@ fn render_tile(
 /// Peak bytes of the film state [`render`] allocates for `scene` (see [`Film::memory_needed`]).
 pub fn memory_needed(scene: &Scene, opts: &RenderOptions) -> u64 {
     let f = &scene.film;
-    Film::memory_needed(
-        f.width,
-        f.height,
-        f.crop,
-        &Filter::new(&f.filter),
-        opts.tile_size,
-    )
+    Film::memory_needed(f.width, f.height, f.crop, &f.filter, opts.tile_size)
 }
 
 /// Render `scene` with `integrator` on the current rayon pool.
@@ -148,8 +142,8 @@ pub fn render(
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
     let start = Instant::now();
-    let filter = Filter::new(&scene.film.filter);
-    let mut film = Film::new(scene.film.width, scene.film.height, scene.film.crop, filter);
+    let f = &scene.film;
+    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
     let tile_list = film.tile_bounds(opts.tile_size.max(1));
     // One tile per region for the whole render, cleared before each pass.
@@ -222,23 +216,4 @@ pub fn render(
         elapsed: start.elapsed(),
         cancelled,
     }
-}
-
-/// Build `desc` with `opts` and render it to the end with no observer: the convenience of
-/// tests and tools that need one image (the spp is the scene's after `opts.spp`).
-pub fn render_desc(
-    desc: &scene::SceneDesc,
-    opts: &crate::build::BuildOptions,
-) -> Result<RenderOutcome, String> {
-    let scene = crate::build::build(desc, opts).map_err(|e| e.to_string())?;
-    let integrator = Integrator::from_desc(&scene.integrator).map_err(|e| e.to_string())?;
-    Ok(render(
-        &scene,
-        &integrator,
-        &RenderOptions {
-            spp: scene.sampler.spp,
-            ..Default::default()
-        },
-        &Silent,
-    ))
 }

@@ -12,7 +12,7 @@
 
 use std::sync::Arc;
 
-use scene::{NoiseConversion, TextureFilter, WrapMode};
+use base::{NoiseConversion, TextureFilter, WrapMode};
 
 use crate::film::Image;
 use crate::math::{Mat3, Vec2, Vec3};

@@ -3,11 +3,12 @@
 //! hit, occlusion, parameters at a hit, light selection). Built by [`crate::build`]; the
 //! integrators, lights and materials read it and never the builder.
 
-use scene::{IntegratorDesc, SamplerDesc};
+use base::SamplerDesc;
 
 use crate::accel::{Accel, Hit};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
+use crate::film::FilmSettings;
 use crate::geometry::Ray;
 use crate::lights::select::LightSampler;
 use crate::lights::{Light, Receiver};
@@ -53,9 +54,8 @@ pub struct Scene {
     pub warnings: Vec<String>,
     pub textures: Textures,
     pub camera: Camera,
-    pub film: scene::Film,
+    pub film: FilmSettings,
     pub sampler: SamplerDesc,
-    pub integrator: IntegratorDesc,
     pub background: Option<Vec3>,
     /// A texture over the image seen by escaping camera rays (CENG795 `replace_background`).
     pub background_texture: Option<u32>,

@@ -7,13 +7,13 @@
 //! The same sampling pass checks that every non-delta sample's weight equals eval/pdf and
 //! that `pdf(wo, wi)` reproduces the sample's pdf.
 
+use base::PhongModel;
 use render::bsdf::{
     Bsdf, CourseMaterial, Diffuse, IdealLobe, MicrofacetType, NoriMicrofacet, PhongFamily, Plastic,
     RoughConductor, RoughDielectric, RoughPlastic, TransportMode,
 };
 use render::math::{Vec2, Vec3};
 use render::stats::{Chi2Config, Pcg32, chi2_test, sidak};
-use scene::PhongModel;
 
 const ANGLES: [f32; 5] = [0.0, 30.0, 60.0, 80.0, 89.0];
 const ALPHAS: [f32; 3] = [0.05, 0.3, 0.8];

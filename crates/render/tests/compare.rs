@@ -21,7 +21,7 @@ use render::image_io::write_image;
 use render::math::Vec3;
 
 fn references_dir() -> Option<PathBuf> {
-    scene::testing::shared_dir("references")
+    base::testing::shared_dir("references")
 }
 
 /// SplitMix64 → standard normals (Box–Muller); a fixed, platform-independent stream.

@@ -7,13 +7,13 @@
 
 mod sampling_common;
 
+use base::{CropWindow, FilterDesc, SamplerKind};
 use glam::{UVec2, Vec2};
 use rayon::prelude::*;
 use render::film::{Film, Filter};
 use render::math::Vec3;
 use render::sampling::Sampler;
 use sampling_common::{Rng, sidak};
-use scene::{CropWindow, FilterDesc, SamplerKind};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 const ALPHA: f64 = 0.01;

@@ -11,10 +11,10 @@
 
 mod sampling_common;
 
+use base::SamplerKind;
 use glam::{UVec2, Vec2};
 use render::sampling::{AliasTable, Distribution1D, Distribution2D, Sampler};
 use sampling_common::{Rng, assert_chi2, sidak};
-use scene::SamplerKind;
 
 const ALPHA: f64 = 0.01;
 

@@ -7,7 +7,7 @@ pub mod error;
 pub mod formats;
 pub mod model;
 pub mod spectra;
-pub mod testing;
+pub use base::testing;
 pub(crate) mod textpos;
 
 pub use error::{LoadError, Loc, Result, Warning};
@@ -20,20 +20,6 @@ use std::path::Path;
 pub struct LoadOptions {
     /// `-D name=value` overrides (Mitsuba `<default>` parameters).
     pub defines: Vec<(String, String)>,
-}
-
-/// Read a whole file, refusing anything but a regular file first: a device such as
-/// `/dev/zero` or a FIFO named as a mesh or texture would otherwise be read until memory runs
-/// out, or block for ever.
-pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
-    let meta = std::fs::metadata(path)?;
-    if !meta.is_file() {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "not a regular file",
-        ));
-    }
-    std::fs::read(path)
 }
 
 /// Load any supported scene file.

@@ -14,6 +14,8 @@ pub use glam::{Mat3, Mat4, Vec2, Vec3};
 
 use crate::error::{Loc, Warning};
 
+pub use base::*;
+
 /// Linear RGB triple (Rec.709 primaries).
 pub type Rgb = Vec3;
 
@@ -222,16 +224,6 @@ pub fn is_similarity(m: &Mat4) -> bool {
         && c[1].dot(c[2]).abs() <= tol
 }
 
-/// The profile of a spot light between its full-intensity cone and its cutoff.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum SpotFalloff {
-    /// Mitsuba 3: linear in the angle from the beam width to the cutoff.
-    #[default]
-    Mitsuba,
-    /// The CENG795/CENG477 course: ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴.
-    Cosine4,
-}
-
 /// An indexed triangle mesh. `normals` and `uvs` are either empty or one per position.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
@@ -267,12 +259,6 @@ pub struct MaterialDesc {
     pub ambient: Rgb,
     pub name: Option<String>,
     pub loc: Loc,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MicrofacetDistribution {
-    Ggx,
-    Beckmann,
 }
 
 /// Every material model any supported format can name. Not all are rendered yet; `build`
@@ -425,15 +411,6 @@ pub enum CourseIdealKind {
     },
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PhongModel {
-    OriginalPhong,
-    ModifiedPhong,
-    OriginalBlinnPhong,
-    ModifiedBlinnPhong,
-    TorranceSparrow,
-}
-
 impl Material {
     pub fn kind_name(&self) -> &'static str {
         match self {
@@ -466,19 +443,6 @@ pub struct TextureDesc {
     pub texture: Texture,
     pub name: Option<String>,
     pub loc: Loc,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TextureFilter {
-    Nearest,
-    Bilinear,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum WrapMode {
-    Repeat,
-    Mirror,
-    Clamp,
 }
 
 #[derive(Clone, Debug)]
@@ -526,15 +490,6 @@ pub enum Texture {
     },
 }
 
-/// How the course's Perlin noise n ∈ [−1, 1] becomes a value in [0, 1].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NoiseConversion {
-    /// (n + 1) / 2 (`linear`, the lecture's "patch").
-    Linear,
-    /// |n| (`absval`, the lecture's "vein").
-    AbsVal,
-}
-
 // ---------------------------------------------------------------------------------------------
 // Emitters
 
@@ -542,14 +497,6 @@ pub enum NoiseConversion {
 pub struct EmitterDesc {
     pub emitter: Emitter,
     pub loc: Loc,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum EnvMapping {
-    /// Equirectangular (Mitsuba `envmap`).
-    LatLong,
-    /// Light probe (angular map, CENG795 `probe`).
-    Probe,
 }
 
 #[derive(Clone, Debug)]
@@ -612,15 +559,6 @@ pub struct Sensor {
     pub loc: Loc,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FovAxis {
-    X,
-    Y,
-    Diagonal,
-    Smaller,
-    Larger,
-}
-
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub projection: Projection,
@@ -629,54 +567,6 @@ pub struct Camera {
     pub to_world: Mat4,
     pub near_clip: f32,
     pub far_clip: f32,
-}
-
-#[derive(Clone, Debug)]
-pub enum Projection {
-    Perspective {
-        /// Degrees, measured along `fov_axis`.
-        fov: f32,
-        fov_axis: FovAxis,
-    },
-    ThinLens {
-        fov: f32,
-        fov_axis: FovAxis,
-        aperture_radius: f32,
-        focus_distance: f32,
-    },
-    /// Mitsuba's orthographic camera: the image covers [-1,1]² of the camera plane (scaled
-    /// by `to_world`).
-    Orthographic,
-    /// A pinhole whose image is the window [left, right] × [bottom, top] of the plane one
-    /// unit in front of the eye, in the image's own right/up coordinates (CENG795
-    /// `NearPlane` / `NearDistance`): off-axis when the window is not centred, non-square
-    /// pixels when its aspect differs from the film's.
-    Window {
-        left: f32,
-        right: f32,
-        bottom: f32,
-        top: f32,
-    },
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CropWindow {
-    pub offset_x: u32,
-    pub offset_y: u32,
-    pub width: u32,
-    pub height: u32,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum FilterDesc {
-    /// Box of the given radius (pixels); Mitsuba default 0.5.
-    Box { radius: f32 },
-    /// Tent (triangle) of the given radius; default 1.
-    Tent { radius: f32 },
-    /// Gaussian with standard deviation `stddev`, truncated at `radius` (Mitsuba: 0.5, 4σ = 2).
-    Gaussian { stddev: f32, radius: f32 },
-    /// Mitchell–Netravali with parameters B and C (radius 2).
-    Mitchell { b: f32, c: f32, radius: f32 },
 }
 
 #[derive(Clone, Debug)]
@@ -692,57 +582,8 @@ pub struct Film {
     pub tonemap: Option<Tonemap>,
 }
 
-/// A tone-mapping operator for display outputs.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Tonemap {
-    /// Reinhard et al. 2002 photographic global operator: scale by `key` / log-average
-    /// luminance, burn out the brightest `burn_percent` % of pixels, then colour
-    /// `saturation` and display `gamma` (CENG795 `TMO Photographic`).
-    Photographic {
-        key: f32,
-        burn_percent: f32,
-        saturation: f32,
-        gamma: f32,
-    },
-    /// The radiance is in display units 0–255 (CENG795 scenes without a `Tonemap`): an 8-bit
-    /// pixel is clamp(round(L), 0, 255) per channel, with no gamma.
-    DisplayUnits,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SamplerKind {
-    Independent,
-    Stratified,
-    Halton,
-    /// Owen-scrambled Sobol.
-    Sobol,
-}
-
-#[derive(Clone, Debug)]
-pub struct SamplerDesc {
-    pub kind: SamplerKind,
-    pub spp: u32,
-    pub seed: u64,
-}
-
-impl Default for SamplerDesc {
-    fn default() -> Self {
-        SamplerDesc {
-            kind: SamplerKind::Independent,
-            spp: 16,
-            seed: 0,
-        }
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Integrators
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MisHeuristic {
-    Balance,
-    Power,
-}
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum IntegratorDesc {
@@ -837,44 +678,6 @@ impl Default for PathDesc {
             only_depth: None,
         }
     }
-}
-
-/// When paths are terminated at random (and survivors reweighted, so the mean is unchanged).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum RussianRoulette {
-    Off,
-    /// Mitsuba: from `from_depth` segments on, continue with probability
-    /// min(max component of throughput × η², 0.95).
-    Throughput {
-        from_depth: u32,
-    },
-    /// The courses' rule: after `after` segments, terminate with fixed probability `q`.
-    Fixed {
-        after: u32,
-        q: f32,
-    },
-}
-
-/// How a path picks its next direction at a non-delta vertex.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DirectionSampling {
-    /// Importance sampling of the BSDF (the default).
-    Bsdf,
-    /// Uniform over the hemisphere of the shading normal on the side of `wo` (CS184 `-H`,
-    /// CENG795 without `ImportanceSampling`); transmission is not sampled.
-    UniformHemisphere,
-}
-
-/// How one emitter is chosen for next-event estimation.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LightSelection {
-    /// Every emitter equally likely (Mitsuba).
-    #[default]
-    Uniform,
-    /// Proportional to emitted power (alias table).
-    Power,
-    /// A light BVH over position and orientation bounds (Conty & Kulla 2018, as pbrt-v4).
-    Bvh,
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -155,7 +155,7 @@ impl BsdfModel for CourseMaterial {
 mod tests {
     use super::*;
     use crate::stats::Pcg32;
-    use scene::PhongModel;
+    use base::PhongModel;
 
     fn phong(kd: f32, ks: f32) -> PhongFamily {
         PhongFamily::new(

@@ -28,11 +28,11 @@ pub enum MicrofacetType {
     Ggx,
 }
 
-impl From<scene::model::MicrofacetDistribution> for MicrofacetType {
-    fn from(d: scene::model::MicrofacetDistribution) -> Self {
+impl From<base::MicrofacetDistribution> for MicrofacetType {
+    fn from(d: base::MicrofacetDistribution) -> Self {
         match d {
-            scene::model::MicrofacetDistribution::Ggx => MicrofacetType::Ggx,
-            scene::model::MicrofacetDistribution::Beckmann => MicrofacetType::Beckmann,
+            base::MicrofacetDistribution::Ggx => MicrofacetType::Ggx,
+            base::MicrofacetDistribution::Beckmann => MicrofacetType::Beckmann,
         }
     }
 }

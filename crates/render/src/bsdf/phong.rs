@@ -31,7 +31,7 @@ use super::reflect_z_about;
 use super::{BsdfModel, BsdfSample, TransportMode, mean, mixture_reflection_sample, reflect_z};
 use crate::math::{Frame, INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
-use scene::PhongModel;
+use base::PhongModel;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PhongFamily {

@@ -60,7 +60,7 @@
 
 use super::{Filter, Image, filter};
 use crate::math::{IVec2, UVec2, Vec2, Vec3};
-use scene::CropWindow;
+use base::CropWindow;
 
 /// The sums of one pixel (see the module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -529,7 +529,7 @@ fn floor_to_int(v: Vec2) -> IVec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use scene::FilterDesc;
+    use base::FilterDesc;
 
     #[test]
     fn floor_to_int_is_floor() {

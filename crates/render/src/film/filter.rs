@@ -21,7 +21,7 @@
 //! and every radius at [`MAX_RADIUS`], which bounds the border of a film tile.
 
 use crate::math::Vec2;
-use scene::FilterDesc;
+use base::FilterDesc;
 
 /// Largest filter radius, in pixels (a film tile stores a border this wide around its pixels).
 pub const MAX_RADIUS: f32 = 16.0;

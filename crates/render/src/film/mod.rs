@@ -17,3 +17,14 @@ pub mod tonemap;
 pub use accum::{Film, FilmTile, PixelSums};
 pub use filter::Filter;
 pub use image::Image;
+
+/// The film a scene renders to: its size, optional crop window, reconstruction filter and
+/// the tone mapping of its 8-bit outputs (`None`: clamp and the sRGB curve).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmSettings {
+    pub width: u32,
+    pub height: u32,
+    pub crop: Option<base::CropWindow>,
+    pub filter: Filter,
+    pub tonemap: Option<base::Tonemap>,
+}

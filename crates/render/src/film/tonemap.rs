@@ -11,7 +11,7 @@
 
 use super::Image;
 use crate::math::Vec3;
-use scene::Tonemap;
+use base::Tonemap;
 
 const LUM: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 

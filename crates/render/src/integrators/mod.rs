@@ -8,9 +8,7 @@ mod aov;
 mod direct;
 pub mod path;
 
-use scene::{IntegratorDesc, NoriIntegrator};
-
-use self::path::{Combine, PathConfig};
+use self::path::PathConfig;
 
 use crate::camera::CameraRay;
 use crate::math::Vec3;
@@ -43,38 +41,6 @@ pub enum Integrator {
 pub struct UnsupportedIntegrator(pub String);
 
 impl Integrator {
-    pub fn from_desc(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegrator> {
-        Ok(match desc {
-            IntegratorDesc::Normals => Integrator::Normals,
-            IntegratorDesc::Albedo => Integrator::Albedo,
-            IntegratorDesc::Depth => Integrator::Depth,
-            IntegratorDesc::AmbientOcclusion { samples, length } => Integrator::AmbientOcclusion {
-                samples: (*samples).max(1),
-                length: length.unwrap_or(f32::INFINITY),
-            },
-            IntegratorDesc::Path(d) => Integrator::Path(PathConfig::from_desc(d)),
-            IntegratorDesc::Direct {
-                emitter_samples,
-                bsdf_samples,
-            } => Integrator::Direct {
-                emitter_samples: *emitter_samples,
-                bsdf_samples: *bsdf_samples,
-            },
-            IntegratorDesc::Whitted { max_depth } => {
-                Integrator::Path(PathConfig::whitted(*max_depth))
-            }
-            IntegratorDesc::NoriSimple => Integrator::Path(nori(2, Combine::EmitterOnly)),
-            IntegratorDesc::Nori(n) => Integrator::Path(match n {
-                NoriIntegrator::DirectEms => nori(2, Combine::EmitterOnly),
-                NoriIntegrator::DirectMats => nori(2, Combine::BsdfOnly),
-                NoriIntegrator::DirectMis => nori(2, Combine::Balance),
-                NoriIntegrator::PathEms => nori(u32::MAX, Combine::EmitterOnly),
-                NoriIntegrator::PathMats => nori(u32::MAX, Combine::BsdfOnly),
-                NoriIntegrator::PathMis => nori(u32::MAX, Combine::Balance),
-            }),
-        })
-    }
-
     pub fn name(&self) -> &'static str {
         match self {
             Integrator::Normals => "normals",
@@ -128,14 +94,5 @@ impl Integrator {
         while let Some((tag, cray)) = next(&mut sampler) {
             done(tag, self.li(scene, &cray, &mut sampler));
         }
-    }
-}
-
-/// Nori's unbiased estimators: Russian roulette from the third bounce, no depth limit unless
-/// `max_depth` (direct lighting: 2 segments).
-fn nori(max_depth: u32, combine: Combine) -> PathConfig {
-    PathConfig {
-        max_depth,
-        ..PathConfig::mitsuba(-1, 3, false, combine)
     }
 }

@@ -15,7 +15,7 @@
 //! A [`PathRecorder`] sees every vertex, scattering event and contribution of a path (render
 //! layers, the path visualiser); [`NoRecorder`] compiles to nothing.
 
-use scene::{DirectionSampling, RussianRoulette};
+use base::{DirectionSampling, RussianRoulette};
 
 use crate::accel::Hit;
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
@@ -91,23 +91,12 @@ impl PathConfig {
         }
     }
 
-    /// The path tracer a scene description asks for.
-    pub fn from_desc(d: &scene::PathDesc) -> Self {
-        let combine = match (d.nee, d.mis) {
-            (false, _) => Combine::BsdfOnly,
-            (true, scene::MisHeuristic::Power) => Combine::Power,
-            (true, scene::MisHeuristic::Balance) => Combine::Balance,
-        };
+    /// Nori's unbiased estimators: Russian roulette from the third bounce, no depth limit
+    /// unless `max_depth` (direct lighting: 2 segments).
+    pub fn nori(max_depth: u32, combine: Combine) -> Self {
         PathConfig {
-            rr: d.rr,
-            directions: d.directions,
-            light_samples: d.light_samples.max(1),
-            all_lights: d.all_lights,
-            splitting: d.splitting.max(1),
-            caustics: d.caustics,
-            clamp: d.clamp,
-            only_depth: d.only_depth,
-            ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
+            max_depth,
+            ..PathConfig::mitsuba(-1, 3, false, combine)
         }
     }
 

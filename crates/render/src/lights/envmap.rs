@@ -3,7 +3,7 @@
 //! luminance weighted by sin θ; or a light probe (Debevec's angular map), sampled uniformly.
 //! Local directions map to uv = (atan2(x, −z) / 2π, acos(y) / π), y up, as in Mitsuba.
 
-use scene::EnvMapping;
+use base::EnvMapping;
 
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};

@@ -8,7 +8,7 @@
 //! bounding radius r: π r²·E (directional), 4π·π r²·L̄ (constant and environment maps, L̄ the
 //! solid-angle mean). Textured emitters use the mean of an 8×8 grid of texture lookups.
 
-use scene::LightSelection;
+use base::LightSelection;
 
 use crate::math::{Vec2, Vec3};
 use crate::sampling::distrib::AliasTable;

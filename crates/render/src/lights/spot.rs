@@ -27,7 +27,7 @@ impl SpotLight {
         intensity: Vec3,
         cutoff_deg: f32,
         beam_deg: f32,
-        falloff: scene::SpotFalloff,
+        falloff: base::SpotFalloff,
     ) -> SpotLight {
         let cutoff = cutoff_deg.to_radians();
         let beam = beam_deg.to_radians().min(cutoff);
@@ -44,7 +44,7 @@ impl SpotLight {
             } else {
                 0.0
             },
-            course: falloff == scene::SpotFalloff::Cosine4,
+            course: falloff == base::SpotFalloff::Cosine4,
         }
     }
 
@@ -141,8 +141,8 @@ mod tests {
     fn course_spot_profile() {
         let light = |falloff| SpotLight::new(&Mat4::IDENTITY, Vec3::ONE, 30.0, 10.0, falloff);
         let at = |l: &SpotLight, deg: f32| l.falloff(deg.to_radians().cos());
-        let course = light(scene::SpotFalloff::Cosine4);
-        let mitsuba = light(scene::SpotFalloff::Mitsuba);
+        let course = light(base::SpotFalloff::Cosine4);
+        let mitsuba = light(base::SpotFalloff::Mitsuba);
         for deg in [0.0f32, 5.0, 9.9] {
             assert_eq!(at(&course, deg), 1.0);
         }

@@ -9,7 +9,7 @@
 //! thread count or the tile order, progressive passes can resume, and a render split across
 //! machines by sample index merges exactly.
 //!
-//! Kinds (`scene::SamplerKind`):
+//! Kinds (`base::SamplerKind`):
 //! - **Independent**: a counter-based generator: dimension `d` of a sample is SplitMix64's
 //!   output for the state `key + (d + 1)·γ`, `key = hash(seed, pixel, index)`.
 //! - **Stratified**: 1D draws are jittered strata `(π(index) + ξ)/spp` with a per-(pixel,
@@ -41,7 +41,7 @@
 
 use crate::math::{UVec2, Vec2};
 use crate::sampling::distrib::ONE_MINUS_EPSILON;
-use scene::SamplerKind;
+use base::SamplerKind;
 
 // ---------------------------------------------------------------------------------------------
 // Hashing

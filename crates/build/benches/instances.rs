@@ -10,8 +10,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use render::build::{BuildOptions, build};
-use render::integrators::Integrator;
+use build::{BuildOptions, build};
 use render::render::{RenderOptions, Silent, render};
 use scene::formats::ply::write_ply;
 use scene::{Document, LoadOptions, TriMesh, Vec3};
@@ -134,7 +133,7 @@ fn main() {
     };
     let t_load = t0.elapsed();
     let t1 = Instant::now();
-    let scene = build(&desc, &BuildOptions::default()).expect("build");
+    let build::Built { scene, integrator } = build(&desc, &BuildOptions::default()).expect("build");
     let t_build = t1.elapsed();
     let peak = peak_rss_kb();
     let total = t0.elapsed();
@@ -170,8 +169,6 @@ fn main() {
         "bottom-level trees + instances + top level: {:.1} MB",
         accel_bytes as f64 / 1.0e6
     );
-
-    let integrator = Integrator::from_desc(&scene.integrator).expect("integrator");
     let t2 = Instant::now();
     let out = render(
         &scene,

@@ -18,10 +18,10 @@
 
 use std::path::{Path, PathBuf};
 
-use render::build::BuildOptions;
+use build::BuildOptions;
+use build::render_desc;
 use render::compare::{TestImages, compare, load_reference, rel_mse};
 use render::film::Image;
-use render::render::render_desc;
 use scene::{Document, LoadOptions};
 
 const BATCHES: u64 = 16;

@@ -6,10 +6,9 @@
 //! the image mean must be within 1% of 1, and a z-test of the mean against 1 (standard error
 //! from the per-pixel sample variances) must not reject at α = 0.001 per material.
 
+use build::{BuildOptions, build};
 use glam::{Mat4, Vec3};
-use render::build::{BuildOptions, build};
 use render::compare::image_mean;
-use render::integrators::Integrator;
 use render::render::{RenderOptions, Silent, render};
 use scene::{
     Camera, ColorParam, Emitter, EmitterDesc, FilterDesc, FovAxis, IntegratorDesc, Material,
@@ -82,8 +81,7 @@ fn furnace_with_fov(material: Material, fov: f32) -> (f64, f64) {
         name: None,
         loc: Default::default(),
     });
-    let scene = build(&desc, &BuildOptions::default()).unwrap();
-    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
+    let build::Built { scene, integrator } = build(&desc, &BuildOptions::default()).unwrap();
     let out = render(
         &scene,
         &integrator,

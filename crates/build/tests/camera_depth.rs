@@ -1,9 +1,8 @@
 //! Camera rays are exact: depth images of analytic scenes equal the analytically computed
 //! distances within 1e-4 relative.
 
+use build::{BuildOptions, build};
 use glam::{DVec3, Mat4, Vec3};
-use render::build::{BuildOptions, build};
-use render::integrators::Integrator;
 use render::math::Vec2;
 use render::render::{RenderOptions, Silent, render};
 use scene::{
@@ -127,7 +126,7 @@ fn perspective_depth_matches_analytic_distances() {
         ),
     ];
     let desc = scene_with(camera, shapes, w, h);
-    let scene = build(&desc, &BuildOptions::default()).unwrap();
+    let scene = build(&desc, &BuildOptions::default()).unwrap().scene;
     let mut checked = 0;
     for j in 0..h {
         for i in 0..w {
@@ -179,8 +178,7 @@ fn orthographic_depth_image_of_a_facing_plane_is_exact() {
     };
     let plane = shape(Shape::Rectangle, Mat4::from_scale(Vec3::splat(10.0)));
     let desc = scene_with(camera, vec![plane], 16, 12);
-    let scene = build(&desc, &BuildOptions::default()).unwrap();
-    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
+    let build::Built { scene, integrator } = build(&desc, &BuildOptions::default()).unwrap();
     let out = render(
         &scene,
         &integrator,

@@ -15,14 +15,14 @@
 use rayon::prelude::*;
 use scene::{MaterialId, SceneDesc, TestDesc, TestKind};
 
-use crate::bsdf::{Bsdf, TransportMode};
-use crate::build::{BuildError, BuildOptions, build};
-use crate::integrators::{Integrator, UnsupportedIntegrator};
-use crate::math::{UVec2, Vec3};
-use crate::sampling::Sampler;
-use crate::sampling::warp::square_to_cosine_hemisphere;
-use crate::stats::{Chi2Config, MeanVar, Pcg32, chi2_test, sidak};
-use crate::textures::ConstantParams;
+use crate::{BuildError, BuildOptions, Built, build};
+use render::bsdf::{Bsdf, TransportMode};
+use render::integrators::UnsupportedIntegrator;
+use render::math::{UVec2, Vec3};
+use render::sampling::Sampler;
+use render::sampling::warp::square_to_cosine_hemisphere;
+use render::stats::{Chi2Config, MeanVar, Pcg32, chi2_test, sidak};
+use render::textures::ConstantParams;
 
 #[derive(Clone, Debug)]
 pub struct CaseResult {
@@ -68,7 +68,7 @@ fn bsdf_of(desc: &SceneDesc, id: MaterialId) -> Result<Bsdf, TestError> {
         .materials
         .get(id.0 as usize)
         .ok_or_else(|| TestError::Malformed(format!("material {} does not exist", id.0)))?;
-    crate::build::material_kind(&m.material)
+    crate::material_kind(&m.material)
         .map(|k| k.bsdf(&ConstantParams, Default::default()))
         .ok_or_else(|| {
             TestError::Malformed(format!(
@@ -81,8 +81,7 @@ fn bsdf_of(desc: &SceneDesc, id: MaterialId) -> Result<Bsdf, TestError> {
 
 /// Mean and variance of the luminance of `n` camera samples of `desc`.
 fn scene_estimate(desc: &SceneDesc, n: u64, seed: u64) -> Result<MeanVar, TestError> {
-    let scene = build(desc, &BuildOptions::default())?;
-    let integrator = Integrator::from_desc(&scene.integrator)?;
+    let Built { scene, integrator } = build(desc, &BuildOptions::default())?;
     let (w, h) = (scene.film.width.max(1), scene.film.height.max(1));
     const CHUNK: u64 = 4096;
     let chunks: Vec<MeanVar> = (0..n.div_ceil(CHUNK))
@@ -96,7 +95,7 @@ fn scene_estimate(desc: &SceneDesc, n: u64, seed: u64) -> Result<MeanVar, TestEr
                     (pick.next_u32() % w).min(w - 1),
                     (pick.next_u32() % h).min(h - 1),
                 );
-                let (_, cray) = crate::render::camera_sample(&scene, &mut sampler, px, k as u32);
+                let (_, cray) = render::render::camera_sample(&scene, &mut sampler, px, k as u32);
                 let v = luminance(integrator.li(&scene, &cray, &mut sampler));
                 mv.push(if v.is_finite() { v } else { 0.0 });
             }

@@ -7,8 +7,8 @@
 
 use std::sync::Arc;
 
+use build::{BuildOptions, build};
 use glam::{Mat4, Vec3};
-use render::build::{BuildOptions, build};
 use render::film::Image;
 use render::geometry::Ray;
 use render::lights::Receiver;
@@ -261,7 +261,7 @@ fn emitter_sampling_matches_its_pdf() {
     let mut failures = Vec::new();
     let mut seed = 1;
     for (name, desc, receivers) in &cases {
-        let scene = build(desc, &BuildOptions::default()).unwrap();
+        let scene = build(desc, &BuildOptions::default()).unwrap().scene;
         assert_eq!(scene.lights.len(), 1, "{name}");
         for p in receivers {
             let (ok, msg) = test_light(&scene, *p, level, seed);

@@ -2,8 +2,8 @@
 //! each ellipsoid's silhouette through the pixel centres equals the analytic one, pixel for
 //! pixel, and an emissive ellipsoid's light sampling has the density it claims.
 
+use build::{BuildOptions, build};
 use glam::{DMat4, DVec3};
-use render::build::{BuildOptions, build};
 use render::math::{Mat4, PVec3, Vec2, Vec3};
 use render::shapes::Ellipsoid;
 use scene::{Document, LoadOptions, Shape};
@@ -43,7 +43,7 @@ fn ellipsoid_silhouettes_are_pixel_exact() {
             resolution: Some((200, 200)),
             ..Default::default()
         };
-        let scene = build(&one, &opts).unwrap();
+        let scene = build(&one, &opts).unwrap().scene;
         let frame =
             (s.to_world * Mat4::from_translation(center) * Mat4::from_scale(PVec3::splat(radius)))
                 .as_dmat4();

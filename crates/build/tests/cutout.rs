@@ -11,9 +11,9 @@
 //! - a fully opaque mask (α = 1) is an ordinary surface and α = 0 an absent one;
 //! - an opacity bitmap with an alpha channel (an RGBA `map_d`) uses that channel, not red.
 
-use render::build::BuildOptions;
+use build::BuildOptions;
+use build::render_desc;
 use render::compare::image_mean;
-use render::render::render_desc;
 use scene::{Document, LoadOptions};
 
 fn scene(body: &str, name: &str) -> scene::SceneDesc {

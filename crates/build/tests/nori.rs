@@ -24,7 +24,7 @@ fn nori_test_files_pass() {
         let Document::Test(test) = scene::load(f, &LoadOptions::default()).expect("loads") else {
             continue;
         };
-        let report = render::nori_tests::run(&test, 0).expect("runs");
+        let report = build::nori_tests::run(&test, 0).expect("runs");
         for c in &report.cases {
             println!(
                 "{}: {} {}: p = {:.3e} ({})",

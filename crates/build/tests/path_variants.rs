@@ -11,13 +11,12 @@
 //! sphere and a glass sphere (delta chains for splitting and caustics for brute force), and a
 //! fixed depth of 6 segments so that "no Russian roulette" terminates.
 
-use render::build::{BuildOptions, build};
+use build::render_desc;
+use build::{BuildOptions, build};
 use render::compare::{Reference, TestImages, compare};
 use render::film::Image;
-use render::integrators::Integrator;
 use render::math::{UVec2, Vec3};
 use render::render::camera_sample;
-use render::render::render_desc;
 use render::sampling::Sampler;
 use scene::{
     DirectionSampling, Document, IntegratorDesc, LoadOptions, MisHeuristic, PathDesc,
@@ -240,7 +239,7 @@ fn batched_paths_equal_one_at_a_time() {
         },
     ));
     for (name, path) in configs {
-        let scene = build(
+        let build::Built { scene, integrator } = build(
             &desc,
             &BuildOptions {
                 spp: Some(SPP),
@@ -250,7 +249,6 @@ fn batched_paths_equal_one_at_a_time() {
             },
         )
         .unwrap();
-        let integrator = Integrator::from_desc(&scene.integrator).unwrap();
         let template = Sampler::new(scene.sampler.kind, SPP, scene.sampler.seed);
         let samples: Vec<(UVec2, u32)> = (0..32)
             .flat_map(|y| (0..32).map(move |x| UVec2::new(x, y)))

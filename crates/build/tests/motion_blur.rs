@@ -9,9 +9,8 @@
 //! Bernoulli mean 1 − c (variance c(1 − c)/n), at a family-wise α = 1e-4 with Bonferroni over
 //! the tested pixels. Fixed seed.
 
+use build::{BuildOptions, build};
 use glam::{Mat4, Vec3};
-use render::build::{BuildOptions, build};
-use render::integrators::Integrator;
 use render::math::Vec2;
 use render::render::{RenderOptions, Silent, render};
 use scene::{
@@ -152,9 +151,8 @@ impl SqrtOrNeg for f32 {
 fn time_averaged_coverage_matches_the_analytic_fraction() {
     let (w, h, spp) = (32u32, 32u32, 2048u32);
     let desc = scene_desc(w, h, spp);
-    let scene = build(&desc, &BuildOptions::default()).unwrap();
+    let build::Built { scene, integrator } = build(&desc, &BuildOptions::default()).unwrap();
     assert!(scene.has_motion);
-    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
     let img = render(
         &scene,
         &integrator,
@@ -220,9 +218,19 @@ fn static_scenes_draw_no_time() {
     for s in &mut desc.shapes {
         s.motion = None;
     }
-    assert!(!build(&desc, &BuildOptions::default()).unwrap().has_motion);
+    assert!(
+        !build(&desc, &BuildOptions::default())
+            .unwrap()
+            .scene
+            .has_motion
+    );
     for s in &mut desc.shapes {
         s.motion = Some(Vec3::ZERO);
     }
-    assert!(!build(&desc, &BuildOptions::default()).unwrap().has_motion);
+    assert!(
+        !build(&desc, &BuildOptions::default())
+            .unwrap()
+            .scene
+            .has_motion
+    );
 }

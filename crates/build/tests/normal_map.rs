@@ -6,12 +6,12 @@
 //! - the map is applied: under an overhead directional light the same plane's shading varies
 //!   with the perturbed normals (cos θ′), while the plane without the map is uniform.
 
-use render::build::BuildOptions;
+use build::BuildOptions;
+use build::render_desc;
 use render::compare::image_mean;
 use render::film::Image;
 use render::image_io::write_image;
 use render::math::Vec3;
-use render::render::render_desc;
 use scene::{Document, LoadOptions};
 
 fn dir() -> std::path::PathBuf {

@@ -12,12 +12,10 @@
 
 use std::path::PathBuf;
 
-use render::build::{BuildOptions, build};
+use build::{BuildOptions, Built, build};
 use render::compare::{CompareOptions, Reference, TestImages, compare_with};
 use render::film::Image;
-use render::integrators::Integrator;
 use render::render::{RenderOptions, Silent, render};
-use render::world::Scene;
 use scene::{Document, IntegratorDesc, PathDesc};
 
 /// An octahedron with smooth normals, placed four times: the base mesh (rotated), an instance
@@ -130,7 +128,7 @@ fn build_with(
     flatten: bool,
     integrator: IntegratorDesc,
     seed: u64,
-) -> Scene {
+) -> Built {
     build(
         desc,
         &BuildOptions {
@@ -143,11 +141,10 @@ fn build_with(
     .unwrap()
 }
 
-fn render_image(scene: &Scene, spp: u32) -> Image {
-    let integrator = Integrator::from_desc(&scene.integrator).unwrap();
+fn render_image(built: &Built, spp: u32) -> Image {
     render(
-        scene,
-        &integrator,
+        &built.scene,
+        &built.integrator,
         &RenderOptions {
             spp,
             ..Default::default()
@@ -161,8 +158,8 @@ fn render_image(scene: &Scene, spp: u32) -> Image {
 #[test]
 fn the_scene_is_instanced() {
     let desc = load();
-    let inst = build_with(&desc, false, IntegratorDesc::Depth, 1);
-    let flat = build_with(&desc, true, IntegratorDesc::Depth, 1);
+    let inst = build_with(&desc, false, IntegratorDesc::Depth, 1).scene;
+    let flat = build_with(&desc, true, IntegratorDesc::Depth, 1).scene;
     // One prototype (the octahedron, used by four shapes), none when flattened.
     assert_eq!(inst.accel.instancing_stats().0, 1);
     assert_eq!(flat.accel.instancing_stats().0, 0);
@@ -182,7 +179,7 @@ fn depth_and_normals_equal_the_flattened_scene() {
 fn mitsuba_shapegroup_instances_equal_the_flattened_scene() {
     let desc = load_files(&[("scene.xml", MITSUBA), ("octa.obj", OCTA_OBJ)]);
     assert_eq!(desc.shapes.len(), 7);
-    let inst = build_with(&desc, false, IntegratorDesc::Depth, 1);
+    let inst = build_with(&desc, false, IntegratorDesc::Depth, 1).scene;
     assert_eq!(
         inst.accel.instancing_stats().0,
         1,
@@ -251,7 +248,7 @@ fn emitting_instances_are_flattened() {
         <transform name="to_world"><translate x="3"/></transform></shape>
 </scene>"#;
     let desc = load_files(&[("scene.xml", xml), ("octa.obj", OCTA_OBJ)]);
-    let scene = build(&desc, &BuildOptions::default()).unwrap();
+    let scene = build(&desc, &BuildOptions::default()).unwrap().scene;
     assert_eq!(scene.accel.instancing_stats().0, 0);
     assert_eq!(scene.lights.len(), 2);
 }

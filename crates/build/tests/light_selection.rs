@@ -19,13 +19,13 @@
 
 use std::path::PathBuf;
 
+use build::render_desc;
+use build::{BuildOptions, build};
 use glam::Vec3;
-use render::build::{BuildOptions, build};
 use render::compare::{CompareOptions, Reference, TestImages, compare_with};
 use render::film::Image;
 use render::geometry::Ray;
 use render::lights::Receiver;
-use render::render::render_desc;
 use render::stats::{Pcg32, sidak};
 use render::world::Scene;
 use scene::{Document, LightSelection, LoadOptions, SceneDesc};
@@ -60,6 +60,7 @@ fn built(desc: &SceneDesc, sel: LightSelection) -> Scene {
         },
     )
     .expect("scene builds")
+    .scene
 }
 
 /// Receivers on the scene's surfaces: hits of rays from random points in the room.

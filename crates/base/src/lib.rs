@@ -1,0 +1,223 @@
+//! The vocabulary both the scene description and the renderer speak: kinds and modes that
+//! are plain values (a wrap mode, a sampler kind, a tone-mapping operator, a camera
+//! projection), and `read_file`. Loaders write these into the scene model; the renderer's
+//! runtime objects keep them as they are. Anything that refers to other scene elements (ids,
+//! textures, files to load) is scene model, in `penumbra-scene`, and only `penumbra-build`
+//! turns it into runtime objects.
+
+use std::path::Path;
+
+/// Read a whole file, refusing anything but a regular file first: a device such as
+/// `/dev/zero` or a FIFO named as a mesh or texture would otherwise be read until memory runs
+/// out, or block for ever.
+pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file",
+        ));
+    }
+    std::fs::read(path)
+}
+
+/// The profile of a spot light between its full-intensity cone and its cutoff.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpotFalloff {
+    /// Mitsuba 3: linear in the angle from the beam width to the cutoff.
+    #[default]
+    Mitsuba,
+    /// The CENG795/CENG477 course: ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴.
+    Cosine4,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MicrofacetDistribution {
+    Ggx,
+    Beckmann,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhongModel {
+    OriginalPhong,
+    ModifiedPhong,
+    OriginalBlinnPhong,
+    ModifiedBlinnPhong,
+    TorranceSparrow,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureFilter {
+    Nearest,
+    Bilinear,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WrapMode {
+    Repeat,
+    Mirror,
+    Clamp,
+}
+
+/// How the course's Perlin noise n ∈ [−1, 1] becomes a value in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoiseConversion {
+    /// (n + 1) / 2 (`linear`, the lecture's "patch").
+    Linear,
+    /// |n| (`absval`, the lecture's "vein").
+    AbsVal,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvMapping {
+    /// Equirectangular (Mitsuba `envmap`).
+    LatLong,
+    /// Light probe (angular map, CENG795 `probe`).
+    Probe,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    X,
+    Y,
+    Diagonal,
+    Smaller,
+    Larger,
+}
+
+#[derive(Clone, Debug)]
+pub enum Projection {
+    Perspective {
+        /// Degrees, measured along `fov_axis`.
+        fov: f32,
+        fov_axis: FovAxis,
+    },
+    ThinLens {
+        fov: f32,
+        fov_axis: FovAxis,
+        aperture_radius: f32,
+        focus_distance: f32,
+    },
+    /// Mitsuba's orthographic camera: the image covers [-1,1]² of the camera plane (scaled
+    /// by `to_world`).
+    Orthographic,
+    /// A pinhole whose image is the window [left, right] × [bottom, top] of the plane one
+    /// unit in front of the eye, in the image's own right/up coordinates (CENG795
+    /// `NearPlane` / `NearDistance`): off-axis when the window is not centred, non-square
+    /// pixels when its aspect differs from the film's.
+    Window {
+        left: f32,
+        right: f32,
+        bottom: f32,
+        top: f32,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CropWindow {
+    pub offset_x: u32,
+    pub offset_y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    /// Box of the given radius (pixels); Mitsuba default 0.5.
+    Box { radius: f32 },
+    /// Tent (triangle) of the given radius; default 1.
+    Tent { radius: f32 },
+    /// Gaussian with standard deviation `stddev`, truncated at `radius` (Mitsuba: 0.5, 4σ = 2).
+    Gaussian { stddev: f32, radius: f32 },
+    /// Mitchell–Netravali with parameters B and C (radius 2).
+    Mitchell { b: f32, c: f32, radius: f32 },
+}
+
+/// A tone-mapping operator for display outputs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Tonemap {
+    /// Reinhard et al. 2002 photographic global operator: scale by `key` / log-average
+    /// luminance, burn out the brightest `burn_percent` % of pixels, then colour
+    /// `saturation` and display `gamma` (CENG795 `TMO Photographic`).
+    Photographic {
+        key: f32,
+        burn_percent: f32,
+        saturation: f32,
+        gamma: f32,
+    },
+    /// The radiance is in display units 0–255 (CENG795 scenes without a `Tonemap`): an 8-bit
+    /// pixel is clamp(round(L), 0, 255) per channel, with no gamma.
+    DisplayUnits,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerKind {
+    Independent,
+    Stratified,
+    Halton,
+    /// Owen-scrambled Sobol.
+    Sobol,
+}
+
+#[derive(Clone, Debug)]
+pub struct SamplerDesc {
+    pub kind: SamplerKind,
+    pub spp: u32,
+    pub seed: u64,
+}
+
+impl Default for SamplerDesc {
+    fn default() -> Self {
+        SamplerDesc {
+            kind: SamplerKind::Independent,
+            spp: 16,
+            seed: 0,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MisHeuristic {
+    Balance,
+    Power,
+}
+
+/// When paths are terminated at random (and survivors reweighted, so the mean is unchanged).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RussianRoulette {
+    Off,
+    /// Mitsuba: from `from_depth` segments on, continue with probability
+    /// min(max component of throughput × η², 0.95).
+    Throughput {
+        from_depth: u32,
+    },
+    /// The courses' rule: after `after` segments, terminate with fixed probability `q`.
+    Fixed {
+        after: u32,
+        q: f32,
+    },
+}
+
+/// How a path picks its next direction at a non-delta vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DirectionSampling {
+    /// Importance sampling of the BSDF (the default).
+    Bsdf,
+    /// Uniform over the hemisphere of the shading normal on the side of `wo` (CS184 `-H`,
+    /// CENG795 without `ImportanceSampling`); transmission is not sampled.
+    UniformHemisphere,
+}
+
+/// How one emitter is chosen for next-event estimation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSelection {
+    /// Every emitter equally likely (Mitsuba).
+    #[default]
+    Uniform,
+    /// Proportional to emitted power (alias table).
+    Power,
+    /// A light BVH over position and orientation bounds (Conty & Kulla 2018, as pbrt-v4).
+    Bvh,
+}
+
+pub mod testing;

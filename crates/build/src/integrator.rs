@@ -1,0 +1,56 @@
+//! Integrator factories: the scene's integrator description to the runtime integrator.
+
+use render::integrators::path::{Combine, PathConfig};
+use render::integrators::{Integrator, UnsupportedIntegrator};
+use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
+
+/// The integrator a scene description asks for.
+pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegrator> {
+    Ok(match desc {
+        IntegratorDesc::Normals => Integrator::Normals,
+        IntegratorDesc::Albedo => Integrator::Albedo,
+        IntegratorDesc::Depth => Integrator::Depth,
+        IntegratorDesc::AmbientOcclusion { samples, length } => Integrator::AmbientOcclusion {
+            samples: (*samples).max(1),
+            length: length.unwrap_or(f32::INFINITY),
+        },
+        IntegratorDesc::Path(d) => Integrator::Path(path_config(d)),
+        IntegratorDesc::Direct {
+            emitter_samples,
+            bsdf_samples,
+        } => Integrator::Direct {
+            emitter_samples: *emitter_samples,
+            bsdf_samples: *bsdf_samples,
+        },
+        IntegratorDesc::Whitted { max_depth } => Integrator::Path(PathConfig::whitted(*max_depth)),
+        IntegratorDesc::NoriSimple => Integrator::Path(PathConfig::nori(2, Combine::EmitterOnly)),
+        IntegratorDesc::Nori(n) => Integrator::Path(match n {
+            NoriIntegrator::DirectEms => PathConfig::nori(2, Combine::EmitterOnly),
+            NoriIntegrator::DirectMats => PathConfig::nori(2, Combine::BsdfOnly),
+            NoriIntegrator::DirectMis => PathConfig::nori(2, Combine::Balance),
+            NoriIntegrator::PathEms => PathConfig::nori(u32::MAX, Combine::EmitterOnly),
+            NoriIntegrator::PathMats => PathConfig::nori(u32::MAX, Combine::BsdfOnly),
+            NoriIntegrator::PathMis => PathConfig::nori(u32::MAX, Combine::Balance),
+        }),
+    })
+}
+
+/// The path tracer a scene description asks for.
+pub fn path_config(d: &PathDesc) -> PathConfig {
+    let combine = match (d.nee, d.mis) {
+        (false, _) => Combine::BsdfOnly,
+        (true, MisHeuristic::Power) => Combine::Power,
+        (true, MisHeuristic::Balance) => Combine::Balance,
+    };
+    PathConfig {
+        rr: d.rr,
+        directions: d.directions,
+        light_samples: d.light_samples.max(1),
+        all_lights: d.all_lights,
+        splitting: d.splitting.max(1),
+        caustics: d.caustics,
+        clamp: d.clamp,
+        only_depth: d.only_depth,
+        ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
+    }
+}

@@ -1,0 +1,223 @@
+//! The step from scene description to renderable scene: `SceneDesc` → [`Built`] (the runtime
+//! [`Scene`]: world-space geometry and its BVH, decoded textures, resolved materials, lights,
+//! the chosen sensor's camera, film and sampler settings; and the runtime [`Integrator`]).
+//!
+//! This crate is the boundary: the only code that reads both the scene model
+//! (`penumbra-scene`) and the renderer (`penumbra-render`). The renderer does not depend on
+//! the scene model at all, so the compiler keeps it that way. A factory per kind of object:
+//! [`shapes`], [`materials`], [`textures`], [`lights`], [`camera`], [`integrator`].
+
+pub mod camera;
+pub mod integrator;
+mod lights;
+mod materials;
+pub mod nori_tests;
+mod shapes;
+mod textures;
+
+pub use materials::material_kind;
+pub use shapes::{cube_mesh, rectangle_mesh};
+
+use render::accel::Accel;
+use render::film::{FilmSettings, Filter};
+use render::integrators::Integrator;
+use render::lights::select::LightSampler;
+use render::math::Vec3;
+use render::render::{RenderOptions, RenderOutcome, Silent, render};
+use render::shapes::ShapeGeom;
+use render::textures::Textures;
+use render::world::Scene;
+use scene::{IntegratorDesc, LightSelection, Loc, Material, MaterialId, SceneDesc};
+
+/// A problem found while building (unreadable texture, unsupported feature).
+#[derive(Clone, Debug, thiserror::Error)]
+#[error("{loc}: {message}")]
+pub struct BuildError {
+    pub loc: Loc,
+    pub message: String,
+}
+
+/// Command-line overrides applied on top of the scene's own settings.
+#[derive(Clone, Debug, Default)]
+pub struct BuildOptions {
+    /// Which sensor to render (index into `SceneDesc::sensors`).
+    pub sensor: usize,
+    pub spp: Option<u32>,
+    pub resolution: Option<(u32, u32)>,
+    pub seed: Option<u64>,
+    pub integrator: Option<IntegratorDesc>,
+    /// Overrides `SceneDesc::light_selection`.
+    pub light_selection: Option<LightSelection>,
+    /// Copy shared meshes into world space instead of instancing them (see [`build`]): the
+    /// reference the instanced build is tested against.
+    pub flatten_instances: bool,
+}
+
+/// What [`build`] makes: the scene and the integrator to render it with.
+pub struct Built {
+    pub scene: Scene,
+    pub integrator: Integrator,
+}
+
+/// Turn a loaded scene into a renderable one.
+pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError> {
+    let sensor = desc.sensors.get(opts.sensor).ok_or_else(|| BuildError {
+        loc: Loc::file(&desc.source),
+        message: format!(
+            "the scene has {} sensor(s); sensor {} does not exist",
+            desc.sensors.len(),
+            opts.sensor
+        ),
+    })?;
+
+    let (materials, default_material) = materials::materials(&desc.materials)?;
+    let shapes::Shapes {
+        mut shapes,
+        protos,
+        warning,
+    } = shapes::shapes(desc, opts, &materials, default_material)?;
+    let mut warnings: Vec<String> = warning.into_iter().collect();
+    let has_motion = shapes
+        .iter()
+        .any(|s| matches!(&s.geom, ShapeGeom::Instance(i) if i.motion != Vec3::ZERO));
+    let triangle_count = shapes.iter().map(|s| s.geom.triangle_count()).sum();
+    let accel = Accel::build_instanced(
+        shapes.iter().map(|s| s.geom.accel_shape()).collect(),
+        protos.iter().map(ShapeGeom::accel_shape).collect(),
+    );
+    drop(protos);
+    let bounds = accel.bounds();
+
+    let mut textures = desc
+        .textures
+        .iter()
+        .map(textures::load_texture)
+        .collect::<Result<Vec<_>, _>>()?;
+    textures::opacity_from_alpha(desc, &mut shapes, &mut textures)?;
+
+    let selection = opts.light_selection.unwrap_or(desc.light_selection);
+    let split = selection != LightSelection::Uniform;
+    let (lights, shape_lights) = lights::lights(desc, &shapes, split)?;
+    let infinite_lights = (0..lights.len() as u32)
+        .filter(|&i| lights[i as usize].is_infinite())
+        .collect();
+
+    let has_cutouts = shapes.iter().any(|s| s.opacity.is_some());
+    let is_mask = |id: &MaterialId| {
+        matches!(
+            desc.materials.get(id.0 as usize).map(|m| &m.material),
+            Some(Material::Mask { .. })
+        )
+    };
+    if desc
+        .shapes
+        .iter()
+        .any(|s| s.emission.is_some() && s.material.is_some_and(|m| is_mask(&m)))
+    {
+        warnings.push(format!(
+            "{}: warning: an emitting shape's alpha cut-out is ignored (it emits, and is hit, everywhere)",
+            desc.source.display()
+        ));
+    }
+    for m in &desc.materials {
+        let below = match &m.material {
+            Material::TwoSided { front, back } => {
+                is_mask(front) || back.as_ref().is_some_and(is_mask)
+            }
+            Material::NormalMap { nested, .. } | Material::Mask { nested, .. } => is_mask(nested),
+            _ => false,
+        };
+        if below {
+            warnings.push(format!(
+                "{}: warning: a mask (alpha cut-out) below another material has no effect; put it outermost",
+                m.loc
+            ));
+        }
+    }
+
+    let mut film = FilmSettings {
+        width: sensor.film.width,
+        height: sensor.film.height,
+        crop: sensor.film.crop,
+        filter: Filter::new(&sensor.film.filter),
+        tonemap: sensor.film.tonemap.clone(),
+    };
+    if let Some((w, h)) = opts.resolution {
+        film.width = w;
+        film.height = h;
+        film.crop = None;
+    }
+    let mut sampler = sensor.sampler.clone();
+    if let Some(spp) = opts.spp {
+        sampler.spp = spp;
+    }
+    if let Some(seed) = opts.seed {
+        sampler.seed = seed;
+    }
+    let camera = camera::camera(&sensor.camera, film.width, film.height);
+    let integrator_desc = opts
+        .integrator
+        .clone()
+        .or_else(|| sensor.integrator.clone())
+        .unwrap_or_else(|| desc.integrator.clone());
+    let ambient: Vec3 = desc
+        .emitters
+        .iter()
+        .filter_map(|e| match e.emitter {
+            scene::Emitter::Ambient { radiance } => Some(radiance),
+            _ => None,
+        })
+        .map(Vec3::from)
+        .sum();
+    let integrator = integrator::integrator(&integrator_desc).map_err(|e| BuildError {
+        loc: Loc::file(&desc.source),
+        message: e.to_string(),
+    })?;
+    if ambient != Vec3::ZERO && !matches!(integrator_desc, IntegratorDesc::Whitted { .. }) {
+        warnings.push(format!(
+            "{}: warning: the ambient light is used only by the Whitted ray tracer; the {} integrator ignores it",
+            desc.source.display(),
+            integrator.name(),
+        ));
+    }
+
+    let mut scene = Scene {
+        accel,
+        shapes,
+        has_unlit: materials.iter().any(|m| m.unlit.is_some()),
+        materials,
+        warnings,
+        textures: Textures::new(textures),
+        camera,
+        film,
+        sampler,
+        background: desc.background.map(Vec3::from),
+        background_texture: desc.background_texture.map(|t| t.0),
+        ambient,
+        lights,
+        shape_lights,
+        light_sampler: LightSampler::Uniform,
+        infinite_lights,
+        bounds,
+        triangle_count,
+        has_cutouts,
+        has_motion,
+    };
+    scene.light_sampler = LightSampler::new(selection, &scene);
+    Ok(Built { scene, integrator })
+}
+
+/// Build `desc` with `opts` and render it to the end with no observer: the convenience of
+/// tests and tools that need one image (the spp is the scene's after `opts.spp`).
+pub fn render_desc(desc: &SceneDesc, opts: &BuildOptions) -> Result<RenderOutcome, String> {
+    let Built { scene, integrator } = build(desc, opts).map_err(|e| e.to_string())?;
+    Ok(render(
+        &scene,
+        &integrator,
+        &RenderOptions {
+            spp: scene.sampler.spp,
+            ..Default::default()
+        },
+        &Silent,
+    ))
+}

@@ -1,0 +1,134 @@
+//! Light factories: an area light per emitting shape (or per emitting triangle), then the
+//! scene's other emitters.
+
+use std::sync::Arc;
+
+use render::image_io::{self, Decode};
+use render::lights::{
+    AreaLight, ConstantLight, DirectionalLight, EnvMap, Light, MeshSampling, PointLight, SpotLight,
+};
+use render::shapes::ShapeGeom;
+use render::world::{ShapeInfo, ShapeLights};
+use scene::SceneDesc;
+
+use crate::BuildError;
+
+/// Every emitter of the scene: area lights (one per emitting shape, or with `split` one per
+/// triangle of an emitting mesh) first, then the others.
+pub(crate) fn lights(
+    desc: &SceneDesc,
+    shapes: &[ShapeInfo],
+    split: bool,
+) -> Result<(Vec<Light>, Vec<ShapeLights>), BuildError> {
+    let mut lights = Vec::new();
+    let mut shape_light = vec![ShapeLights::None; shapes.len()];
+    for (i, (s, d)) in shapes.iter().zip(&desc.shapes).enumerate() {
+        let Some(radiance) = &s.emission else {
+            continue;
+        };
+        let two_sided = d.emission.as_ref().is_some_and(|e| e.two_sided);
+        let triangles = match &s.geom {
+            ShapeGeom::Mesh {
+                positions, indices, ..
+            } => {
+                let areas: Vec<f32> = indices
+                    .iter()
+                    .map(|t| {
+                        let [a, b, c] = t.map(|i| positions[i as usize]);
+                        0.5 * (b - a).cross(c - a).length()
+                    })
+                    .collect();
+                if split {
+                    // Degenerate triangles stay (so that triangle t is light first + t):
+                    // they have no power and are never chosen.
+                    shape_light[i] = ShapeLights::PerTriangle {
+                        first: lights.len() as u32,
+                        count: areas.len() as u32,
+                    };
+                    for (t, area) in areas.into_iter().enumerate() {
+                        lights.push(Light::Area(AreaLight {
+                            shape: i as u32,
+                            radiance: *radiance,
+                            two_sided,
+                            triangles: None,
+                            prim: Some(t as u32),
+                            area: if area.is_finite() { area } else { 0.0 },
+                        }));
+                    }
+                    continue;
+                }
+                Some(MeshSampling::new(positions, indices, &areas))
+            }
+            ShapeGeom::Plane { .. } => {
+                return Err(BuildError {
+                    loc: d.loc.clone(),
+                    message: "an infinite plane cannot be an area light".into(),
+                });
+            }
+            _ => None,
+        };
+        let area = s.geom.area();
+        if !(area > 0.0 && area.is_finite()) {
+            continue;
+        }
+        shape_light[i] = ShapeLights::Whole(lights.len() as u32);
+        lights.push(Light::Area(AreaLight {
+            shape: i as u32,
+            radiance: *radiance,
+            two_sided,
+            triangles,
+            prim: None,
+            area,
+        }));
+    }
+    for e in &desc.emitters {
+        lights.push(match &e.emitter {
+            // Not a light: the Whitted integrator's ambient term (`Scene::ambient`).
+            scene::Emitter::Ambient { .. } => continue,
+            scene::Emitter::Point {
+                position,
+                intensity,
+            } => Light::Point(PointLight {
+                position: (*position).into(),
+                intensity: (*intensity).into(),
+            }),
+            scene::Emitter::Spot {
+                to_world,
+                intensity,
+                cutoff_angle,
+                beam_width,
+                falloff,
+            } => Light::Spot(SpotLight::new(
+                to_world,
+                (*intensity).into(),
+                *cutoff_angle,
+                *beam_width,
+                *falloff,
+            )),
+            scene::Emitter::Directional {
+                direction,
+                irradiance,
+            } => Light::Directional(DirectionalLight {
+                direction: direction.normalize_or_zero().into(),
+                irradiance: (*irradiance).into(),
+            }),
+            scene::Emitter::Constant { radiance } => Light::Constant(ConstantLight {
+                radiance: (*radiance).into(),
+            }),
+            scene::Emitter::EnvMap {
+                path,
+                scale,
+                to_world,
+                mapping,
+            } => {
+                let image =
+                    image_io::read_image_with(path, Decode::Srgb).map_err(|err| BuildError {
+                        loc: e.loc.clone(),
+                        message: format!("cannot read environment map: {err}"),
+                    })?;
+                Light::EnvMap(Arc::new(EnvMap::new(image, *scale, to_world, *mapping)))
+            }
+        });
+    }
+    Ok((lights, shape_light))
+}

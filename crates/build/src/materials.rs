@@ -1,0 +1,445 @@
+//! Material factories: scene materials to runtime ones ([`RtMaterial`]). `twosided`,
+//! `normalmap`, `bumpmap` and `mask` chains are resolved here, once, into layers; parameters
+//! become texture references.
+
+use std::sync::Arc;
+
+use render::bsdf::{IdealLobe, Microfacet, MicrofacetType, NoriMicrofacet, RoughPlasticTables};
+use render::materials::{CourseLobe, Layer, MaterialKind, Perturb, RtMaterial, Then, alpha};
+use render::math::PVec3;
+use render::textures::{ColorRef, FloatRef, TexRef};
+use scene::{
+    ColorParam, CourseIdeal, CourseIdealKind, FloatParam, Loc, Material, MaterialDesc, MaterialId,
+};
+
+use crate::BuildError;
+
+/// The runtime materials of `materials`, in order, followed by Mitsuba's default diffuse
+/// (for shapes without a material) whose index is returned too.
+pub(crate) fn materials(materials: &[MaterialDesc]) -> Result<(Vec<RtMaterial>, u32), BuildError> {
+    let mut resolver = MaterialResolver {
+        materials,
+        kinds: vec![None; materials.len()],
+    };
+    let mut list = (0..materials.len() as u32)
+        .map(|id| resolver.material(MaterialId(id)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let default_material = list.len() as u32;
+    list.push(RtMaterial::default_diffuse());
+    Ok((list, default_material))
+}
+
+pub(crate) fn color_ref(p: &ColorParam) -> ColorRef {
+    match p {
+        ColorParam::Const(c) => TexRef::Const((*c).into()),
+        ColorParam::Texture(t) => TexRef::Texture(t.0),
+    }
+}
+
+pub(crate) fn float_ref(p: &FloatParam) -> FloatRef {
+    match p {
+        FloatParam::Const(c) => TexRef::Const(*c),
+        FloatParam::Texture(t) => TexRef::Texture(t.0),
+    }
+}
+
+/// How deep `twosided` materials may nest with a normal or bump map between them (each level
+/// doubles the resolved material). Nested directly, a `twosided` is resolved statically.
+const MAX_SIDE_NESTING: usize = 8;
+
+/// Resolves scene materials into runtime ones: `twosided`, `normalmap`, `bumpmap` and `mask`
+/// chains become [`Layer`]s, each scattering model is converted once.
+struct MaterialResolver<'a> {
+    materials: &'a [MaterialDesc],
+    kinds: Vec<Option<Option<MaterialKind>>>,
+}
+
+impl MaterialResolver<'_> {
+    fn material(&mut self, id: MaterialId) -> Result<RtMaterial, BuildError> {
+        let m = &self.materials[id.0 as usize];
+        let absorption = match &m.material {
+            Material::Dielectric {
+                absorption: Some(sigma),
+                ..
+            }
+            | Material::PhongFamily {
+                ideal:
+                    Some(CourseIdeal {
+                        kind:
+                            CourseIdealKind::Dielectric {
+                                absorption: Some(sigma),
+                                ..
+                            },
+                        ..
+                    }),
+                ..
+            } if *sigma != PVec3::ZERO => Some((*sigma).into()),
+            _ => None,
+        };
+        Ok(RtMaterial {
+            surface: self.layer(id, &mut Vec::new(), 0, &m.loc)?,
+            ambient: m.ambient.into(),
+            absorption,
+            unlit: match &m.material {
+                Material::Unlit { color } => Some(color_ref(color)),
+                _ => None,
+            },
+        })
+    }
+
+    /// The layer from material `id` down. `outer` holds the ids of the enclosing layers (a
+    /// cycle ends in a surface that does not scatter); `depth` counts the `twosided` splits
+    /// above: inside one, the frame already faces the viewer.
+    fn layer(
+        &mut self,
+        mut id: MaterialId,
+        outer: &mut Vec<u32>,
+        depth: usize,
+        loc: &Loc,
+    ) -> Result<Layer, BuildError> {
+        let mut perturbs = Vec::new();
+        let start = outer.len();
+        let done = |perturbs: Vec<Perturb>, outer: &mut Vec<u32>, then| {
+            outer.truncate(start);
+            Ok(Layer {
+                perturbs: perturbs.into(),
+                then,
+            })
+        };
+        loop {
+            let Some(m) = self.materials.get(id.0 as usize) else {
+                return done(perturbs, outer, Then::Model(None));
+            };
+            if outer.contains(&id.0) {
+                return done(perturbs, outer, Then::Model(None));
+            }
+            outer.push(id.0);
+            match &m.material {
+                // Directly inside a side the frame faces the viewer: the front is seen.
+                Material::TwoSided { front, .. } if depth > 0 && perturbs.is_empty() => id = *front,
+                Material::TwoSided { front, back } => {
+                    if depth >= MAX_SIDE_NESTING {
+                        return Err(BuildError {
+                            loc: loc.clone(),
+                            message: format!(
+                                "twosided materials nested more than {MAX_SIDE_NESTING} deep"
+                            ),
+                        });
+                    }
+                    let f = self.layer(*front, outer, depth + 1, loc)?;
+                    let b = match back {
+                        Some(b) => self.layer(*b, outer, depth + 1, loc)?,
+                        None => f.clone(),
+                    };
+                    return done(perturbs, outer, Then::Sides(Box::new([f, b])));
+                }
+                Material::NormalMap { nested, texture } => {
+                    perturbs.push(Perturb::NormalMap { texture: texture.0 });
+                    id = *nested;
+                }
+                Material::BumpMap {
+                    nested,
+                    texture,
+                    factor,
+                } => {
+                    perturbs.push(Perturb::BumpMap {
+                        texture: texture.0,
+                        factor: *factor,
+                    });
+                    id = *nested;
+                }
+                // The opacity acts in `Scene::intersect` (a cut-out is never hit).
+                Material::Mask { nested, .. } => id = *nested,
+                _ => {
+                    let kind = self.kind(id);
+                    return done(perturbs, outer, Then::Model(kind));
+                }
+            }
+        }
+    }
+
+    /// The scattering model of material `id` (a leaf: not a wrapper), converted once.
+    fn kind(&mut self, id: MaterialId) -> Option<MaterialKind> {
+        let slot = &mut self.kinds[id.0 as usize];
+        if slot.is_none() {
+            *slot = Some(material_kind(&self.materials[id.0 as usize].material));
+        }
+        slot.clone().flatten()
+    }
+}
+
+/// The runtime model of a leaf material (`None`: it does not scatter).
+pub fn material_kind(m: &Material) -> Option<MaterialKind> {
+    Some(match m {
+        Material::Diffuse { reflectance } => MaterialKind::Diffuse {
+            reflectance: color_ref(reflectance),
+        },
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+        } => MaterialKind::Conductor {
+            eta: (*eta).into(),
+            k: (*k).into(),
+            specular: color_ref(specular_reflectance),
+        },
+        Material::Mirror { reflectance } => MaterialKind::Mirror {
+            reflectance: color_ref(reflectance),
+        },
+        Material::RoughConductor {
+            distribution,
+            alpha_u,
+            alpha_v,
+            eta,
+            k,
+            specular_reflectance,
+        } => MaterialKind::RoughConductor {
+            distribution: MicrofacetType::from(*distribution),
+            alpha_u: float_ref(alpha_u),
+            alpha_v: float_ref(alpha_v),
+            eta: (*eta).into(),
+            k: (*k).into(),
+            specular: color_ref(specular_reflectance),
+        },
+        Material::Dielectric {
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+            ..
+        } => MaterialKind::Dielectric {
+            int_ior: *int_ior,
+            ext_ior: *ext_ior,
+            reflectance: color_ref(specular_reflectance),
+            transmittance: color_ref(specular_transmittance),
+        },
+        Material::ThinDielectric {
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+        } => MaterialKind::ThinDielectric {
+            int_ior: *int_ior,
+            ext_ior: *ext_ior,
+            reflectance: color_ref(specular_reflectance),
+            transmittance: color_ref(specular_transmittance),
+        },
+        Material::RoughDielectric {
+            distribution,
+            alpha_u,
+            alpha_v,
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+        } => MaterialKind::RoughDielectric {
+            distribution: MicrofacetType::from(*distribution),
+            alpha_u: float_ref(alpha_u),
+            alpha_v: float_ref(alpha_v),
+            int_ior: *int_ior,
+            ext_ior: *ext_ior,
+            reflectance: color_ref(specular_reflectance),
+            transmittance: color_ref(specular_transmittance),
+        },
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            int_ior,
+            ext_ior,
+            nonlinear,
+        } => MaterialKind::Plastic {
+            diffuse: color_ref(diffuse_reflectance),
+            specular: color_ref(specular_reflectance),
+            int_ior: *int_ior,
+            ext_ior: *ext_ior,
+            nonlinear: *nonlinear,
+        },
+        Material::RoughPlastic {
+            distribution,
+            alpha: a,
+            diffuse_reflectance,
+            specular_reflectance,
+            int_ior,
+            ext_ior,
+            nonlinear,
+        } => {
+            let kind = MicrofacetType::from(*distribution);
+            let eta = int_ior / ext_ior;
+            MaterialKind::RoughPlastic {
+                microfacet: Microfacet::isotropic(kind, alpha(*a)),
+                eta,
+                tables: Arc::new(RoughPlasticTables::new(
+                    Microfacet::isotropic(kind, *a),
+                    eta,
+                )),
+                diffuse: color_ref(diffuse_reflectance),
+                specular: color_ref(specular_reflectance),
+                nonlinear: *nonlinear,
+            }
+        }
+        Material::NoriMicrofacet {
+            alpha: a,
+            int_ior,
+            ext_ior,
+            kd,
+        } => MaterialKind::NoriMicrofacet(NoriMicrofacet::new(
+            alpha(*a),
+            *int_ior,
+            *ext_ior,
+            (*kd).into(),
+        )),
+        Material::PhongFamily {
+            model,
+            normalized,
+            kd_fresnel,
+            exponent,
+            diffuse,
+            specular,
+            ior,
+            absorption,
+            ideal,
+        } => MaterialKind::Phong {
+            model: *model,
+            normalized: *normalized,
+            kd_fresnel: *kd_fresnel,
+            exponent: *exponent,
+            diffuse: color_ref(diffuse),
+            specular: color_ref(specular),
+            ior: *ior,
+            absorption: *absorption,
+            ideal: ideal.map(|i| CourseLobe {
+                lobe: match i.kind {
+                    CourseIdealKind::Mirror => IdealLobe::Mirror,
+                    CourseIdealKind::Conductor { eta, k } => IdealLobe::Conductor { eta, k },
+                    CourseIdealKind::Dielectric { ior, .. } => IdealLobe::Dielectric { eta: ior },
+                },
+                reflectance: i.reflectance.into(),
+                roughness: i.roughness,
+            }),
+        },
+        Material::Null
+        | Material::Unlit { .. }
+        | Material::TwoSided { .. }
+        | Material::NormalMap { .. }
+        | Material::BumpMap { .. }
+        | Material::Mask { .. } => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scene::MaterialDesc;
+
+    fn desc(material: Material) -> MaterialDesc {
+        MaterialDesc {
+            material,
+            ambient: Default::default(),
+            name: None,
+            loc: Default::default(),
+        }
+    }
+
+    fn rough(alpha_u: f32, alpha_v: f32) -> Material {
+        Material::RoughConductor {
+            distribution: scene::MicrofacetDistribution::Ggx,
+            alpha_u: FloatParam::Const(alpha_u),
+            alpha_v: FloatParam::Const(alpha_v),
+            eta: PVec3::splat(1.5),
+            k: PVec3::splat(0.0),
+            specular_reflectance: ColorParam::constant(1.0),
+        }
+    }
+
+    fn resolve(mats: &[MaterialDesc], id: u32) -> Result<RtMaterial, BuildError> {
+        MaterialResolver {
+            materials: mats,
+            kinds: vec![None; mats.len()],
+        }
+        .material(MaterialId(id))
+    }
+
+    /// The shape of a resolved layer: perturbation count, then the model's name or the sides.
+    fn shape(l: &Layer) -> String {
+        let then = match &l.then {
+            Then::Model(None) => "none".to_string(),
+            Then::Model(Some(MaterialKind::Diffuse { .. })) => "diffuse".to_string(),
+            Then::Model(Some(_)) => "other".to_string(),
+            Then::Sides(s) => format!("[{} | {}]", shape(&s[0]), shape(&s[1])),
+        };
+        format!("{}{then}", "p".repeat(l.perturbs.len()))
+    }
+
+    #[test]
+    fn material_chains_resolve_into_layers() {
+        let diffuse = Material::Diffuse {
+            reflectance: ColorParam::constant(0.5),
+        };
+        let two = |front, back: Option<u32>| Material::TwoSided {
+            front: MaterialId(front),
+            back: back.map(MaterialId),
+        };
+        let normal = |nested| Material::NormalMap {
+            nested: MaterialId(nested),
+            texture: scene::TextureId(0),
+        };
+        let mask = |nested| Material::Mask {
+            nested: MaterialId(nested),
+            opacity: FloatParam::Const(0.5),
+        };
+        let mats = [
+            desc(diffuse),         // 0
+            desc(rough(0.1, 0.1)), // 1
+            desc(rough(0.1, 0.3)), // 2
+            desc(two(0, Some(2))), // 3
+            desc(normal(0)),       // 4
+            desc(mask(1)),         // 5
+            desc(two(6, None)),    // 6: a cycle
+            desc(mask(4)),         // 7
+            desc(two(3, None)),    // 8: twosided directly inside twosided: its front
+            desc(normal(3)),       // 9: a normal map around a twosided
+            desc(two(9, Some(7))), // 10: twosided, normal map, twosided
+            desc(Material::Null),  // 11
+        ];
+        let layer = |id| shape(&resolve(&mats, id).unwrap().surface);
+        assert_eq!(layer(0), "diffuse");
+        assert_eq!(layer(3), "[diffuse | other]");
+        assert_eq!(layer(4), "pdiffuse");
+        assert_eq!(layer(5), "other");
+        assert_eq!(layer(6), "[none | none]");
+        assert_eq!(layer(7), "pdiffuse");
+        assert_eq!(layer(8), "[diffuse | diffuse]");
+        assert_eq!(layer(9), "p[diffuse | other]");
+        assert_eq!(layer(10), "[p[diffuse | other] | pdiffuse]");
+        assert_eq!(layer(11), "none");
+
+        let iso = |id| resolve(&mats, id).unwrap().isotropic();
+        assert!(iso(0) && iso(1) && iso(5) && iso(6) && iso(8) && iso(11));
+        assert!(!iso(2), "alpha_u != alpha_v");
+        assert!(!iso(3), "anisotropic back side");
+        assert!(!iso(4) && !iso(7) && !iso(9), "normal map");
+        assert!(RtMaterial::default_diffuse().isotropic());
+    }
+
+    #[test]
+    fn twosided_nesting_through_normal_maps_is_bounded() {
+        // twosided(normalmap(twosided(normalmap(... diffuse)))) 20 levels deep.
+        let mut mats = vec![desc(Material::Diffuse {
+            reflectance: ColorParam::constant(0.5),
+        })];
+        for _ in 0..20 {
+            let below = mats.len() as u32 - 1;
+            mats.push(desc(Material::NormalMap {
+                nested: MaterialId(below),
+                texture: scene::TextureId(0),
+            }));
+            mats.push(desc(Material::TwoSided {
+                front: MaterialId(below + 1),
+                back: None,
+            }));
+        }
+        let err = resolve(&mats, mats.len() as u32 - 1).unwrap_err();
+        assert!(err.message.contains("nested more than"), "{}", err.message);
+        assert!(resolve(&mats, 2 * MAX_SIDE_NESTING as u32).is_ok());
+    }
+}
