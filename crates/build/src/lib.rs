@@ -203,7 +203,8 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         has_cutouts,
         has_motion,
     };
-    scene.light_sampler = LightSampler::new(selection, &scene);
+    scene.light_sampler =
+        LightSampler::new(selection, &scene.lights, &scene.infinite_lights, &scene);
     Ok(Built { scene, integrator })
 }
 

@@ -8,7 +8,8 @@ use render::lights::{
     AreaLight, ConstantLight, DirectionalLight, EnvMap, Light, MeshSampling, PointLight, SpotLight,
 };
 use render::shapes::ShapeGeom;
-use render::world::{ShapeInfo, ShapeLights};
+use render::shapes::ShapeInfo;
+use render::world::ShapeLights;
 use scene::SceneDesc;
 
 use crate::BuildError;

@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use render::materials::RtMaterial;
 use render::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
-use render::shapes::{Ellipsoid, Instance, Reads, ShapeGeom};
-use render::world::ShapeInfo;
+use render::shapes::{Ellipsoid, Instance, Reads, ShapeGeom, ShapeInfo};
+
 use scene::{Material, SceneDesc, Shape, TriMesh};
 
 use crate::materials::{color_ref, float_ref};

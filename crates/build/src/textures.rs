@@ -5,8 +5,9 @@ use std::sync::Arc;
 
 use render::image_io::{self, Decode};
 use render::math::Vec3;
+use render::shapes::ShapeInfo;
 use render::textures::{TexRef, Texture};
-use render::world::ShapeInfo;
+
 use scene::SceneDesc;
 
 use crate::BuildError;

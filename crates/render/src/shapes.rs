@@ -17,6 +17,7 @@ use crate::geometry::Ray;
 use glam::Mat3A;
 
 use crate::math::{Frame, Mat3, Mat4, PI, Vec2, Vec3, normalize_or_zero_fast, rsqrt};
+use crate::textures::{ColorRef, FloatRef};
 
 /// γ(n) of Higham / pbrt: a bound on the relative error of n floating-point operations.
 #[inline]
@@ -421,7 +422,7 @@ fn next_float_away(x: Vec3, offset: Vec3) -> Vec3 {
 }
 
 /// What shading at a shape reads of its interactions beyond position and normals, fixed at
-/// build time (see [`crate::world::ShapeInfo`]); [`interaction`] skips computing the rest.
+/// build time (see [`ShapeInfo`]); [`interaction`] skips computing the rest.
 /// Mitsuba's ray flags serve the same purpose.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Reads {
@@ -731,6 +732,22 @@ fn flat_interaction(
         prim: hit.prim,
         time,
     }
+}
+
+/// A shape of the runtime scene: its geometry and what the renderer needs to shade it.
+#[derive(Clone, Debug)]
+pub struct ShapeInfo {
+    pub geom: ShapeGeom,
+    /// Index into the scene's materials; `None` on an emitter without a material (it does not
+    /// scatter).
+    pub material: Option<u32>,
+    pub emission: Option<ColorRef>,
+    pub flip_normals: bool,
+    /// Alpha cut-out (the shape's material is a `mask`): the probability that a ray hitting
+    /// the surface stops there. See `Scene::intersect`.
+    pub opacity: Option<FloatRef>,
+    /// What shading reads of this shape's interactions beyond position and normals.
+    pub reads: Reads,
 }
 
 #[cfg(test)]

@@ -11,27 +11,12 @@ use crate::camera::Camera;
 use crate::film::FilmSettings;
 use crate::geometry::Ray;
 use crate::lights::select::LightSampler;
-use crate::lights::{Light, Receiver};
+use crate::lights::{Light, LightScene, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Frame, Vec3};
 use crate::sampling::sampler::{mix64, u64_to_unit};
-use crate::shapes::{Reads, ShapeGeom, SurfaceInteraction, interaction};
+use crate::shapes::{ShapeInfo, SurfaceInteraction, interaction};
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, Textures};
-
-#[derive(Clone, Debug)]
-pub struct ShapeInfo {
-    pub geom: ShapeGeom,
-    /// Index into [`Scene::materials`]; `None` on an emitter without a material (it does not
-    /// scatter).
-    pub material: Option<u32>,
-    pub emission: Option<ColorRef>,
-    pub flip_normals: bool,
-    /// Alpha cut-out (the shape's material is a `mask`): the probability that a ray hitting
-    /// the surface stops there. See [`Scene::intersect`].
-    pub opacity: Option<FloatRef>,
-    /// What shading reads of this shape's interactions beyond position and normals.
-    pub reads: Reads,
-}
 
 /// The lights of one shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -248,4 +233,21 @@ fn ray_hash(ray: &Ray) -> u64 {
         (v.x.to_bits() as u64) ^ (v.y.to_bits() as u64) << 21 ^ (v.z.to_bits() as u64) << 42
     };
     mix64(bits(ray.o) ^ mix64(bits(ray.d)))
+}
+
+impl LightScene for Scene {
+    #[inline(always)]
+    fn shape(&self, i: u32) -> &ShapeInfo {
+        &self.shapes[i as usize]
+    }
+
+    #[inline(always)]
+    fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3 {
+        self.textures.color(p, at)
+    }
+
+    #[inline(always)]
+    fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
 }

@@ -146,6 +146,9 @@ fn renderer_modules_import_each_other_without_a_circle() {
     }
     // The layering, printed for the record (`cargo test -- --nocapture`).
     for (n, uses) in &graph {
-        println!("{n} → {}", uses.iter().cloned().collect::<Vec<_>>().join(", "));
+        println!(
+            "{n} → {}",
+            uses.iter().cloned().collect::<Vec<_>>().join(", ")
+        );
     }
 }

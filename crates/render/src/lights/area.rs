@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use glam::Mat3A;
 
+use super::LightScene;
 use super::bvh::LightBounds;
 use super::select::{mean_radiance, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
@@ -19,7 +20,6 @@ use crate::sampling::distrib::Distribution1D;
 use crate::sampling::warp;
 use crate::shapes::{Ellipsoid, ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
 use crate::textures::{ColorRef, TexCoord, TexRef};
-use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct AreaLight {
@@ -40,8 +40,8 @@ impl LightModel for AreaLight {
         false
     }
 
-    fn sample_li(&self, scene: &Scene, r: &Receiver, u: Vec2) -> Option<LightSample> {
-        let info = &scene.shapes[self.shape as usize];
+    fn sample_li(&self, scene: &impl LightScene, r: &Receiver, u: Vec2) -> Option<LightSample> {
+        let info = scene.shape(self.shape);
         let flip = if info.flip_normals { -1.0 } else { 1.0 };
         // The sampled point's uv only feeds a radiance texture.
         let textured = matches!(self.radiance, TexRef::Texture(_));
@@ -152,13 +152,13 @@ impl LightModel for AreaLight {
 
     fn pdf_li(
         &self,
-        scene: &Scene,
+        scene: &impl LightScene,
         r: &Receiver,
         wi: Vec3,
         si: Option<&SurfaceInteraction>,
     ) -> f32 {
         let Some(si) = si else { return 0.0 };
-        let info = &scene.shapes[self.shape as usize];
+        let info = scene.shape(self.shape);
         if let ShapeGeom::Sphere { center, radius } = &info.geom {
             // Zero where `sample_li` yields nothing: the back of a one-sided light.
             if !self.two_sided && si.shading.n.dot(-wi) <= 0.0 {
@@ -177,7 +177,7 @@ impl LightModel for AreaLight {
         }
     }
 
-    fn le(&self, scene: &Scene, si: &SurfaceInteraction) -> Vec3 {
+    fn le(&self, scene: &impl LightScene, si: &SurfaceInteraction) -> Vec3 {
         if self.two_sided || si.shading.n.dot(si.wo) > 0.0 {
             scene.color(&self.radiance, si.tex())
         } else {
@@ -186,13 +186,13 @@ impl LightModel for AreaLight {
     }
 
     /// π·A·L̄, twice for a two-sided light.
-    fn power(&self, scene: &Scene) -> f32 {
+    fn power(&self, scene: &impl LightScene) -> f32 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         PI * sides * self.area * mean_radiance(scene, &self.radiance)
     }
 
-    fn bounds(&self, scene: &Scene, phi: f32) -> Option<LightBounds> {
-        let info = &scene.shapes[self.shape as usize];
+    fn bounds(&self, scene: &impl LightScene, phi: f32) -> Option<LightBounds> {
+        let info = scene.shape(self.shape);
         let flip = if info.flip_normals { -1.0 } else { 1.0 };
         let any = |lo, hi| LightBounds {
             two_sided: self.two_sided,
@@ -365,7 +365,7 @@ impl Parallelogram {
 /// Mitsuba's sphere emitter sampling: uniform cone from outside, uniform area from inside.
 #[allow(clippy::too_many_arguments)]
 fn sample_sphere(
-    scene: &Scene,
+    scene: &impl LightScene,
     center: Vec3,
     radius: f32,
     flip: f32,

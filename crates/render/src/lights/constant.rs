@@ -1,12 +1,12 @@
 //! The constant environment: the same radiance from every direction, sampled uniformly over
 //! the sphere.
 
+use super::LightScene;
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
-use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct ConstantLight {
@@ -26,7 +26,7 @@ impl LightModel for ConstantLight {
         self.radiance
     }
 
-    fn sample_li(&self, _scene: &Scene, _r: &Receiver, u: Vec2) -> Option<LightSample> {
+    fn sample_li(&self, _scene: &impl LightScene, _r: &Receiver, u: Vec2) -> Option<LightSample> {
         Some(LightSample {
             wi: warp::square_to_uniform_sphere(u),
             li: self.radiance,
@@ -36,12 +36,18 @@ impl LightModel for ConstantLight {
         })
     }
 
-    fn pdf_li(&self, _: &Scene, _: &Receiver, _: Vec3, _: Option<&SurfaceInteraction>) -> f32 {
+    fn pdf_li(
+        &self,
+        _: &impl LightScene,
+        _: &Receiver,
+        _: Vec3,
+        _: Option<&SurfaceInteraction>,
+    ) -> f32 {
         warp::uniform_sphere_pdf()
     }
 
     /// The power through a disk of the scene's bounding radius r: 4π·π r²·L.
-    fn power(&self, scene: &Scene) -> f32 {
+    fn power(&self, scene: &impl LightScene) -> f32 {
         let r = scene_radius(scene);
         4.0 * PI * PI * r * r * mean(self.radiance)
     }

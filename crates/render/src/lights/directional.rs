@@ -1,10 +1,10 @@
 //! Directional lights: irradiance arriving along one direction from infinitely far; a delta
 //! light.
 
+use super::LightScene;
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
-use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct DirectionalLight {
@@ -22,7 +22,7 @@ impl LightModel for DirectionalLight {
         true
     }
 
-    fn sample_li(&self, _scene: &Scene, _r: &Receiver, _u: Vec2) -> Option<LightSample> {
+    fn sample_li(&self, _scene: &impl LightScene, _r: &Receiver, _u: Vec2) -> Option<LightSample> {
         Some(LightSample {
             wi: -self.direction,
             li: self.irradiance,
@@ -33,7 +33,7 @@ impl LightModel for DirectionalLight {
     }
 
     /// The power through a disk of the scene's bounding radius r: π r²·E.
-    fn power(&self, scene: &Scene) -> f32 {
+    fn power(&self, scene: &impl LightScene) -> f32 {
         let r = scene_radius(scene);
         PI * r * r * mean(self.irradiance)
     }

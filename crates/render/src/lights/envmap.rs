@@ -5,6 +5,7 @@
 
 use base::EnvMapping;
 
+use super::LightScene;
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::film::Image;
@@ -12,7 +13,6 @@ use crate::math::{INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
 use crate::sampling::distrib::Distribution2D;
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
-use crate::world::Scene;
 
 #[derive(Debug)]
 pub struct EnvMap {
@@ -162,7 +162,7 @@ impl LightModel for EnvMap {
         self.eval(d)
     }
 
-    fn sample_li(&self, _scene: &Scene, _r: &Receiver, u: Vec2) -> Option<LightSample> {
+    fn sample_li(&self, _scene: &impl LightScene, _r: &Receiver, u: Vec2) -> Option<LightSample> {
         let (wi, li, pdf) = self.sample(u)?;
         Some(LightSample {
             wi,
@@ -173,13 +173,19 @@ impl LightModel for EnvMap {
         })
     }
 
-    fn pdf_li(&self, _: &Scene, _: &Receiver, wi: Vec3, _: Option<&SurfaceInteraction>) -> f32 {
+    fn pdf_li(
+        &self,
+        _: &impl LightScene,
+        _: &Receiver,
+        wi: Vec3,
+        _: Option<&SurfaceInteraction>,
+    ) -> f32 {
         self.pdf(wi)
     }
 
     /// The power through a disk of the scene's bounding radius r: 4π·π r²·L̄, L̄ the
     /// solid-angle mean of the map.
-    fn power(&self, scene: &Scene) -> f32 {
+    fn power(&self, scene: &impl LightScene) -> f32 {
         let (w, h) = (self.image.width, self.image.height);
         let (mut sum, mut weight) = (0f64, 0f64);
         for y in 0..h {

@@ -27,10 +27,19 @@ pub use spot::SpotLight;
 
 use crate::geometry::Ray;
 use crate::math::{Vec2, Vec3};
-use crate::shapes::SurfaceInteraction;
-use crate::world::Scene;
+use crate::shapes::{ShapeInfo, SurfaceInteraction};
+use crate::textures::{ColorRef, TexCoord};
 
 /// A point on an emitter with what it sends towards the receiver.
+/// What lights read of the scene they light: the emitting shapes, parameter values and the
+/// bounds of the geometry. The runtime scene (`world::Scene`) holds the lights and
+/// implements this; lights depend on it, not on the scene.
+pub trait LightScene {
+    fn shape(&self, i: u32) -> &ShapeInfo;
+    fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3;
+    fn bounds(&self) -> (Vec3, Vec3);
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
     /// Unit direction from the receiver towards the light.
@@ -108,14 +117,14 @@ pub(crate) trait LightModel {
     }
 
     /// Sample a direction from `r` towards this light.
-    fn sample_li(&self, scene: &Scene, r: &Receiver, u: Vec2) -> Option<LightSample>;
+    fn sample_li(&self, scene: &impl LightScene, r: &Receiver, u: Vec2) -> Option<LightSample>;
 
     /// Solid-angle density with which `sample_li` from `r` produces the direction towards
     /// `si`, a point on this (area) light — or, for environment lights, the direction `wi`.
     /// 0 for delta lights.
     fn pdf_li(
         &self,
-        _scene: &Scene,
+        _scene: &impl LightScene,
         _r: &Receiver,
         _wi: Vec3,
         _si: Option<&SurfaceInteraction>,
@@ -124,15 +133,15 @@ pub(crate) trait LightModel {
     }
 
     /// Radiance leaving an area light at `si` towards `si.wo`.
-    fn le(&self, _scene: &Scene, _si: &SurfaceInteraction) -> Vec3 {
+    fn le(&self, _scene: &impl LightScene, _si: &SurfaceInteraction) -> Vec3 {
         Vec3::ZERO
     }
 
     /// Emitted power, up to a common factor ([`select`] has the definitions).
-    fn power(&self, scene: &Scene) -> f32;
+    fn power(&self, scene: &impl LightScene) -> f32;
 
     /// Bounds for the light BVH of a bounded light of power `phi` (`None`: infinite).
-    fn bounds(&self, _scene: &Scene, _phi: f32) -> Option<LightBounds> {
+    fn bounds(&self, _scene: &impl LightScene, _phi: f32) -> Option<LightBounds> {
         None
     }
 }
@@ -179,7 +188,7 @@ impl Light {
 
     /// Sample a direction from `r` towards this light.
     #[inline]
-    pub fn sample_li(&self, scene: &Scene, r: &Receiver, u: Vec2) -> Option<LightSample> {
+    pub fn sample_li(&self, scene: &impl LightScene, r: &Receiver, u: Vec2) -> Option<LightSample> {
         dispatch!(self, l => l.sample_li(scene, r, u))
     }
 
@@ -188,7 +197,7 @@ impl Light {
     #[inline]
     pub fn pdf_li(
         &self,
-        scene: &Scene,
+        scene: &impl LightScene,
         r: &Receiver,
         wi: Vec3,
         si: Option<&SurfaceInteraction>,
@@ -198,18 +207,18 @@ impl Light {
 
     /// Radiance leaving an area light at `si` towards `si.wo`.
     #[inline]
-    pub fn le(&self, scene: &Scene, si: &SurfaceInteraction) -> Vec3 {
+    pub fn le(&self, scene: &impl LightScene, si: &SurfaceInteraction) -> Vec3 {
         dispatch!(self, l => l.le(scene, si))
     }
 
     /// Emitted power (see [`select`]); 0 for a light that emits nothing.
-    pub fn power(&self, scene: &Scene) -> f32 {
+    pub fn power(&self, scene: &impl LightScene) -> f32 {
         let p = dispatch!(self, l => l.power(scene));
         if p.is_finite() { p.max(0.0) } else { 0.0 }
     }
 
     /// Bounds for the light BVH (`None` for infinite lights and lights without power).
-    pub fn bounds(&self, scene: &Scene) -> Option<LightBounds> {
+    pub fn bounds(&self, scene: &impl LightScene) -> Option<LightBounds> {
         let phi = self.power(scene);
         if phi <= 0.0 {
             return None;

@@ -1,10 +1,10 @@
 //! Point lights: intensity / d² towards every direction; a delta light.
 
+use super::LightScene;
 use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
-use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct PointLight {
@@ -17,7 +17,7 @@ impl LightModel for PointLight {
         true
     }
 
-    fn sample_li(&self, _scene: &Scene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
+    fn sample_li(&self, _scene: &impl LightScene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
         let d = self.position - r.p;
         let d2 = d.length_squared();
         (d2 > 0.0).then(|| LightSample {
@@ -30,11 +30,11 @@ impl LightModel for PointLight {
     }
 
     /// 4π·I.
-    fn power(&self, _scene: &Scene) -> f32 {
+    fn power(&self, _scene: &impl LightScene) -> f32 {
         4.0 * PI * mean(self.intensity)
     }
 
-    fn bounds(&self, _scene: &Scene, phi: f32) -> Option<LightBounds> {
+    fn bounds(&self, _scene: &impl LightScene, phi: f32) -> Option<LightBounds> {
         Some(omni(self.position, self.position, phi))
     }
 }

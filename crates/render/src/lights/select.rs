@@ -10,13 +10,13 @@
 
 use base::LightSelection;
 
+use super::LightScene;
 use crate::math::{Vec2, Vec3};
 use crate::sampling::distrib::AliasTable;
 use crate::textures::{ColorRef, TexCoord, TexRef};
-use crate::world::Scene;
 
-use super::Receiver;
 use super::bvh::{LightBounds, LightBvh};
+use super::{Light, Receiver};
 
 /// The light selection strategy of a scene, built once.
 #[derive(Clone, Debug)]
@@ -32,7 +32,7 @@ pub(super) fn mean(c: Vec3) -> f32 {
 }
 
 /// Mean radiance of an emitter's colour over its texture space.
-pub(super) fn mean_radiance(scene: &Scene, c: &ColorRef) -> f32 {
+pub(super) fn mean_radiance(scene: &impl LightScene, c: &ColorRef) -> f32 {
     match c {
         TexRef::Const(c) => mean(*c),
         TexRef::Texture(_) => {
@@ -51,8 +51,8 @@ pub(super) fn mean_radiance(scene: &Scene, c: &ColorRef) -> f32 {
 }
 
 /// Radius of the bounding sphere of the scene's bounded geometry (1 if it has none).
-pub(super) fn scene_radius(scene: &Scene) -> f32 {
-    let (lo, hi) = scene.bounds;
+pub(super) fn scene_radius(scene: &impl LightScene) -> f32 {
+    let (lo, hi) = scene.bounds();
     let r = 0.5 * (hi - lo).length();
     if r.is_finite() && r > 0.0 { r } else { 1.0 }
 }
@@ -80,17 +80,22 @@ fn uniform_choice(u: f32, n: usize) -> Option<(u32, f32)> {
 }
 
 impl LightSampler {
-    /// Builds the strategy `kind` over the lights of `scene`.
-    pub fn new(kind: LightSelection, scene: &Scene) -> LightSampler {
+    /// Builds the strategy `kind` over `lights` (`infinite`: the indices of the infinite ones)
+    /// of `scene`.
+    pub fn new(
+        kind: LightSelection,
+        lights: &[Light],
+        infinite: &[u32],
+        scene: &impl LightScene,
+    ) -> LightSampler {
         match kind {
             LightSelection::Uniform => LightSampler::Uniform,
             LightSelection::Power => {
-                let w: Vec<f32> = scene.lights.iter().map(|l| l.power(scene)).collect();
+                let w: Vec<f32> = lights.iter().map(|l| l.power(scene)).collect();
                 LightSampler::Power(AliasTable::new(&w))
             }
             LightSelection::Bvh => {
-                let bounds: Vec<Option<LightBounds>> = scene
-                    .lights
+                let bounds: Vec<Option<LightBounds>> = lights
                     .iter()
                     .map(|l| {
                         if l.is_infinite() {
@@ -100,7 +105,7 @@ impl LightSampler {
                         }
                     })
                     .collect();
-                LightSampler::Bvh(LightBvh::new(&bounds, &scene.infinite_lights))
+                LightSampler::Bvh(LightBvh::new(&bounds, infinite))
             }
         }
     }

@@ -2,11 +2,11 @@
 //! between `beam_width` and `cutoff_angle`, or the CENG795 course's
 //! ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴; a delta light.
 
+use super::LightScene;
 use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{Mat3, Mat4, PI, Vec2, Vec3};
-use crate::world::Scene;
 
 #[derive(Clone, Debug)]
 pub struct SpotLight {
@@ -66,7 +66,7 @@ impl LightModel for SpotLight {
         true
     }
 
-    fn sample_li(&self, _scene: &Scene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
+    fn sample_li(&self, _scene: &impl LightScene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
         let d = self.position - r.p;
         let d2 = d.length_squared();
         if d2 <= 0.0 {
@@ -85,13 +85,13 @@ impl LightModel for SpotLight {
     }
 
     /// 2π·I·((1 − cos θbeam) + (cos θbeam − cos θcutoff)/2).
-    fn power(&self, _scene: &Scene) -> f32 {
+    fn power(&self, _scene: &impl LightScene) -> f32 {
         2.0 * PI
             * mean(self.intensity)
             * ((1.0 - self.cos_beam) + 0.5 * (self.cos_beam - self.cos_cutoff))
     }
 
-    fn bounds(&self, _scene: &Scene, phi: f32) -> Option<LightBounds> {
+    fn bounds(&self, _scene: &impl LightScene, phi: f32) -> Option<LightBounds> {
         let at = omni(self.position, self.position, phi);
         let w = (self.to_local.inverse() * Vec3::Z).normalize_or_zero();
         if w == Vec3::ZERO {
