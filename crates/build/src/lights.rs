@@ -5,10 +5,10 @@ use std::sync::Arc;
 
 use render::image_io::{self, Decode};
 use render::lights::{
-    AreaLight, ConstantLight, DirectionalLight, EnvMap, Light, MeshSampling, PointLight, SpotLight,
+    AreaLight, ConstantLight, DirectionalLight, EnvMap, Light, PointLight, SpotLight,
 };
-use render::shapes::ShapeGeom;
 use render::shapes::ShapeInfo;
+use render::shapes::{MeshSampling, ShapeGeom};
 use render::world::ShapeLights;
 use scene::SceneDesc;
 

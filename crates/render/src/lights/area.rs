@@ -7,18 +7,15 @@
 //! an emitting mesh becomes one light per triangle (`prim`), so that each triangle is chosen
 //! on its own.
 
-use std::sync::Arc;
-
-use glam::Mat3A;
-
 use super::LightScene;
 use super::bvh::LightBounds;
 use super::select::{mean_radiance, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
-use crate::math::{Frame, PI, Vec2, Vec3, rsqrt};
-use crate::sampling::distrib::Distribution1D;
+use crate::math::{PI, Vec2, Vec3, rsqrt};
 use crate::sampling::warp;
-use crate::shapes::{Ellipsoid, ShapeGeom, SurfaceInteraction, disk_uv, gamma, sphere_uv};
+use crate::shapes::{
+    MeshSampling, ShapeGeom, SurfaceInteraction, disk_uv, ellipsoid, gamma, sphere, sphere_uv,
+};
 use crate::textures::{ColorRef, TexCoord, TexRef};
 
 #[derive(Clone, Debug)]
@@ -107,7 +104,7 @@ impl LightModel for AreaLight {
                 (p, err, *normal * flip, uv, 1.0 / self.area)
             }
             ShapeGeom::Ellipsoid(e) => {
-                let (dir, pdf_solid) = sample_ellipsoid(e, r.p, u)?;
+                let (dir, pdf_solid) = ellipsoid::sample(e, r.p, u)?;
                 let (p, p_error) = e.point(dir);
                 let n = e.normal(dir) * flip;
                 let to = p - r.p;
@@ -164,7 +161,7 @@ impl LightModel for AreaLight {
             if !self.two_sided && si.shading.n.dot(-wi) <= 0.0 {
                 return 0.0;
             }
-            return sphere_pdf(*center, *radius, r.p, si.p);
+            return sphere::pdf(*center, *radius, r.p, si.p);
         }
         let d2 = (si.p - r.p).length_squared();
         let cos_l = si.ng.dot(-wi);
@@ -172,7 +169,7 @@ impl LightModel for AreaLight {
             return 0.0;
         }
         match &info.geom {
-            ShapeGeom::Ellipsoid(e) => ellipsoid_pdf(e, r.p, wi, si.p, cos_l.abs()),
+            ShapeGeom::Ellipsoid(e) => ellipsoid::pdf(e, r.p, wi, si.p, cos_l.abs()),
             _ => d2 / (cos_l.abs() * self.area),
         }
     }
@@ -259,110 +256,7 @@ impl LightModel for AreaLight {
     }
 }
 
-/// How an emitting mesh lit as a whole places a uniform point on its surface.
-#[derive(Clone, Debug)]
-pub enum MeshSampling {
-    /// A triangle in proportion to its area, then a uniform point in it.
-    ByArea(Arc<Distribution1D>),
-    /// Two triangles forming a parallelogram (a meshed rectangle: the usual quad light).
-    Parallelogram(Parallelogram),
-}
-
-impl MeshSampling {
-    /// The sampling for a mesh with these triangles (whose areas are `areas`).
-    pub fn new(positions: &[Vec3], indices: &[[u32; 3]], areas: &[f32]) -> MeshSampling {
-        match Parallelogram::detect(positions, indices) {
-            Some(q) => MeshSampling::Parallelogram(q),
-            None => MeshSampling::ByArea(Arc::new(Distribution1D::new(areas))),
-        }
-    }
-}
-
-/// A mesh of two triangles that together form a parallelogram `a + s·e₁ + t·e₂`,
-/// `(s, t) ∈ [0, 1]²`, split along the diagonal from `a + e₁` to `a + e₂`. One 2D sample gives
-/// a uniform point with no discrete choice (an `f64` CDF search) and no triangle warp: the
-/// same density as choosing a triangle by area, since the halves have equal areas.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Parallelogram {
-    /// Per triangle (0 holds `a`, 1 the opposite corner), the barycentrics `b₁`, `b₂` of the
-    /// point as affine functions of the sample: coefficients of `(1, s, t)`.
-    coef: [[Vec3; 2]; 2],
-    /// The unit normal of both triangles (by their winding), which they share.
-    normal: Vec3,
-}
-
-impl Parallelogram {
-    /// Relative tolerance on `a + (a + e₁ + e₂) = (a + e₁) + (a + e₂)`: corners placed by a
-    /// float transform are off by a few ulp; the density error is of the same relative size.
-    const TOLERANCE: f32 = 1e-5;
-
-    /// The parallelogram formed by a two-triangle mesh, if it is one.
-    pub fn detect(positions: &[Vec3], indices: &[[u32; 3]]) -> Option<Parallelogram> {
-        let [t0, t1] = indices else { return None };
-        let get = |i: u32| positions.get(i as usize).copied();
-        let p0 = [get(t0[0])?, get(t0[1])?, get(t0[2])?];
-        let p1 = [get(t1[0])?, get(t1[1])?, get(t1[2])?];
-        // The diagonal: the two corners the triangles share (by position).
-        let mut shared = Vec::with_capacity(3);
-        for (i, a) in p0.iter().enumerate() {
-            if let Some(j) = p1.iter().position(|b| b == a) {
-                shared.push((i, j));
-            }
-        }
-        let [(i0, i1), (j0, j1)] = shared[..] else {
-            return None;
-        };
-        let k0 = 3 - i0 - j0;
-        let l1 = 3 - i1 - j1;
-        let (a, e1, e2) = (p0[k0], p0[i0] - p0[k0], p0[j0] - p0[k0]);
-        let scale = e1.abs().max(e2.abs()).max_element();
-        let face = |p: [Vec3; 3]| (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        let normal = face(p0);
-        // Both windings alike (a mesh may flip one triangle: each then emits to its own side).
-        let ok = (a + e1 + e2 - p1[l1]).abs().max_element() <= Self::TOLERANCE * scale
-            && normal != Vec3::ZERO
-            && normal.dot(face(p1)) > 0.0
-            && scale.is_finite();
-        if !ok {
-            return None;
-        }
-        // Weights of the corners as coefficients of (1, s, t): in triangle 0, a, a + e₁, a + e₂
-        // take 1 − s − t, s, t; in triangle 1, a + e₁, a + e₂, a + e₁ + e₂ take 1 − t, 1 − s,
-        // s + t − 1. b₁, b₂ are the weights of the corners in vertex slots 1 and 2.
-        let weights = [
-            [Vec3::new(1.0, -1.0, -1.0), Vec3::Y, Vec3::Z],
-            [
-                Vec3::new(1.0, 0.0, -1.0),
-                Vec3::new(1.0, -1.0, 0.0),
-                Vec3::new(-1.0, 1.0, 1.0),
-            ],
-        ];
-        let slots = [[k0, i0, j0], [i1, j1, l1]];
-        let mut coef = [[Vec3::ZERO; 2]; 2];
-        for (tri, (slots, weights)) in slots.iter().zip(weights).enumerate() {
-            for (&slot, w) in slots.iter().zip(weights) {
-                if slot > 0 {
-                    coef[tri][slot - 1] = w;
-                }
-            }
-        }
-        Some(Parallelogram { coef, normal })
-    }
-
-    /// A uniform point: its triangle and its barycentrics `(b₁, b₂)` in that triangle's vertex
-    /// order (`p = (1 − b₁ − b₂) p₀ + b₁ p₁ + b₂ p₂`).
-    /// Always inlined: out of line, its result went through memory and the caller stalled
-    /// reading it back.
-    #[inline(always)]
-    pub fn sample(&self, u: Vec2) -> (usize, Vec2) {
-        let tri = (u.x + u.y > 1.0) as usize;
-        let [c1, c2] = self.coef[tri];
-        let x = Vec3::new(1.0, u.x, u.y);
-        (tri, Vec2::new(c1.dot(x), c2.dot(x)))
-    }
-}
-
-/// Mitsuba's sphere emitter sampling: uniform cone from outside, uniform area from inside.
+/// A sphere light's sample ([`sphere::sample`]) with its radiance and orientation.
 #[allow(clippy::too_many_arguments)]
 fn sample_sphere(
     scene: &impl LightScene,
@@ -374,32 +268,7 @@ fn sample_sphere(
     r: &Receiver,
     u: Vec2,
 ) -> Option<LightSample> {
-    let to_c = center - r.p;
-    let dc2 = to_c.length_squared();
-    let r2 = radius * radius;
-    let (p, pdf_solid) = if dc2 > r2 * (1.0 + 1e-4) {
-        let dc = dc2.sqrt();
-        let sin_max2 = r2 / dc2;
-        let cos_max = (1.0 - sin_max2).max(0.0).sqrt();
-        let frame = Frame::from_normal(to_c / dc);
-        let local = warp::square_to_uniform_cone(u, cos_max);
-        let wi = frame.to_world(local);
-        // Nearest intersection of the ray r.p + t wi with the sphere (clamped for grazing).
-        let b = wi.dot(to_c);
-        let disc = (r2 - (to_c - b * wi).length_squared()).max(0.0);
-        let t = b - disc.sqrt();
-        (r.p + wi * t, warp::uniform_cone_pdf(cos_max))
-    } else {
-        let d = warp::square_to_uniform_sphere(u);
-        let p = center + d * radius;
-        let to = p - r.p;
-        let d2 = to.length_squared();
-        let cos_l = d.dot(-to.normalize_or_zero()).abs();
-        if d2 <= 0.0 || cos_l == 0.0 {
-            return None;
-        }
-        (p, d2 / (cos_l * 4.0 * PI * r2))
-    };
+    let (p, pdf_solid) = sphere::sample(center, radius, r.p, u)?;
     let n_out = (p - center).normalize_or_zero();
     let p = center + n_out * radius;
     let to = p - r.p;
@@ -429,156 +298,4 @@ fn sample_sphere(
             n,
         },
     })
-}
-
-/// An ellipsoid light seen from `from`: the unit-sphere point (object space) and the
-/// solid-angle density of the world direction towards it. Outside, the cone of directions
-/// the object sphere subtends from the object-space receiver is sampled uniformly (as for
-/// spheres) and carried to world directions by the Jacobian of the linear map A = M⁻¹ on
-/// directions, dω_obj/dω = |det A| / |A w|³; inside, uniformly on the object sphere by area.
-fn sample_ellipsoid(e: &Ellipsoid, from: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
-    let o = e.to_object.transform_point3a(from);
-    let dc2 = o.length_squared();
-    if dc2 > 1.0 + 1e-4 {
-        let dc = dc2.sqrt();
-        let cos_max = (1.0 - 1.0 / dc2).max(0.0).sqrt();
-        let axis = -o / dc;
-        let w = Frame::from_normal(axis).to_world(warp::square_to_uniform_cone(u, cos_max));
-        // Nearest intersection with the unit sphere (clamped for grazing directions).
-        let b = w.dot(-o);
-        let disc = (1.0 - (-o - b * w).length_squared()).max(0.0);
-        let q = (o + w * (b - disc.sqrt())).normalize_or(axis);
-        let (p, _) = e.point(q);
-        let wi = (p - from).normalize_or_zero();
-        let a = Mat3A::from_mat4(e.to_object);
-        let aw = (a * wi).length();
-        Some((q, warp::uniform_cone_pdf(cos_max) / (e.det * aw * aw * aw)))
-    } else {
-        let q = warp::square_to_uniform_sphere(u);
-        let (p, _) = e.point(q);
-        let to = p - from;
-        let cos_l = e.normal(q).dot(to.normalize_or_zero()).abs();
-        if cos_l == 0.0 {
-            return None;
-        }
-        Some((
-            q,
-            to.length_squared() / (cos_l * 4.0 * PI * e.area_scale(q)),
-        ))
-    }
-}
-
-/// The density [`sample_ellipsoid`] gives the direction `wi` from `from` towards the point
-/// `on` of the ellipsoid (`cos_l`: |cosine| at `on`).
-fn ellipsoid_pdf(e: &Ellipsoid, from: Vec3, wi: Vec3, on: Vec3, cos_l: f32) -> f32 {
-    let o = e.to_object.transform_point3a(from);
-    let dc2 = o.length_squared();
-    if dc2 > 1.0 + 1e-4 {
-        let cos_max = (1.0 - 1.0 / dc2).max(0.0).sqrt();
-        let a = Mat3A::from_mat4(e.to_object);
-        let aw = (a * wi).length();
-        warp::uniform_cone_pdf(cos_max) / (e.det * aw * aw * aw)
-    } else {
-        if cos_l == 0.0 {
-            return 0.0;
-        }
-        let q = e.to_object.transform_point3a(on).normalize_or(Vec3::Z);
-        (on - from).length_squared() / (cos_l * 4.0 * PI * e.area_scale(q))
-    }
-}
-
-fn sphere_pdf(center: Vec3, radius: f32, from: Vec3, on: Vec3) -> f32 {
-    let to_c = center - from;
-    let dc2 = to_c.length_squared();
-    let r2 = radius * radius;
-    if dc2 > r2 * (1.0 + 1e-4) {
-        let cos_max = (1.0 - r2 / dc2).max(0.0).sqrt();
-        warp::uniform_cone_pdf(cos_max)
-    } else {
-        let to = on - from;
-        let d2 = to.length_squared();
-        let n = (on - center).normalize_or_zero();
-        let cos_l = n.dot(to.normalize_or_zero()).abs();
-        if cos_l == 0.0 {
-            return 0.0;
-        }
-        d2 / (cos_l * 4.0 * PI * r2)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::math::Mat3;
-
-    /// The point a `Parallelogram` sample designates, from the mesh.
-    fn point(pos: &[Vec3], idx: &[[u32; 3]], q: &Parallelogram, u: Vec2) -> Vec3 {
-        let (tri, b) = q.sample(u);
-        let [p0, p1, p2] = idx[tri].map(|i| pos[i as usize]);
-        (1.0 - b.x - b.y) * p0 + b.x * p1 + b.y * p2
-    }
-
-    #[test]
-    fn parallelogram_samples_are_the_bilinear_map_whatever_the_vertex_order() {
-        let (a, e1, e2) = (
-            Vec3::new(0.5, -1.0, 2.0),
-            Vec3::new(2.0, 0.25, 0.0),
-            Vec3::new(0.5, 0.0, 1.5),
-        );
-        let corners = [a, a + e1, a + e1 + e2, a + e2];
-        // Split along either diagonal, with rotated and reversed (but matching) windings and unshared
-        // vertices (the triangles share positions, not indices).
-        let splits: [[[usize; 3]; 2]; 4] = [
-            [[0, 1, 3], [1, 2, 3]],
-            [[2, 3, 1], [3, 0, 1]],
-            [[0, 2, 1], [0, 3, 2]],
-            [[3, 0, 2], [2, 0, 1]],
-        ];
-        for split in splits {
-            let pos: Vec<Vec3> = split.iter().flatten().map(|&c| corners[c]).collect();
-            let idx = [[0, 1, 2], [3, 4, 5]];
-            let q = Parallelogram::detect(&pos, &idx).expect("a parallelogram");
-            for (s, t) in [(0.1, 0.2), (0.9, 0.8), (0.5, 0.5), (0.0, 0.99), (0.7, 0.31)] {
-                let p = point(&pos, &idx, &q, Vec2::new(s, t));
-                // Uniform in (s, t) over some parametrisation of the parallelogram: check the
-                // point lies inside and that the map is affine within each half.
-                let d = p - a;
-                let m = Mat3::from_cols(e1.into(), e2.into(), e1.cross(e2).into());
-                let st = m.inverse() * d;
-                assert!(st.z.abs() < 1e-5, "{split:?} off the plane");
-                assert!(
-                    (-1e-5..=1.0 + 1e-5).contains(&st.x) && (-1e-5..=1.0 + 1e-5).contains(&st.y)
-                );
-            }
-            // Area preserving: the Jacobian of u ↦ p is the same in both halves.
-            let jac = |u: Vec2| {
-                let h = 1e-3;
-                let p = point(&pos, &idx, &q, u);
-                let ds = point(&pos, &idx, &q, u + Vec2::new(h, 0.0)) - p;
-                let dt = point(&pos, &idx, &q, u + Vec2::new(0.0, h)) - p;
-                ds.cross(dt).length() / (h * h)
-            };
-            let area = e1.cross(e2).length();
-            for u in [Vec2::new(0.2, 0.3), Vec2::new(0.7, 0.6)] {
-                assert!((jac(u) / area - 1.0).abs() < 1e-2, "{split:?} {u:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn other_two_triangle_meshes_are_not_parallelograms() {
-        let sq = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
-        let quad = |p: [Vec3; 4]| Parallelogram::detect(&p, &[[0, 1, 3], [1, 2, 3]]);
-        assert!(quad(sq).is_some());
-        // A trapezoid, a folded quad, triangles sharing only a vertex, a degenerate one, and
-        // a square whose second triangle is wound the other way.
-        assert!(Parallelogram::detect(&sq, &[[0, 1, 3], [1, 3, 2]]).is_none());
-        assert!(quad([sq[0], sq[1], Vec3::new(0.7, 1.0, 0.0), sq[3]]).is_none());
-        assert!(quad([sq[0], sq[1], Vec3::new(1.0, 1.0, 0.5), sq[3]]).is_none());
-        assert!(Parallelogram::detect(&sq, &[[0, 1, 2], [2, 3, 2]]).is_none());
-        assert!(Parallelogram::detect(&sq, &[[0, 1, 2], [0, 2, 3], [0, 1, 3]]).is_none());
-        assert!(Parallelogram::detect(&[Vec3::ZERO; 4], &[[0, 1, 3], [1, 2, 3]]).is_none());
-        // Out-of-range indices are not a panic.
-        assert!(Parallelogram::detect(&sq, &[[0, 1, 7], [1, 2, 3]]).is_none());
-    }
 }

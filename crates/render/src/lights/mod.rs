@@ -17,7 +17,7 @@ mod spot;
 
 use std::sync::Arc;
 
-pub use area::{AreaLight, MeshSampling, Parallelogram};
+pub use area::AreaLight;
 pub use bvh::LightBounds;
 pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
