@@ -10,7 +10,7 @@ pub mod path;
 
 use scene::{IntegratorDesc, NoriIntegrator};
 
-use self::path::{Combine, PathConfig};
+use self::path::{Combine, PathConfig, nori};
 
 use crate::camera::CameraRay;
 use crate::math::Vec3;
@@ -128,14 +128,5 @@ impl Integrator {
         while let Some((tag, cray)) = next(&mut sampler) {
             done(tag, self.li(scene, &cray, &mut sampler));
         }
-    }
-}
-
-/// Nori's unbiased estimators: Russian roulette from the third bounce, no depth limit unless
-/// `max_depth` (direct lighting: 2 segments).
-fn nori(max_depth: u32, combine: Combine) -> PathConfig {
-    PathConfig {
-        max_depth,
-        ..PathConfig::mitsuba(-1, 3, false, combine)
     }
 }

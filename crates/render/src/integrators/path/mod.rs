@@ -15,10 +15,12 @@
 //! A [`PathRecorder`] sees every vertex, scattering event and contribution of a path (render
 //! layers, the path visualiser; `record.rs`); [`NoRecorder`] compiles to nothing.
 
+mod course;
 mod record;
 
 use scene::{DirectionSampling, RussianRoulette};
 
+pub(crate) use self::course::nori;
 pub use self::record::{
     Contribution, DepthFilter, NoRecorder, PathEnd, PathRecorder, RecordedScatter, RecordedVertex,
     Scatter, Via,
@@ -115,25 +117,6 @@ impl PathConfig {
             clamp: d.clamp,
             only_depth: d.only_depth,
             ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
-        }
-    }
-
-    /// A Whitted-style ray tracer: every emitter sampled at the first non-delta vertex (plus
-    /// the scene's ambient term), delta chains followed up to `max_depth` segments.
-    pub fn whitted(max_depth: u32) -> Self {
-        PathConfig {
-            max_depth,
-            rr: RussianRoulette::Off,
-            hide_emitters: false,
-            combine: Combine::EmitterOnly,
-            continue_diffuse: false,
-            directions: DirectionSampling::Bsdf,
-            light_samples: 1,
-            all_lights: true,
-            splitting: 1,
-            caustics: true,
-            clamp: None,
-            only_depth: None,
         }
     }
 }
