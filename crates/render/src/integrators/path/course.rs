@@ -1,6 +1,6 @@
 //! The course tracers, as configurations of the one path loop.
 //!
-//! Every course's integrator is a [`PathConfig`]; the loop (`mod.rs`) knows no courses,
+//! Every course's integrator is a [`PathConfig`]; the loop (`vertex.rs`) knows no courses,
 //! only the switches. Each tracer changes a few fields of Mitsuba's `path`
 //! ([`PathConfig::mitsuba`]):
 //!
@@ -21,7 +21,9 @@
 //!
 //! The last four come as a `scene::PathDesc` through [`PathConfig::from_desc`].
 //!
-//! The strategies these switches select live in the loop (`mod.rs`), clamping in
+//! The strategies these switches select live with their purpose: several emitter samples or
+//! every emitter in `nee.rs`, uniform directions and fixed-probability roulette in
+//! `scatter.rs`, splitting and the ambient term in `vertex.rs`, clamping in
 //! [`Integrator::li_stream`](crate::integrators::Integrator::li_stream). Every combination
 //! converges to the same image except `caustics: false`, `clamp` and `only_depth`, which
 //! change the mean on purpose (`tests/path_variants.rs`).
