@@ -1,0 +1,163 @@
+//! The unidirectional path tracer: Mitsuba 3's `path` integrator, and the course tracers
+//! (Whitted, Nori's `path_*` and `direct_*`, CS184's, COMP30019's, CENG795's) as
+//! configurations of the same loop ([`PathConfig`]).
+//!
+//! With the default configuration ([`PathConfig::mitsuba`], which the build crate's `path_config`
+//! starts from) this is Mitsuba 3's `path` integrator exactly: emitter sampling (one light
+//! chosen uniformly, unless the scene asks for another light selection) at every vertex with
+//! a non-delta BSDF, BSDF sampling to continue, both combined with the power heuristic;
+//! Russian roulette from depth `rr_depth` with continuation probability
+//! min(max(throughput)·η², 0.95); `max_depth` counts path segments (1: emitters seen
+//! directly, 2: direct lighting, −1: unbounded).
+//!
+//! The course variants change one thing each: no next-event estimation (brute force), uniform
+//! hemisphere directions instead of BSDF sampling, several emitter samples per vertex or one
+//! per emitter (Whitted, CS184), fixed-probability Russian roulette, splitting at the first
+//! vertex. Every combination converges to the same image; only the noise differs.
+//!
+//! The module, by purpose:
+//!
+//! - here: [`PathConfig`] and the entry points [`li`], [`li_recorded`] (one path at a time)
+//!   and [`li_batched`] (a stream of camera samples);
+//! - `course.rs`: the course configurations ([`PathConfig::whitted`], Nori's) and which
+//!   switches each course uses;
+//! - `vertex.rs`: the path state and the per-vertex step both loops share;
+//! - `nee.rs`: next-event estimation (one emitter, several samples, or every emitter) and the
+//!   MIS weights;
+//! - `scatter.rs`: the next direction and Russian roulette;
+//! - `batched.rs`: the batched loop and its deferred shadow rays — why, and why its estimates
+//!   are the single-path loop's bit for bit;
+//! - `record.rs`: what a [`PathRecorder`] sees (render layers, the path visualiser);
+//!   [`NoRecorder`] compiles to nothing.
+
+mod batched;
+mod course;
+mod nee;
+mod record;
+mod scatter;
+mod vertex;
+
+use base::{DirectionSampling, RussianRoulette};
+
+use self::batched::Shadows;
+pub use self::batched::li_batched;
+
+pub use self::record::{
+    Contribution, DepthFilter, NoRecorder, PathEnd, PathRecorder, RecordedScatter, RecordedVertex,
+    Scatter, Via,
+};
+use self::vertex::{PathState, Tracer};
+use crate::camera::CameraRay;
+use crate::math::Vec3;
+use crate::sampling::Sampler;
+use crate::world::Scene;
+
+/// How emission found by BSDF-sampled rays is weighted against emitter sampling.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Combine {
+    /// Multiple importance sampling with the power heuristic (β = 2).
+    Power,
+    /// Multiple importance sampling with the balance heuristic.
+    Balance,
+    /// Only emitter sampling counts, except after delta bounces and for camera rays.
+    EmitterOnly,
+    /// Only BSDF sampling counts (no emitter sampling at all).
+    BsdfOnly,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathConfig {
+    /// Maximum number of path segments; `u32::MAX` for unbounded.
+    pub max_depth: u32,
+    pub rr: RussianRoulette,
+    /// Do not show emitters hit by camera rays.
+    pub hide_emitters: bool,
+    pub combine: Combine,
+    /// Continue paths after non-delta vertices (false: Whitted-style, only delta chains).
+    pub continue_diffuse: bool,
+    pub directions: DirectionSampling,
+    /// Emitter samples per non-delta vertex.
+    pub light_samples: u32,
+    /// Next-event estimation visits every emitter (`light_samples` each, delta emitters once)
+    /// instead of choosing one; Whitted-style tracers.
+    pub all_lights: bool,
+    /// Continuations traced from the first vertex, each with 1/N of the throughput.
+    pub splitting: u32,
+    /// Count emission reached through delta bounces after a non-delta one (caustics).
+    pub caustics: bool,
+    /// Largest component a camera sample may have (scaled down as a whole above it).
+    pub clamp: Option<f32>,
+    /// Keep only contributions of paths with exactly this many segments.
+    pub only_depth: Option<u32>,
+}
+
+impl PathConfig {
+    pub fn mitsuba(max_depth: i32, rr_depth: u32, hide_emitters: bool, combine: Combine) -> Self {
+        PathConfig {
+            max_depth: if max_depth < 0 {
+                u32::MAX
+            } else {
+                max_depth as u32
+            },
+            rr: RussianRoulette::Throughput {
+                from_depth: rr_depth,
+            },
+            hide_emitters,
+            combine,
+            continue_diffuse: true,
+            directions: DirectionSampling::Bsdf,
+            light_samples: 1,
+            all_lights: false,
+            splitting: 1,
+            caustics: true,
+            clamp: None,
+            only_depth: None,
+        }
+    }
+}
+
+/// `l` scaled down so that its largest component is at most `max` (pbrt-v4's
+/// `maxcomponentvalue`).
+#[inline]
+pub fn clamp_sample(l: Vec3, max: f32) -> Vec3 {
+    let m = l.max_element();
+    if m > max { l * (max / m) } else { l }
+}
+
+pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConfig) -> Vec3 {
+    if let Some(depth) = cfg.only_depth {
+        let mut rec = DepthFilter {
+            depth,
+            sum: Vec3::ZERO,
+        };
+        li_recorded(scene, cray, sampler, cfg, &mut rec);
+        return rec.sum;
+    }
+    li_recorded(scene, cray, sampler, cfg, &mut NoRecorder)
+}
+
+/// [`li`], telling `rec` everything that happens along the path.
+pub fn li_recorded(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    cfg: &PathConfig,
+    rec: &mut impl PathRecorder,
+) -> Vec3 {
+    let mut result = Vec3::ZERO;
+    if cfg.max_depth == 0 {
+        return result;
+    }
+    rec.camera_ray(&cray.ray);
+    let state = PathState::start(cfg, cray);
+    Tracer {
+        scene,
+        cfg,
+        sampler,
+        rec,
+        result: &mut result,
+        shadows: Shadows::Immediate,
+    }
+    .trace(state);
+    result
+}

@@ -1,0 +1,135 @@
+//! Leaving a vertex: the next direction (the BSDF's own sampling, or uniform directions for
+//! the courses' brute-force tracers), the throughput update, and Russian roulette (Mitsuba's
+//! throughput-based one or a fixed probability).
+
+use base::{DirectionSampling, RussianRoulette};
+
+use super::PathConfig;
+use super::record::{PathEnd, PathRecorder, RecordedScatter, Scatter};
+use super::vertex::{PathState, Previous, Shading, Tracer};
+use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
+use crate::lights::Receiver;
+use crate::math::{Vec2, Vec3};
+use crate::sampling::warp;
+
+impl<R: PathRecorder> Tracer<'_, R> {
+    /// Draw the next direction at `v`, advance the state `next` to the next segment
+    /// (throughput, Russian roulette) and tell the recorder; `false` when the path ends here
+    /// (`next` is then left partly updated and must not be used). In place: the state is
+    /// large, and returning a new one cost two copies per bounce.
+    pub(super) fn scatter(&mut self, v: &Shading, next: &mut PathState) -> bool {
+        let (scene, cfg) = (self.scene, self.cfg);
+        let (si, bsdf, wo) = (v.si, v.bsdf, v.wo);
+        let u1 = self.sampler.next_1d();
+        let u2 = self.sampler.next_2d();
+        let sample = if cfg.directions == DirectionSampling::UniformHemisphere && !bsdf.has_delta()
+        {
+            let (wi, pdf) = uniform_direction(bsdf, wo, Some(u2));
+            let f = bsdf.eval(wo, wi, TransportMode::Radiance);
+            (f != Vec3::ZERO).then(|| BsdfSample {
+                wi,
+                weight: f / pdf,
+                pdf,
+                delta: false,
+                transmission: wi.z * wo.z < 0.0,
+                // Only Russian roulette reads η; 1 keeps it unbiased.
+                eta: 1.0,
+            })
+        } else {
+            bsdf.sample(wo, u1, u2, TransportMode::Radiance)
+        };
+        let Some(bs) = sample else {
+            self.rec.end(PathEnd::Absorbed);
+            return false;
+        };
+        if !bs.delta && !cfg.continue_diffuse {
+            self.rec.end(PathEnd::Absorbed);
+            return false;
+        }
+        next.throughput *= bs.weight;
+        next.eta *= bs.eta;
+        next.diffuse_seen |= !bs.delta;
+        if bs.transmission {
+            // Entering through the front (the side the normal points to) or leaving.
+            next.absorption = if wo.z > 0.0 {
+                scene.interior_absorption(si)
+            } else {
+                None
+            };
+        }
+        next.ray = si.spawn_ray(v.frame.to_world(bs.wi));
+        next.prev = Some(Previous {
+            receiver: Receiver::from(si),
+            dir_pdf: bs.pdf,
+            delta: bs.delta,
+        });
+        let scatter = Scatter {
+            delta: bs.delta,
+            transmission: bs.transmission,
+        };
+        if next.first.is_none() {
+            next.first = Some(scatter);
+        }
+        next.depth += 1;
+        let t_max_component = next.throughput.max_element();
+        if t_max_component.is_nan() || t_max_component <= 0.0 {
+            self.rec.end(PathEnd::Absorbed);
+            return false;
+        }
+        let u_rr = self.sampler.next_1d();
+        let q = roulette(cfg, next, t_max_component);
+        if q < 1.0 {
+            if u_rr >= q {
+                self.rec.end(PathEnd::Roulette);
+                return false;
+            }
+            next.throughput /= q;
+        }
+        self.rec.scatter(&RecordedScatter {
+            scatter,
+            wi: next.ray.d,
+            pdf: bs.pdf,
+            throughput: next.throughput,
+        });
+        true
+    }
+}
+
+/// Probability that the path `next`, whose largest throughput component is
+/// `t_max_component`, continues (1: no roulette at this depth).
+#[inline]
+fn roulette(cfg: &PathConfig, next: &PathState, t_max_component: f32) -> f32 {
+    match cfg.rr {
+        RussianRoulette::Off => 1.0,
+        RussianRoulette::Throughput { from_depth } if next.depth >= from_depth => {
+            (t_max_component * next.eta * next.eta).min(0.95)
+        }
+        RussianRoulette::Fixed { after, q } if next.depth >= after => 1.0 - q,
+        _ => 1.0,
+    }
+}
+
+/// Density of the direction strategy at a non-delta vertex.
+#[inline]
+pub(super) fn direction_pdf(cfg: &PathConfig, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    match cfg.directions {
+        DirectionSampling::Bsdf => bsdf.pdf(wo, wi),
+        DirectionSampling::UniformHemisphere => uniform_direction(bsdf, wo, None).1,
+    }
+}
+
+/// Uniform directions: over the hemisphere of `wo` for opaque BSDFs, over the sphere for
+/// those that transmit. Returns the direction (when `u` is given) and its density.
+#[inline]
+fn uniform_direction(bsdf: &Bsdf, wo: Vec3, u: Option<Vec2>) -> (Vec3, f32) {
+    if bsdf.has_transmission() {
+        let w = u.map_or(Vec3::Z, warp::square_to_uniform_sphere);
+        (w, warp::uniform_sphere_pdf())
+    } else {
+        let mut w = u.map_or(Vec3::Z, warp::square_to_uniform_hemisphere);
+        if wo.z < 0.0 {
+            w.z = -w.z;
+        }
+        (w, std::f32::consts::FRAC_1_PI * 0.5)
+    }
+}

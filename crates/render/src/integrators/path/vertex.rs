@@ -1,0 +1,298 @@
+//! The state of a path between two segments ([`PathState`]) and the step both loops take at
+//! each of its vertices ([`Tracer::vertex`]): emission found by the segment just traced,
+//! emitter sampling, splitting, the next direction.
+//!
+//! A [`Tracer`] is what the step works with besides the path's state: the scene and
+//! configuration, the path's sampler, recorder, running estimate and shadow sink. The
+//! single-path loop ([`Tracer::trace`]) and the batched one (`batched.rs`) build one per
+//! path and step it; the step's parts live by purpose — emission, the unlit and ambient
+//! terms and splitting here, next-event estimation in `nee.rs`, the next direction and
+//! Russian roulette in `scatter.rs`.
+
+use super::PathConfig;
+use super::batched::Shadows;
+use super::nee::{NeeContext, emission_weight, nee_pdf};
+use super::record::{Contribution, PathEnd, PathRecorder, RecordedVertex, Scatter, Via};
+use crate::bsdf::Bsdf;
+use crate::camera::CameraRay;
+use crate::geometry::Ray;
+use crate::lights::Receiver;
+use crate::math::{Frame, Vec3};
+use crate::sampling::Sampler;
+use crate::shapes::SurfaceInteraction;
+use crate::textures::TexCoord;
+use crate::world::Scene;
+
+/// Where the previous vertex was and how its direction sample was drawn.
+#[derive(Clone, Copy)]
+pub(super) struct Previous {
+    pub(super) receiver: Receiver,
+    /// Density of the direction sample (including the number of direction samples, which is
+    /// always 1 here).
+    pub(super) dir_pdf: f32,
+    pub(super) delta: bool,
+}
+
+/// The state of a path between two segments.
+#[derive(Clone, Copy)]
+pub(super) struct PathState {
+    pub(super) ray: Ray,
+    pub(super) t_max: f32,
+    pub(super) throughput: Vec3,
+    pub(super) eta: f32,
+    /// Segments traced so far.
+    pub(super) depth: u32,
+    pub(super) prev: Option<Previous>,
+    pub(super) first: Option<Scatter>,
+    /// Splitting still to be done at the next vertex.
+    pub(super) split: bool,
+    /// Beer–Lambert absorption coefficient of the dielectric the path is inside, if any.
+    pub(super) absorption: Option<Vec3>,
+    /// A non-delta bounce happened: emission found after delta bounces from here is caustic.
+    pub(super) diffuse_seen: bool,
+}
+
+impl PathState {
+    pub(super) fn start(cfg: &PathConfig, cray: &CameraRay) -> PathState {
+        PathState {
+            ray: cray.ray,
+            t_max: cray.t_max,
+            throughput: Vec3::ONE,
+            eta: 1.0,
+            depth: 0,
+            prev: None,
+            first: None,
+            split: cfg.splitting > 1,
+            absorption: None,
+            diffuse_seen: false,
+        }
+    }
+
+    /// The segment just traced follows a delta bounce that follows a non-delta one.
+    #[inline]
+    fn caustic(&self) -> bool {
+        self.diffuse_seen && self.prev.is_some_and(|p| p.delta)
+    }
+
+    /// A contribution of this path reaching the camera along `depth` segments.
+    #[inline]
+    fn contribution(&self, via: Via, depth: u32) -> Contribution {
+        Contribution {
+            depth,
+            first: self.first,
+            via,
+        }
+    }
+}
+
+/// A vertex that scatters: its interaction, its BSDF in its shading frame, and the direction
+/// back along the path in that frame.
+#[derive(Clone, Copy)]
+pub(super) struct Shading<'a> {
+    pub(super) si: &'a SurfaceInteraction,
+    pub(super) bsdf: &'a Bsdf,
+    pub(super) frame: &'a Frame,
+    pub(super) wo: Vec3,
+}
+
+/// What a path's vertex step works with besides the path's state.
+pub(super) struct Tracer<'a, R> {
+    pub(super) scene: &'a Scene,
+    pub(super) cfg: &'a PathConfig,
+    pub(super) sampler: &'a mut Sampler,
+    pub(super) rec: &'a mut R,
+    /// The path's estimate so far.
+    pub(super) result: &'a mut Vec3,
+    /// Where next-event estimation's candidate contributions go.
+    pub(super) shadows: Shadows<'a>,
+}
+
+impl<R: PathRecorder> Tracer<'_, R> {
+    /// Trace the path `st` to its end, one segment at a time.
+    pub(super) fn trace(&mut self, mut st: PathState) {
+        let scene = self.scene;
+        loop {
+            let (ray, t_max) = (st.ray, st.t_max);
+            let hit = scene.hit(&ray, t_max);
+            let go_on = scene.surface(&ray, t_max, hit, |si| self.vertex(&mut st, si));
+            if !go_on {
+                return;
+            }
+        }
+    }
+
+    /// Add `l` to the estimate and tell the recorder where it came from.
+    #[inline]
+    pub(super) fn add(&mut self, l: Vec3, c: Contribution) {
+        *self.result += l;
+        self.rec.contribution(l, c);
+    }
+
+    /// One segment of a path: the emission found by `st.ray` (whose closest hit is `si`),
+    /// emitter sampling at the vertex, and the next direction (`st` advanced in place).
+    /// `false` when the path ends here.
+    pub(super) fn vertex(&mut self, st: &mut PathState, si: Option<&SurfaceInteraction>) -> bool {
+        let Some(si) = si else {
+            self.escaped(st);
+            return false;
+        };
+        st.t_max = f32::INFINITY;
+        if let Some(sigma) = st.absorption {
+            st.throughput *= (-sigma * (si.t * st.ray.d.length())).exp();
+        }
+        self.emission(st, si);
+        if self.unlit(st, si) {
+            return false;
+        }
+
+        let (scene, cfg) = (self.scene, self.cfg);
+        let bsdf = scene.bsdf_at(si);
+        self.rec.vertex(&RecordedVertex {
+            p: si.p,
+            n: si.shading.n,
+            depth: st.depth + 1,
+            throughput: st.throughput,
+        });
+        if st.depth.saturating_add(1) >= cfg.max_depth {
+            self.rec.end(PathEnd::MaxDepth);
+            return false;
+        }
+        let Some((bsdf, frame)) = &bsdf else {
+            self.rec.end(PathEnd::Absorbed);
+            return false;
+        };
+        let at = Shading {
+            si,
+            bsdf,
+            frame,
+            wo: frame.to_local(si.wo),
+        };
+        self.ambient(st, si);
+        NeeContext {
+            at,
+            receiver: Receiver::from(si),
+            throughput: st.throughput,
+            contribution: st.contribution(Via::EmitterSample, st.depth + 2),
+        }
+        .estimate(self);
+        if st.split {
+            self.split(st, &at);
+        }
+        self.scatter(&at, st)
+    }
+
+    /// `st.ray` left the scene: the environment's emission along it (and the background, for
+    /// camera rays).
+    #[inline]
+    fn escaped(&mut self, st: &PathState) {
+        let (scene, cfg) = (self.scene, self.cfg);
+        if !(st.depth == 0 && cfg.hide_emitters) {
+            let mut l = Vec3::ZERO;
+            for &i in &scene.infinite_lights {
+                let light = &scene.lights[i as usize];
+                let le = light.environment(st.ray.d);
+                if le == Vec3::ZERO {
+                    continue;
+                }
+                let w = emission_weight(cfg, st.prev.as_ref(), |r| {
+                    nee_pdf(scene, cfg, r, i, light.pdf_li(scene, r, st.ray.d, None))
+                });
+                l += st.throughput * le * w;
+            }
+            if st.depth == 0 {
+                if let Some(bg) = scene.background {
+                    l += bg;
+                }
+                if let Some(t) = scene.background_texture {
+                    let uv = scene.camera.film_uv(st.ray.o, st.ray.d);
+                    l += scene.textures.get(t).eval(TexCoord::uv(uv));
+                }
+            }
+            if l != Vec3::ZERO {
+                self.add(l, st.contribution(Via::Emission, st.depth + 1));
+            }
+        }
+        self.rec.end(PathEnd::Escaped);
+    }
+
+    /// Emission of the surface `st.ray` hit at `si`, if it emits (and the configuration
+    /// shows it: not to camera rays with `hide_emitters`, not through caustic paths without
+    /// `caustics`).
+    #[inline]
+    fn emission(&mut self, st: &PathState, si: &SurfaceInteraction) {
+        let (scene, cfg) = (self.scene, self.cfg);
+        if let Some(li) = scene.shape_light(si)
+            && !(st.depth == 0 && cfg.hide_emitters)
+            && (cfg.caustics || !st.caustic())
+        {
+            let light = &scene.lights[li as usize];
+            let le = light.le(scene, si);
+            if le != Vec3::ZERO {
+                let w = emission_weight(cfg, st.prev.as_ref(), |r| {
+                    let pdf = light.pdf_li(scene, r, st.ray.d.normalize(), Some(si));
+                    nee_pdf(scene, cfg, r, li, pdf)
+                });
+                let l = st.throughput * le * w;
+                self.add(l, st.contribution(Via::Emission, st.depth + 1));
+            }
+        }
+    }
+
+    /// A surface without shading shows its colour to whoever reaches it, and ends the path
+    /// (`true`).
+    #[inline]
+    fn unlit(&mut self, st: &PathState, si: &SurfaceInteraction) -> bool {
+        let scene = self.scene;
+        if scene.has_unlit
+            && let Some(c) = scene.unlit_color(si)
+        {
+            let l = st.throughput * c;
+            if l != Vec3::ZERO {
+                self.add(l, st.contribution(Via::Emission, st.depth + 1));
+            }
+            self.rec.end(PathEnd::Absorbed);
+            return true;
+        }
+        false
+    }
+
+    /// The scene's ambient term at a vertex of a Whitted tracer (one that does not continue
+    /// after non-delta vertices).
+    #[inline]
+    fn ambient(&mut self, st: &PathState, si: &SurfaceInteraction) {
+        let scene = self.scene;
+        if !self.cfg.continue_diffuse
+            && scene.ambient != Vec3::ZERO
+            && let Some(ka) = scene.ambient_reflectance(si)
+        {
+            let l = st.throughput * ka * scene.ambient;
+            if l != Vec3::ZERO {
+                self.add(l, st.contribution(Via::Ambient, st.depth + 1));
+            }
+        }
+    }
+
+    /// Splitting at `at`: N continuations, each carrying 1/N of the throughput. `st` becomes
+    /// the last of them; the other N − 1 are traced to their ends here, with their shadow
+    /// rays tested at once (in the batched loop too).
+    #[inline]
+    fn split(&mut self, st: &mut PathState, at: &Shading) {
+        st.split = false;
+        let n = self.cfg.splitting;
+        st.throughput /= n as f32;
+        for _ in 1..n {
+            let mut next = *st;
+            if self.scatter(at, &mut next) {
+                Tracer {
+                    scene: self.scene,
+                    cfg: self.cfg,
+                    sampler: &mut *self.sampler,
+                    rec: &mut *self.rec,
+                    result: &mut *self.result,
+                    shadows: Shadows::Immediate,
+                }
+                .trace(next);
+            }
+        }
+    }
+}
