@@ -1,6 +1,7 @@
 //! Integrator factories: the scene's integrator description to the runtime integrator.
 
 use render::integrators::path::{Combine, PathConfig};
+use render::integrators::volpath::VolPathConfig;
 use render::integrators::{Integrator, UnsupportedIntegrator};
 use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
 
@@ -15,6 +16,21 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
             length: length.unwrap_or(f32::INFINITY),
         },
         IntegratorDesc::Path(d) => Integrator::Path(path_config(d)),
+        IntegratorDesc::VolPath {
+            max_depth,
+            rr_depth,
+            hide_emitters,
+            equiangular,
+        } => Integrator::VolPath(VolPathConfig {
+            max_depth: if *max_depth < 0 {
+                u32::MAX
+            } else {
+                *max_depth as u32
+            },
+            rr_depth: *rr_depth,
+            hide_emitters: *hide_emitters,
+            equiangular: *equiangular,
+        }),
         IntegratorDesc::Direct {
             emitter_samples,
             bsdf_samples,

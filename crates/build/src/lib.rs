@@ -11,6 +11,7 @@ pub mod camera;
 pub mod integrator;
 mod lights;
 mod materials;
+mod media;
 pub mod nori_tests;
 mod shapes;
 mod textures;
@@ -71,6 +72,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
     })?;
 
     let (materials, default_material) = materials::materials(&desc.materials)?;
+    let media = media::media(desc)?;
     let shapes::Shapes {
         mut shapes,
         protos,
@@ -195,6 +197,8 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         background_texture: desc.background_texture.map(|t| t.0),
         ambient,
         lights,
+        media,
+        camera_medium: sensor.medium.map(|m| m.0),
         shape_lights,
         light_sampler: LightSampler::Uniform,
         infinite_lights,

@@ -161,6 +161,8 @@ pub(crate) fn shapes(
                     _ => None,
                 }
             }),
+            interior: s.media.interior.map(|m| m.0),
+            exterior: s.media.exterior.map(|m| m.0),
             reads: Reads {
                 tangent: !material.is_none_or(|m| materials[m as usize].isotropic()),
                 // Only textures read uv (material and emitter parameters, normal maps and

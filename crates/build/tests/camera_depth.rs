@@ -12,6 +12,7 @@ use scene::{
 
 fn shape(shape: Shape, to_world: Mat4) -> ShapeDesc {
     ShapeDesc {
+        media: Default::default(),
         motion: None,
         shape,
         to_world,
@@ -27,6 +28,7 @@ fn scene_with(camera: Camera, shapes: Vec<ShapeDesc>, w: u32, h: u32) -> SceneDe
     SceneDesc {
         shapes,
         sensors: vec![Sensor {
+            medium: None,
             camera,
             film: scene::Film {
                 width: w,

@@ -22,6 +22,7 @@ use scene::{
 fn base() -> SceneDesc {
     SceneDesc {
         sensors: vec![Sensor {
+            medium: None,
             camera: Camera {
                 projection: Projection::Perspective {
                     fov: 40.0,
@@ -51,6 +52,7 @@ fn base() -> SceneDesc {
 fn emitting(shape: Shape, to_world: Mat4) -> SceneDesc {
     let mut d = base();
     d.shapes.push(ShapeDesc {
+        media: Default::default(),
         motion: None,
         shape,
         to_world,
@@ -126,6 +128,7 @@ fn env_scene() -> SceneDesc {
     render::image_io::write_image(&path, &img).unwrap();
     let mut d = base();
     d.emitters.push(EmitterDesc {
+        medium: None,
         emitter: Emitter::EnvMap {
             path,
             scale: 1.0,

@@ -31,6 +31,7 @@ fn furnace_with_fov(material: Material, fov: f32) -> (f64, f64) {
         loc: Default::default(),
     });
     desc.shapes.push(ShapeDesc {
+        media: Default::default(),
         motion: None,
         shape: Shape::Sphere {
             center: Vec3::ZERO,
@@ -44,12 +45,14 @@ fn furnace_with_fov(material: Material, fov: f32) -> (f64, f64) {
         loc: Default::default(),
     });
     desc.emitters.push(EmitterDesc {
+        medium: None,
         emitter: Emitter::Constant {
             radiance: Vec3::ONE,
         },
         loc: Default::default(),
     });
     desc.sensors.push(Sensor {
+        medium: None,
         camera: Camera {
             projection: Projection::Perspective {
                 fov,

@@ -30,6 +30,7 @@ const SQUARE_V: Vec3 = Vec3::new(-1.7, 0.3, 0.0);
 
 fn shape(shape: Shape, to_world: Mat4, motion: Vec3) -> ShapeDesc {
     ShapeDesc {
+        media: Default::default(),
         shape,
         to_world,
         material: Some(MaterialId(0)),
@@ -67,12 +68,14 @@ fn scene_desc(w: u32, h: u32, spp: u32) -> SceneDesc {
             loc: Default::default(),
         }],
         emitters: vec![EmitterDesc {
+            medium: None,
             emitter: Emitter::Constant {
                 radiance: Vec3::ONE,
             },
             loc: Default::default(),
         }],
         sensors: vec![Sensor {
+            medium: None,
             camera: Camera {
                 projection: Projection::Orthographic,
                 // Looking down −z from z = 10; the film spans [-4, 4] in x.

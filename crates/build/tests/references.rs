@@ -141,3 +141,28 @@ fn lights() {
 fn envmap_materials() {
     check_with("envmap-materials", "envmap-materials.xml", &[], 0.0114, 128);
 }
+
+/// `volpath` through a null-bounded HG medium and a glass cube with a coloured, absorbing
+/// interior.
+#[test]
+fn media_homogeneous() {
+    check("media-homogeneous", "media-homogeneous.xml", &[], 0.0244);
+}
+
+/// A 64³ density grid (`plume-density.vol`) under sun and sky: delta and ratio tracking.
+#[test]
+fn media_heterogeneous() {
+    check(
+        "media-heterogeneous",
+        "media-heterogeneous.xml",
+        &[],
+        0.0019,
+    );
+}
+
+/// Camera, spot light and surfaces inside one fog: sensor and exterior media, and the spot
+/// light's 1/r² singularity in the medium (equiangular sampling keeps its variance finite).
+#[test]
+fn media_fog() {
+    check("media-fog", "media-fog.xml", &[], 0.165);
+}

@@ -122,6 +122,24 @@ fn integrator(i: &IntegratorDesc) -> String {
             format!("direct illumination ({emitter_samples} emitter, {bsdf_samples} BSDF samples)")
         }
         IntegratorDesc::Path(p) => path(p),
+        IntegratorDesc::VolPath {
+            max_depth,
+            rr_depth,
+            hide_emitters,
+            ..
+        } => format!(
+            "volumetric path tracer: max depth {}, Russian roulette after {rr_depth}{}",
+            if *max_depth < 0 {
+                "unbounded".to_string()
+            } else {
+                max_depth.to_string()
+            },
+            if *hide_emitters {
+                ", emitters hidden from the camera"
+            } else {
+                ""
+            }
+        ),
         IntegratorDesc::Whitted { max_depth } => format!("Whitted, max depth {max_depth}"),
         IntegratorDesc::NoriSimple => "Nori simple".into(),
         IntegratorDesc::Nori(n) => format!(
@@ -159,6 +177,13 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
         count(desc.materials.iter().map(|m| m.material.kind_name()))
     );
     println!("{indent}textures:   {}", desc.textures.len());
+    if !desc.media.is_empty() {
+        println!(
+            "{indent}media:      {} ({})",
+            desc.media.len(),
+            count(desc.media.iter().map(|m| m.medium.kind_name()))
+        );
+    }
     let area = desc.shapes.iter().filter(|s| s.emission.is_some()).count();
     println!(
         "{indent}emitters:   {} area, {}",

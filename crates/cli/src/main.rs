@@ -1049,6 +1049,7 @@ mod tests {
             ..SceneDesc::default()
         };
         d.sensors.push(scene::Sensor {
+            medium: None,
             camera: scene::Camera {
                 projection: scene::Projection::Orthographic,
                 to_world: scene::Mat4::IDENTITY,

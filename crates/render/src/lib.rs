@@ -17,6 +17,7 @@ pub mod layers;
 pub mod lights;
 pub mod materials;
 pub mod math;
+pub mod media;
 
 pub mod post;
 pub mod render;

@@ -196,6 +196,12 @@ impl RtMaterial {
         }
     }
 
+    /// An index-matched boundary (Mitsuba's `null`): no scattering model anywhere, nothing
+    /// shown. Volumetric paths cross it unchanged.
+    pub fn is_null(&self) -> bool {
+        self.unlit.is_none() && matches!(self.surface.then, Then::Model(None))
+    }
+
     /// Whether shading is unchanged when the tangent frame turns about the normal: no
     /// perturbation and no anisotropic roughness on either side. Interaction may then take
     /// the tangent from a triangle edge instead of the uv parameterisation (see

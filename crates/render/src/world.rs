@@ -14,6 +14,7 @@ use crate::lights::select::LightSampler;
 use crate::lights::{Light, LightScene, Receiver};
 use crate::materials::RtMaterial;
 use crate::math::{Frame, Vec3};
+use crate::media::Medium;
 use crate::sampling::sampler::{mix64, u64_to_unit};
 use crate::shapes::{ShapeInfo, SurfaceInteraction, interaction};
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, Textures};
@@ -49,6 +50,10 @@ pub struct Scene {
     /// Sum of the scene's ambient lights, used by Whitted.
     pub ambient: Vec3,
     pub lights: Vec<Light>,
+    /// Participating media, referenced by shapes and the camera.
+    pub media: Vec<Medium>,
+    /// The medium the camera sits in.
+    pub camera_medium: Option<u32>,
     /// The light(s) of each shape; see [`Scene::shape_light`].
     pub shape_lights: Vec<ShapeLights>,
     /// How `sample_light` chooses.
@@ -202,6 +207,31 @@ impl Scene {
     pub fn bsdf_at(&self, si: &SurfaceInteraction) -> Option<(Bsdf, Frame)> {
         let (kind, frame) = self.material(si)?.resolve(&self.textures, si)?;
         Some((kind.bsdf(&self.textures, si.tex()), frame))
+    }
+
+    /// Whether the surface at `si` is an index-matched boundary (see [`RtMaterial::is_null`]).
+    #[inline]
+    pub fn is_null(&self, si: &SurfaceInteraction) -> bool {
+        self.material(si).is_some_and(RtMaterial::is_null)
+    }
+
+    /// The medium a path is in after leaving the surface at `si` in direction `d`, having been
+    /// in `current`: the side `d` goes to when the shape bounds media, else unchanged.
+    #[inline]
+    pub fn medium_after(
+        &self,
+        si: &SurfaceInteraction,
+        d: Vec3,
+        current: Option<u32>,
+    ) -> Option<u32> {
+        let s = &self.shapes[si.shape as usize];
+        if s.interior.is_none() && s.exterior.is_none() {
+            current
+        } else if d.dot(si.ng) > 0.0 {
+            s.exterior
+        } else {
+            s.interior
+        }
     }
 
     /// The Beer–Lambert absorption coefficient inside the material at `si`, applied when a

@@ -23,6 +23,10 @@ pub type Rgb = Vec3;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct MaterialId(pub u32);
 
+/// Index into `SceneDesc::media`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MediumId(pub u32);
+
 /// Index into `SceneDesc::textures`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct TextureId(pub u32);
@@ -63,6 +67,8 @@ pub struct SceneDesc {
     pub textures: Vec<TextureDesc>,
     /// Emitters that are not attached to a shape (area emitters live on `ShapeDesc`).
     pub emitters: Vec<EmitterDesc>,
+    /// Participating media, referenced by shapes (interior/exterior), sensors and emitters.
+    pub media: Vec<MediumDesc>,
     /// At least one sensor after loading (loaders add the format's default camera).
     pub sensors: Vec<Sensor>,
     pub integrator: IntegratorDesc,
@@ -86,6 +92,10 @@ impl SceneDesc {
     pub fn add_material(&mut self, m: MaterialDesc) -> MaterialId {
         self.materials.push(m);
         MaterialId(self.materials.len() as u32 - 1)
+    }
+    pub fn add_medium(&mut self, m: MediumDesc) -> MediumId {
+        self.media.push(m);
+        MediumId(self.media.len() as u32 - 1)
     }
     pub fn add_texture(&mut self, t: TextureDesc) -> TextureId {
         self.textures.push(t);
@@ -113,6 +123,8 @@ pub struct ShapeDesc {
     pub emission: Option<AreaEmission>,
     /// Flip the shading and geometric normals (Mitsuba `flip_normals`).
     pub flip_normals: bool,
+    /// The media on either side of the surface (a medium transition when either is set).
+    pub media: MediumInterface,
     /// Motion blur: the shape moves by `τ·motion` (world space, after `to_world`) at time τ
     /// of the shutter interval [0, 1] (CENG795 `MotionBlur`). `None`: static.
     pub motion: Option<Vec3>,
@@ -246,6 +258,98 @@ pub struct AreaEmission {
     /// Emit on both sides (CS184 area lights are one-sided; some formats are two-sided).
     pub two_sided: bool,
     pub loc: Loc,
+}
+
+/// The media on the two sides of a surface: `interior` on the side opposite the normal,
+/// `exterior` on the side it points to (Mitsuba's convention). A ray crossing the surface
+/// enters the medium of the side it goes to; `None` is vacuum.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MediumInterface {
+    pub interior: Option<MediumId>,
+    pub exterior: Option<MediumId>,
+}
+
+impl MediumInterface {
+    /// Whether crossing the surface can change the medium (either side is set).
+    pub fn is_transition(&self) -> bool {
+        self.interior.is_some() || self.exterior.is_some()
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Participating media
+
+#[derive(Clone, Debug)]
+pub struct MediumDesc {
+    pub medium: Medium,
+    pub phase: PhaseDesc,
+    pub name: Option<String>,
+    pub loc: Loc,
+}
+
+/// A participating medium, with Mitsuba 3's parameters: extinction σt per unit length (world
+/// units) times `scale`, and the single-scattering albedo σs/σt.
+#[derive(Clone, Debug)]
+pub enum Medium {
+    /// Constant coefficients: σt = `sigma_t`·`scale`, σs = `albedo`·σt.
+    Homogeneous {
+        sigma_t: Rgb,
+        albedo: Rgb,
+        scale: f32,
+    },
+    /// Coefficients from grids: σt(x) = `scale`·`sigma_t`(x), σs(x) = `albedo`(x)·σt(x).
+    Heterogeneous {
+        sigma_t: Box<VolumeDesc>,
+        albedo: VolumeParam,
+        scale: f32,
+    },
+}
+
+impl Medium {
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Medium::Homogeneous { .. } => "homogeneous",
+            Medium::Heterogeneous { .. } => "heterogeneous",
+        }
+    }
+}
+
+/// A medium parameter: a constant or a grid.
+#[derive(Clone, Debug)]
+pub enum VolumeParam {
+    Const(Rgb),
+    Grid(Box<VolumeDesc>),
+}
+
+/// A voxel grid read from a file, placed in the world: the grid fills the unit cube [0,1]³ of
+/// its own space (Mitsuba's `gridvolume`: the file's bounding box is ignored), mapped to the
+/// world by `to_world`.
+#[derive(Clone, Debug)]
+pub struct VolumeDesc {
+    pub path: PathBuf,
+    pub format: VolumeFormat,
+    pub to_world: Mat4,
+    /// Trilinear interpolation between voxel centres (Mitsuba's default), or nearest voxel.
+    pub trilinear: bool,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum VolumeFormat {
+    /// Mitsuba's binary `.vol` (version 3, float32).
+    MitsubaVol,
+    /// An OpenVDB file and the name of the grid to read.
+    Vdb { grid_name: String },
+}
+
+/// How a medium scatters: the phase function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhaseDesc {
+    Isotropic,
+    /// Henyey–Greenstein with mean cosine `g` ∈ (−1, 1) (forward scattering for g > 0).
+    HenyeyGreenstein {
+        g: f32,
+    },
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -496,6 +600,8 @@ pub enum Texture {
 #[derive(Clone, Debug)]
 pub struct EmitterDesc {
     pub emitter: Emitter,
+    /// The medium the emitter sits in (Mitsuba `<ref id="..."/>` in an emitter).
+    pub medium: Option<MediumId>,
     pub loc: Loc,
 }
 
@@ -555,6 +661,8 @@ pub struct Sensor {
     pub sampler: SamplerDesc,
     /// This camera's own integrator (CENG795 `Renderer` per camera); `None`: the scene's.
     pub integrator: Option<IntegratorDesc>,
+    /// The medium the camera sits in (its rays start inside it); `None`: vacuum.
+    pub medium: Option<MediumId>,
     pub name: Option<String>,
     pub loc: Loc,
 }
@@ -602,6 +710,16 @@ pub enum IntegratorDesc {
     },
     /// Unidirectional path tracer (Mitsuba `path` and the course variants).
     Path(PathDesc),
+    /// Volumetric path tracer (Mitsuba 3 `volpath`): `max_depth` counts scattering events on
+    /// surfaces and in media (−1: unbounded), Russian roulette after `rr_depth` of them.
+    VolPath {
+        max_depth: i32,
+        rr_depth: u32,
+        hide_emitters: bool,
+        /// Equiangular sampling towards point and spot lights, MIS-combined with free-flight
+        /// sampling (our extension, on by default; the mean is Mitsuba's).
+        equiangular: bool,
+    },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },
     /// Nori's `simple` (one point light, no shadows from area lights).

@@ -906,3 +906,98 @@ fn shapegroup_errors() {
     );
     assert!(e.message.contains("another shapegroup"), "{e}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Participating media
+
+#[test]
+fn media_on_shapes_sensors_and_emitters() {
+    let s = scene_of(
+        r#"<scene version="3.0.0">
+            <integrator type="volpath"><integer name="max_depth" value="7"/></integrator>
+            <medium type="homogeneous" id="fog">
+                <float name="sigma_t" value="0.5"/>
+                <rgb name="albedo" value="0.8, 0.7, 0.6"/>
+                <float name="scale" value="2"/>
+                <phase type="hg"><float name="g" value="0.3"/></phase>
+            </medium>
+            <sensor type="perspective"><ref id="fog"/></sensor>
+            <emitter type="point"><point name="position" x="0" y="1" z="0"/><ref id="fog"/></emitter>
+            <shape type="sphere">
+                <bsdf type="null"/>
+                <medium type="homogeneous" name="interior">
+                    <float name="sigma_a" value="1"/><float name="sigma_s" value="3"/>
+                </medium>
+                <ref name="exterior" id="fog"/>
+            </shape>
+        </scene>"#,
+    );
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.media.len(), 2, "the fog is instantiated once");
+    let fog = MediumId(0);
+    assert_eq!(s.sensors[0].medium, Some(fog));
+    assert_eq!(s.emitters[0].medium, Some(fog));
+    assert_eq!(s.shapes[0].media.exterior, Some(fog));
+    let interior = s.shapes[0].media.interior.unwrap();
+    match &s.media[interior.0 as usize].medium {
+        Medium::Homogeneous {
+            sigma_t, albedo, ..
+        } => {
+            assert_eq!(*sigma_t, Vec3::splat(4.0));
+            assert_eq!(*albedo, Vec3::splat(0.75));
+        }
+        m => panic!("{m:?}"),
+    }
+    assert_eq!(s.media[interior.0 as usize].phase, PhaseDesc::Isotropic);
+    match &s.media[0] {
+        MediumDesc {
+            medium: Medium::Homogeneous { scale, .. },
+            phase: PhaseDesc::HenyeyGreenstein { g },
+            ..
+        } => assert_eq!((*scale, *g), (2.0, 0.3)),
+        m => panic!("{m:?}"),
+    }
+    assert!(matches!(
+        s.integrator,
+        IntegratorDesc::VolPath {
+            max_depth: 7,
+            rr_depth: 5,
+            hide_emitters: false,
+            equiangular: true,
+        }
+    ));
+}
+
+#[test]
+fn bad_media_are_errors_with_their_place() {
+    let cases = [
+        (
+            r#"<medium type="homogeneous" name="interior"><float name="sigma_t" value="-1"/></medium>"#,
+            "≥ 0",
+        ),
+        (
+            r#"<medium type="homogeneous" name="interior"><phase type="hg"><float name="g" value="1"/></phase></medium>"#,
+            "-1 < g < 1",
+        ),
+        (r#"<medium type="homogeneous"/>"#, "interior"),
+        (r#"<medium type="smoke" name="interior"/>"#, "smoke"),
+        (
+            r#"<medium type="heterogeneous" name="interior"/>"#,
+            "gridvolume",
+        ),
+        (
+            r#"<medium type="heterogeneous" name="interior"><volume type="gridvolume" name="sigma_t"><string name="filename" value="missing.vol"/></volume></medium>"#,
+            "missing.vol",
+        ),
+    ];
+    for (medium, want) in cases {
+        let text =
+            format!(r#"<scene version="3.0.0"><shape type="sphere">{medium}</shape></scene>"#);
+        let e = match load_with(&text, &[]) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("{medium}: loads"),
+        };
+        assert!(e.contains(want), "{medium}: {e}");
+        assert!(e.contains("scene.xml:1:"), "{medium}: no location in {e}");
+    }
+}

@@ -7,6 +7,7 @@
 mod aov;
 mod direct;
 pub mod path;
+pub mod volpath;
 
 use self::path::PathConfig;
 
@@ -28,6 +29,8 @@ pub enum Integrator {
     AmbientOcclusion { samples: u32, length: f32 },
     /// Path tracing and its restrictions (Whitted, Nori's variants).
     Path(PathConfig),
+    /// Mitsuba's `volpath`: path tracing through participating media.
+    VolPath(volpath::VolPathConfig),
     /// Mitsuba's `direct`: `emitter_samples` + `bsdf_samples` combined with MIS.
     Direct {
         emitter_samples: u32,
@@ -48,6 +51,7 @@ impl Integrator {
             Integrator::Depth => "depth",
             Integrator::AmbientOcclusion { .. } => "ao",
             Integrator::Path(_) => "path",
+            Integrator::VolPath(_) => "volpath",
             Integrator::Direct { .. } => "direct",
         }
     }
@@ -62,6 +66,7 @@ impl Integrator {
                 aov::ambient_occlusion(scene, cray, sampler, *samples, *length)
             }
             Integrator::Path(cfg) => path::li(scene, cray, sampler, cfg),
+            Integrator::VolPath(cfg) => volpath::li(scene, cray, sampler, cfg),
             Integrator::Direct {
                 emitter_samples,
                 bsdf_samples,

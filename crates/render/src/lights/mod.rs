@@ -111,6 +111,11 @@ pub(crate) trait LightModel {
         false
     }
 
+    /// The point a light emits from, for lights that are a point (point, spot).
+    fn position(&self) -> Option<Vec3> {
+        None
+    }
+
     /// Radiance of an environment light seen along `d` (escaping ray direction).
     fn environment(&self, _d: Vec3) -> Vec3 {
         Vec3::ZERO
@@ -184,6 +189,12 @@ impl Light {
     #[inline]
     pub fn environment(&self, d: Vec3) -> Vec3 {
         dispatch!(self, l => l.environment(d))
+    }
+
+    /// The point a point or spot light emits from (`None` for other lights).
+    #[inline]
+    pub fn position(&self) -> Option<Vec3> {
+        dispatch!(self, l => l.position())
     }
 
     /// Sample a direction from `r` towards this light.

@@ -17,6 +17,10 @@ impl LightModel for PointLight {
         true
     }
 
+    fn position(&self) -> Option<Vec3> {
+        Some(self.position)
+    }
+
     fn sample_li(&self, _scene: &impl LightScene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
         let d = self.position - r.p;
         let d2 = d.length_squared();

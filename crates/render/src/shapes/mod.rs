@@ -249,6 +249,10 @@ pub struct ShapeInfo {
     pub opacity: Option<FloatRef>,
     /// What shading reads of this shape's interactions beyond position and normals.
     pub reads: Reads,
+    /// The media inside (opposite the geometric normal) and outside (where it points): indices
+    /// into the scene's media. A shape with either set is a medium transition.
+    pub interior: Option<u32>,
+    pub exterior: Option<u32>,
 }
 
 #[cfg(test)]

@@ -1112,6 +1112,7 @@ impl Builder {
                         .ok_or_else(|| self.ctx.err(nn, "zero normal"))?;
                     let radiance = self.ctx.vec3(self.ctx.req(n, "Radiance")?)?;
                     self.desc.shapes.push(ShapeDesc {
+                        media: Default::default(),
                         motion: None,
                         shape: Shape::Rectangle,
                         to_world: frame * Mat4::from_scale(Vec3::new(size * 0.5, size * 0.5, 1.0)),
@@ -1154,7 +1155,11 @@ impl Builder {
                     continue;
                 }
             };
-            self.desc.emitters.push(EmitterDesc { emitter, loc });
+            self.desc.emitters.push(EmitterDesc {
+                medium: None,
+                emitter,
+                loc,
+            });
         }
         Ok(())
     }
@@ -1344,6 +1349,7 @@ impl Builder {
         emission: Option<AreaEmission>,
     ) {
         self.desc.shapes.push(ShapeDesc {
+            media: Default::default(),
             motion: None,
             shape,
             to_world,
@@ -1572,6 +1578,7 @@ impl Builder {
         };
         let _ = aspect;
         self.desc.sensors.push(Sensor {
+            medium: None,
             camera: Camera {
                 projection,
                 to_world,

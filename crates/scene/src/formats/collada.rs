@@ -432,6 +432,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let loc = self.loc(inst);
         let first = bound.values().next().copied();
         let shape_for = |shape: Shape, mat: Option<Mat>| ShapeDesc {
+            media: Default::default(),
             motion: None,
             shape,
             to_world: m,
@@ -1013,6 +1014,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     loc: loc.clone(),
                 });
                 self.desc.shapes.push(ShapeDesc {
+                    media: Default::default(),
                     motion: None,
                     shape: Shape::Rectangle,
                     to_world,
@@ -1034,7 +1036,11 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 )));
             }
         };
-        self.desc.emitters.push(EmitterDesc { emitter, loc });
+        self.desc.emitters.push(EmitterDesc {
+            medium: None,
+            emitter,
+            loc,
+        });
         Ok(())
     }
 
@@ -1101,6 +1107,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let width = DEFAULT_WIDTH;
         let height = ((width as f32 / aspect).round() as u32).clamp(1, 1 << 16);
         Ok(Sensor {
+            medium: None,
             camera: Camera {
                 projection: Projection::Perspective {
                     fov: fov_y,
@@ -1135,6 +1142,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let left = m.transform_vector3(-Vec3::X);
         let up = fwd.cross(left);
         Sensor {
+            medium: None,
             camera: Camera {
                 projection: Projection::Perspective {
                     fov: 45.0,

@@ -449,6 +449,7 @@ impl Parser<'_> {
                 loc: l.loc(0),
             });
         self.desc.shapes.push(ShapeDesc {
+            media: Default::default(),
             motion: None,
             shape,
             to_world,
@@ -677,6 +678,7 @@ impl Parser<'_> {
         let color = self.color(color);
         self.light_id(l, id)?;
         self.desc.emitters.push(EmitterDesc {
+            medium: None,
             emitter: crate::Emitter::Point {
                 position,
                 intensity: color * std::f32::consts::PI,
@@ -721,6 +723,7 @@ impl Parser<'_> {
             loc: l.loc(l.toks[0].col),
         });
         self.desc.shapes.push(ShapeDesc {
+            media: Default::default(),
             motion: None,
             shape: Shape::Rectangle,
             to_world,
@@ -822,6 +825,7 @@ impl Parser<'_> {
             None => default_camera(),
         };
         self.desc.sensors.push(Sensor {
+            medium: None,
             camera,
             film: Film {
                 width: DEFAULT_WIDTH,

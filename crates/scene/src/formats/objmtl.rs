@@ -295,6 +295,7 @@ pub fn square_light(
     let to_world =
         Mat4::from_scale_rotation_translation(Vec3::new(0.5 * size, 0.5 * size, 1.0), rot, center);
     Some(ShapeDesc {
+        media: Default::default(),
         motion: None,
         shape: Shape::Rectangle,
         to_world,
@@ -441,6 +442,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
             None => (None, file_loc.clone()),
         };
         desc.shapes.push(ShapeDesc {
+            media: Default::default(),
             motion: None,
             shape: Shape::Mesh(Arc::new(submesh(mesh, tris))),
             to_world: Mat4::IDENTITY,
@@ -473,6 +475,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
     }
 
     desc.sensors.push(Sensor {
+        medium: None,
         camera: default_camera(lo, hi, front_face_closed(mesh, hi, lo)),
         film: crate::Film {
             width: 512,

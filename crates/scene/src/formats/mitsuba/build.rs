@@ -172,7 +172,10 @@ fn spec_to_rgb(spec: &ColorSpec, usage: SpectrumUse, loc: &Loc) -> Result<Rgb> {
 fn usage_for(name: &str, emitter: bool) -> SpectrumUse {
     if emitter {
         SpectrumUse::Emission
-    } else if matches!(name, "eta" | "k" | "int_ior" | "ext_ior") {
+    } else if matches!(
+        name,
+        "eta" | "k" | "int_ior" | "ext_ior" | "sigma_t" | "sigma_a" | "sigma_s"
+    ) {
         SpectrumUse::Unbounded
     } else {
         SpectrumUse::Reflectance
@@ -185,6 +188,7 @@ pub struct SceneBuilder<'c, 's> {
     pub scene: SceneDesc,
     materials: HashMap<String, MaterialId>,
     textures: HashMap<String, TextureId>,
+    media: HashMap<String, MediumId>,
     /// A sampler given at scene level (Nori), applied to every sensor without its own.
     top_sampler: Option<SamplerDesc>,
     sensor_has_sampler: Vec<bool>,
@@ -206,6 +210,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             },
             materials: HashMap::new(),
             textures: HashMap::new(),
+            media: HashMap::new(),
             top_sampler: None,
             sensor_has_sampler: Vec::new(),
             has_integrator: false,
@@ -464,6 +469,195 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             self.materials.insert(key.to_string(), id);
         }
         Ok(id)
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Participating media
+
+    /// A medium, instantiated once per id.
+    pub fn medium(&mut self, c: &Child<'s>) -> Result<MediumId> {
+        if let Some(id) = c.id()
+            && let Some(&m) = self.media.get(id)
+        {
+            return Ok(m);
+        }
+        let pl = self.ctx.plugin(c.elem)?;
+        let mut phase = PhaseDesc::Isotropic;
+        let mut grids: [Option<VolumeParam>; 2] = [None, None];
+        for ch in &pl.children {
+            match (ch.elem.tag.as_str(), ch.name.as_deref()) {
+                ("phase", _) => phase = self.phase(ch)?,
+                ("volume", Some("sigma_t")) => grids[0] = Some(self.volume(ch)?),
+                ("volume", Some("albedo")) => grids[1] = Some(self.volume(ch)?),
+                ("volume", _) => {
+                    return Err(err(
+                        &ch.loc,
+                        "a volume in a medium needs name=\"sigma_t\" or name=\"albedo\"",
+                    ));
+                }
+                (other, _) => {
+                    return Err(err(
+                        &ch.loc,
+                        format!("<{other}> cannot be nested in a medium"),
+                    ));
+                }
+            }
+        }
+        let scale = pl.props.float("scale", 1.0)?;
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(err(pl.loc(), "medium 'scale' must be a finite number ≥ 0"));
+        }
+        let [sigma_t_grid, albedo_grid] = grids;
+        let medium = match pl.ty.as_str() {
+            "homogeneous" => {
+                let (sigma_t, albedo) = if pl.props.has("sigma_a") || pl.props.has("sigma_s") {
+                    // Mitsuba 0.6: absorption and scattering coefficients.
+                    let a = self.medium_rgb(&pl, "sigma_a", Vec3::ZERO)?;
+                    let s = self.medium_rgb(&pl, "sigma_s", Vec3::ZERO)?;
+                    let t = a + s;
+                    let albedo = Vec3::select(t.cmpgt(Vec3::ZERO), s / t, Vec3::ZERO);
+                    (t, albedo)
+                } else {
+                    let t = match sigma_t_grid {
+                        Some(VolumeParam::Const(v)) => v,
+                        Some(VolumeParam::Grid(_)) => {
+                            return Err(err(
+                                pl.loc(),
+                                "a homogeneous medium takes constant coefficients; use type \"heterogeneous\" for a grid",
+                            ));
+                        }
+                        None => self.medium_rgb(&pl, "sigma_t", Vec3::ONE)?,
+                    };
+                    let albedo = match albedo_grid {
+                        Some(VolumeParam::Const(v)) => v,
+                        Some(VolumeParam::Grid(_)) => {
+                            return Err(err(
+                                pl.loc(),
+                                "a homogeneous medium takes a constant albedo",
+                            ));
+                        }
+                        None => self.medium_rgb(&pl, "albedo", Vec3::splat(0.75))?,
+                    };
+                    (t, albedo)
+                };
+                Medium::Homogeneous {
+                    sigma_t,
+                    albedo,
+                    scale,
+                }
+            }
+            "heterogeneous" => {
+                let sigma_t = match sigma_t_grid {
+                    Some(VolumeParam::Grid(g)) => g,
+                    _ => {
+                        return Err(err(
+                            pl.loc(),
+                            "a heterogeneous medium needs <volume type=\"gridvolume\" name=\"sigma_t\">",
+                        ));
+                    }
+                };
+                let albedo = match albedo_grid {
+                    Some(v) => v,
+                    None => {
+                        VolumeParam::Const(self.medium_rgb(&pl, "albedo", Vec3::splat(0.75))?)
+                    }
+                };
+                Medium::Heterogeneous {
+                    sigma_t,
+                    albedo,
+                    scale,
+                }
+            }
+            _ => return Err(unknown_type(&pl, "homogeneous, heterogeneous")),
+        };
+        // Mitsuba's `sample_emitters` (next-event estimation from medium vertices) is always on.
+        pl.props.bool("sample_emitters", true)?;
+        self.ctx.finish(&pl);
+        let id = self.scene.add_medium(MediumDesc {
+            medium,
+            phase,
+            name: c.id().map(str::to_string),
+            loc: pl.loc().clone(),
+        });
+        if let Some(key) = c.id() {
+            self.media.insert(key.to_string(), id);
+        }
+        Ok(id)
+    }
+
+    /// A non-negative, finite constant colour parameter of a medium.
+    fn medium_rgb(&mut self, pl: &Plugin<'s>, name: &str, default: Rgb) -> Result<Rgb> {
+        let v = self.rgb(pl, name, default, false)?;
+        if !(v.is_finite() && v.cmpge(Vec3::ZERO).all()) {
+            let loc = pl.props.get(name).map_or(pl.loc(), |p| &p.loc);
+            return Err(err(
+                loc,
+                format!("medium parameter '{name}' must be finite and ≥ 0, found {v}"),
+            ));
+        }
+        Ok(v)
+    }
+
+    fn phase(&mut self, c: &Child<'s>) -> Result<PhaseDesc> {
+        let pl = self.ctx.plugin(c.elem)?;
+        let phase = match pl.ty.as_str() {
+            "isotropic" => PhaseDesc::Isotropic,
+            "hg" => {
+                let g = pl.props.float("g", 0.8)?;
+                if !(g > -1.0 && g < 1.0) {
+                    return Err(err(pl.loc(), "phase 'hg' needs -1 < g < 1"));
+                }
+                PhaseDesc::HenyeyGreenstein { g }
+            }
+            _ => return Err(unknown_type(&pl, "isotropic, hg")),
+        };
+        self.ctx.finish(&pl);
+        Ok(phase)
+    }
+
+    /// A medium parameter given as a volume: `constvolume` or `gridvolume` (a Mitsuba `.vol`
+    /// file, or an OpenVDB `.vdb` file with its `grid_name`, default `density`).
+    fn volume(&mut self, c: &Child<'s>) -> Result<VolumeParam> {
+        let pl = self.ctx.plugin(c.elem)?;
+        let v = match pl.ty.as_str() {
+            "constvolume" => VolumeParam::Const(self.medium_rgb(&pl, "value", Vec3::ONE)?),
+            "gridvolume" => {
+                let path = self.ctx.file_param(&pl, "gridvolume")?;
+                let vdb = path
+                    .extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
+                let format = if vdb {
+                    let name = pl
+                        .props
+                        .string_opt("grid_name")?
+                        .map_or("density", |(n, _)| n)
+                        .to_string();
+                    VolumeFormat::Vdb { grid_name: name }
+                } else {
+                    VolumeFormat::MitsubaVol
+                };
+                let trilinear = match pl.props.string_opt("filter_type")? {
+                    None | Some(("trilinear", _)) => true,
+                    Some(("nearest", _)) => false,
+                    Some((other, loc)) => {
+                        return Err(err(
+                            loc,
+                            format!("filter_type '{other}': expected trilinear or nearest"),
+                        ));
+                    }
+                };
+                VolumeParam::Grid(Box::new(VolumeDesc {
+                    path,
+                    format,
+                    to_world: pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY),
+                    trilinear,
+                    loc: pl.loc().clone(),
+                }))
+            }
+            _ => return Err(unknown_type(&pl, "constvolume, gridvolume")),
+        };
+        self.ctx.finish(&pl);
+        Ok(v)
     }
 
     /// The single nested bsdf of a wrapper (`normalmap`, `mask`), or an error naming it.
@@ -942,6 +1136,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         let flip_normals = pl.props.bool("flip_normals", false)?;
         let mut material = None;
         let mut emission = None;
+        let mut media = MediumInterface::default();
         for c in &pl.children {
             match c.elem.tag.as_str() {
                 "bsdf" => {
@@ -956,9 +1151,19 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     }
                     emission = Some(self.area_emission(c)?);
                 }
-                "medium" => self
-                    .ctx
-                    .warn(&c.loc, "participating media are not supported; ignored"),
+                "medium" => {
+                    let m = Some(self.medium(c)?);
+                    match c.name.as_deref() {
+                        Some("interior") => media.interior = m,
+                        Some("exterior") => media.exterior = m,
+                        _ => {
+                            return Err(err(
+                                &c.loc,
+                                "a medium in a shape needs name=\"interior\" or name=\"exterior\"",
+                            ));
+                        }
+                    }
+                }
                 other => {
                     return Err(err(
                         &c.loc,
@@ -974,6 +1179,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             .or_else(|| pl.elem.value("name"))
             .map(str::to_string);
         self.scene.shapes.push(ShapeDesc {
+            media,
             motion: None,
             shape,
             to_world,
@@ -1284,15 +1490,17 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         let mut film = None;
         let mut sampler = None;
         let mut filter = None;
+        let mut medium = None;
         for c in &pl.children {
+            if c.elem.tag == "medium" {
+                medium = Some(self.medium(c)?);
+                continue;
+            }
             let cp = self.ctx.plugin(c.elem)?;
             match c.elem.tag.as_str() {
                 "film" => film = Some(self.film(&cp)?),
                 "sampler" => sampler = Some(self.sampler(&cp)?),
                 "rfilter" => filter = Some(self.rfilter(&cp)?),
-                "medium" => self
-                    .ctx
-                    .warn(&c.loc, "participating media are not supported; ignored"),
                 other => {
                     return Err(err(
                         &c.loc,
@@ -1333,6 +1541,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         self.ctx.finish(pl);
         self.sensor_has_sampler.push(sampler.is_some());
         self.scene.sensors.push(Sensor {
+            medium,
             camera: Camera {
                 projection,
                 to_world,
@@ -1357,22 +1566,20 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     fn integrator(&mut self, pl: &Plugin<'s>) -> Result<IntegratorDesc> {
         let i = match pl.ty.as_str() {
-            "path" | "volpath" | "volpathmis" => {
-                if pl.ty != "path" {
-                    self.ctx.warn(
-                        pl.loc(),
-                        format!("integrator '{}' approximated by 'path' (no media)", pl.ty),
-                    );
-                }
-                IntegratorDesc::Path(PathDesc {
-                    max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
-                    rr: RussianRoulette::Throughput {
-                        from_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
-                    },
-                    hide_emitters: pl.props.bool("hide_emitters", false)?,
-                    ..PathDesc::default()
-                })
-            }
+            "volpath" | "volpathmis" => IntegratorDesc::VolPath {
+                max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
+                hide_emitters: pl.props.bool("hide_emitters", false)?,
+                equiangular: pl.props.bool("equiangular", true)?,
+            },
+            "path" => IntegratorDesc::Path(PathDesc {
+                max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                rr: RussianRoulette::Throughput {
+                    from_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
+                },
+                hide_emitters: pl.props.bool("hide_emitters", false)?,
+                ..PathDesc::default()
+            }),
             "direct" => {
                 let shading = pl.props.int_in("shading_samples", 1, 0, 1 << 20)?;
                 IntegratorDesc::Direct {
@@ -1461,7 +1668,12 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 "emitter" => {
                     let cp = self.ctx.plugin(c.elem)?;
                     if let Some(e) = self.emitter(&cp)? {
+                        let mut medium = None;
+                        for m in cp.children.iter().filter(|m| m.elem.tag == "medium") {
+                            medium = Some(self.medium(m)?);
+                        }
                         self.scene.emitters.push(EmitterDesc {
+                            medium,
                             emitter: e,
                             loc: cp.loc().clone(),
                         });
@@ -1486,14 +1698,13 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     self.top_sampler = Some(self.sampler(&cp)?);
                     self.ctx.finish(&cp);
                 }
-                "medium" | "phase" | "volume" => {
-                    self.ctx.warn(
-                        &c.loc,
-                        format!(
-                            "<{}> (participating media) is not supported; ignored",
-                            c.elem.tag
-                        ),
-                    );
+                // Declared media are instantiated (and checked) once, used through <ref>.
+                "medium" => {
+                    self.medium(c)?;
+                }
+                "phase" | "volume" => {
+                    let cp = self.ctx.plugin(c.elem)?;
+                    self.ctx.finish(&cp);
                 }
                 other => {
                     return Err(err(&c.loc, format!("<{other}> cannot appear in a <scene>")));
@@ -1557,6 +1768,7 @@ fn default_sensor(scene: &SceneDesc, loc: &Loc) -> Sensor {
         None => (Mat4::IDENTITY, 1e-2, 1e4),
     };
     Sensor {
+        medium: None,
         camera: Camera {
             projection: Projection::Perspective {
                 fov,
