@@ -21,6 +21,7 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
             rr_depth,
             hide_emitters,
             equiangular,
+            transmittance,
         } => Integrator::VolPath(VolPathConfig {
             max_depth: if *max_depth < 0 {
                 u32::MAX
@@ -30,6 +31,7 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
             rr_depth: *rr_depth,
             hide_emitters: *hide_emitters,
             equiangular: *equiangular,
+            transmittance: *transmittance,
         }),
         IntegratorDesc::Direct {
             emitter_samples,

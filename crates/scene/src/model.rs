@@ -719,6 +719,8 @@ pub enum IntegratorDesc {
         /// Equiangular sampling towards point and spot lights, MIS-combined with free-flight
         /// sampling (our extension, on by default; the mean is Mitsuba's).
         equiangular: bool,
+        /// How shadow rays estimate the transmittance of grids (`transmittance`).
+        transmittance: TransmittanceEstimator,
     },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },

@@ -964,6 +964,7 @@ fn media_on_shapes_sensors_and_emitters() {
             rr_depth: 5,
             hide_emitters: false,
             equiangular: true,
+            transmittance: TransmittanceEstimator::RatioTracking,
         }
     ));
 }

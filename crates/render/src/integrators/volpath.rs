@@ -20,6 +20,8 @@
 //! analytic transmittance on shadow rays: lower variance, the same mean. Grids use delta and
 //! ratio tracking, as Mitsuba does.
 
+use base::TransmittanceEstimator;
+
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
@@ -42,6 +44,8 @@ pub struct VolPathConfig {
     /// Also sample points on each medium segment by equiangular sampling towards a point or
     /// spot light, MIS-combined with free-flight sampling (grey homogeneous media).
     pub equiangular: bool,
+    /// How shadow rays estimate the transmittance of grids.
+    pub transmittance: TransmittanceEstimator,
 }
 
 /// The power heuristic (β = 2).
@@ -109,6 +113,7 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                     end: d_surface,
                     sigma_t,
                     sigma_s,
+                    estimator: cfg.transmittance,
                 });
             if let Some(seg) = &segment {
                 result += throughput
@@ -132,8 +137,14 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                     let r = Receiver::at(p);
                     if let Some((i, ls, pmf)) = sample_light(scene, &r, sampler) {
                         let ph = m.phase.eval(wo, ls.wi);
-                        let tr =
-                            transmittance(scene, From::Medium(p, ray.time), &ls, medium, sampler);
+                        let tr = transmittance(
+                            scene,
+                            From::Medium(p, ray.time),
+                            &ls,
+                            medium,
+                            cfg.transmittance,
+                            sampler,
+                        );
                         if tr != Vec3::ZERO {
                             let w = match (&segment, scene.lights[i as usize].position()) {
                                 // A point light also reachable by strategy B.
@@ -226,7 +237,14 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                 let (f, pdf) = bsdf.eval_pdf(wo, frame.to_local(ls.wi), TransportMode::Radiance);
                 if f != Vec3::ZERO {
                     let start = scene.medium_after(&si, ls.wi, medium);
-                    let tr = transmittance(scene, From::Surface(&si), &ls, start, sampler);
+                    let tr = transmittance(
+                        scene,
+                        From::Surface(&si),
+                        &ls,
+                        start,
+                        cfg.transmittance,
+                        sampler,
+                    );
                     if tr != Vec3::ZERO {
                         let w = if ls.delta {
                             1.0
@@ -284,6 +302,7 @@ struct Segment {
     end: f32,
     sigma_t: f32,
     sigma_s: f32,
+    estimator: TransmittanceEstimator,
 }
 
 impl Segment {
@@ -355,7 +374,14 @@ impl Segment {
         if ls.li == Vec3::ZERO || ls.pdf <= 0.0 {
             return Vec3::ZERO;
         }
-        let tr = transmittance(scene, From::Medium(x, time), &ls, medium, sampler);
+        let tr = transmittance(
+            scene,
+            From::Medium(x, time),
+            &ls,
+            medium,
+            self.estimator,
+            sampler,
+        );
         if tr == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -390,6 +416,7 @@ fn transmittance(
     from: From<'_>,
     ls: &LightSample,
     mut medium: Option<u32>,
+    estimator: TransmittanceEstimator,
     sampler: &mut Sampler,
 ) -> Vec3 {
     let (mut ray, mut t_max) = shadow_ray(&from, ls);
@@ -400,7 +427,7 @@ fn transmittance(
             let len = ray.d.length();
             let unit = Ray::at_time(ray.o, ray.d / len, ray.time);
             let end = hit.as_ref().map_or(t_max, |si| si.t);
-            tr *= scene.media[m as usize].transmittance(&unit, end * len, sampler);
+            tr *= scene.media[m as usize].transmittance(&unit, end * len, estimator, sampler);
             if tr == Vec3::ZERO {
                 return tr;
             }

@@ -6,6 +6,9 @@ use std::path::Path;
 
 use crate::math::Vec3;
 
+/// The most values a grid may hold (2³⁰ floats: 4 GiB).
+const MAX_VALUES: usize = 1 << 30;
+
 #[derive(Clone, Debug)]
 pub struct VoxelGrid {
     /// Voxels along x, y, z.
@@ -130,14 +133,15 @@ impl VoxelGrid {
             ));
         }
         let res = dims.map(|d| d as usize);
+        // Refused before any arithmetic can overflow or an allocation can be attempted.
         let count = res
             .iter()
             .try_fold(channels as usize, |a, &r| a.checked_mul(r))
-            .filter(|&n| n <= (bytes.len() - 48) / 4 + 1)
+            .filter(|&n| n <= MAX_VALUES)
             .ok_or_else(|| {
                 fail(
-                    Some(48),
-                    format!("resolution {res:?} × {channels} does not fit in the file"),
+                    Some(8),
+                    format!("resolution {res:?} × {channels} is too large"),
                 )
             })?;
         let need = 48 + count * 4;
@@ -232,7 +236,7 @@ mod tests {
                 vol([2, 2, 2], 1, &[0.5, f32::NAN, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]),
                 "finite",
             ),
-            (vol([1 << 30, 1 << 30, 4], 1, &[]), "does not fit"),
+            (vol([1 << 30, 1 << 30, 4], 1, &[]), "too large"),
         ];
         for (i, (bytes, want)) in cases.into_iter().enumerate() {
             let p = write(&format!("bad{i}.vol"), &bytes);

@@ -2,10 +2,12 @@
 //! albedo that is constant or a grid; the grid fills [0,1]³ of its space, placed in the
 //! world by an affine map. Outside that box the medium is empty.
 //!
-//! Free flights are sampled by delta tracking and transmittance is estimated by ratio
-//! tracking (Novák et al. 2014), both against a majorant σ̄ ≥ σt: tentative collisions at
-//! rate σ̄, each real with probability σt/σ̄ (delta tracking) or weighting the estimate by
-//! 1 − σt/σ̄ (ratio tracking). Both are unbiased for any σ̄ ≥ max σt.
+//! Free flights are sampled by delta tracking against a majorant σ̄ ≥ σt: tentative
+//! collisions at rate σ̄, each real with probability σt/σ̄. Transmittance is estimated by one
+//! of six unbiased estimators ([`Estimator`]: delta, ratio, residual ratio and next-flight
+//! ratio tracking, the power-series CMF estimator and unbiased ray marching).
+
+use base::TransmittanceEstimator as Estimator;
 
 use super::grid::VoxelGrid;
 use super::homogeneous::Flight;
@@ -28,12 +30,16 @@ pub struct Heterogeneous {
     pub to_grid: Mat4,
     /// The majorant: scale · the largest density.
     pub majorant: f32,
+    /// The smallest density (the residual tracker's control, times `scale`).
+    pub min_density: f32,
 }
 
 impl Heterogeneous {
     pub fn new(density: VoxelGrid, albedo: Albedo, scale: f32, to_world: Mat4) -> Heterogeneous {
         let majorant = scale * density.max_value();
+        let min_density = density.data.iter().fold(f32::INFINITY, |m, &v| m.min(v));
         Heterogeneous {
+            min_density,
             density,
             albedo,
             scale,
@@ -63,22 +69,25 @@ impl Heterogeneous {
 
     /// Delta tracking over `[0, d_max)` of the (unit-direction) ray.
     pub fn sample(&self, ray: &Ray, d_max: f32, sampler: &mut Sampler) -> Flight {
+        self.sample_with(ray, d_max, &mut || sampler.next_1d())
+    }
+
+    /// [`Heterogeneous::sample`] with the uniform numbers from `u`.
+    pub fn sample_with(&self, ray: &Ray, d_max: f32, u: &mut impl FnMut() -> f32) -> Flight {
+        let pass = Flight::Pass {
+            weight: Vec3::ONE,
+            ratio: Vec3::ONE,
+        };
         let Some((mut t, far, o, d)) = self.clip(ray, d_max) else {
-            return Flight::Pass {
-                weight: Vec3::ONE,
-                ratio: Vec3::ONE,
-            };
+            return pass;
         };
         loop {
-            t -= (1.0 - sampler.next_1d()).ln() / self.majorant;
+            t -= (1.0 - u()).ln() / self.majorant;
             if t >= far {
-                return Flight::Pass {
-                    weight: Vec3::ONE,
-                    ratio: Vec3::ONE,
-                };
+                return pass;
             }
             let p = o + d * t;
-            if sampler.next_1d() * self.majorant < self.sigma_t(p) {
+            if u() * self.majorant < self.sigma_t(p) {
                 let albedo = match &self.albedo {
                     Albedo::Const(a) => *a,
                     Albedo::Grid(g) => g.rgb(p),
@@ -92,26 +101,176 @@ impl Heterogeneous {
         }
     }
 
-    /// Ratio tracking over `[0, d_max)`.
-    pub fn transmittance(&self, ray: &Ray, d_max: f32, sampler: &mut Sampler) -> Vec3 {
-        let Some((mut t, far, o, d)) = self.clip(ray, d_max) else {
-            return Vec3::ONE;
+    /// σt at distance `t` along the (unit-direction) ray, for tests and quadrature.
+    pub fn sigma_t_along(&self, ray: &Ray, t: f32) -> f32 {
+        let o = self.to_grid.transform_point3a(ray.o);
+        let d = self.to_grid.transform_vector3a(ray.d);
+        let p = o + d * t;
+        if p.cmpge(Vec3::ZERO).all() && p.cmple(Vec3::ONE).all() {
+            self.sigma_t(p)
+        } else {
+            0.0
+        }
+    }
+
+    /// The transmittance along `ray` (unit direction) over `[0, d_max)` by `estimator`.
+    pub fn transmittance(
+        &self,
+        ray: &Ray,
+        d_max: f32,
+        estimator: Estimator,
+        sampler: &mut Sampler,
+    ) -> Vec3 {
+        Vec3::splat(self.estimate(ray, d_max, estimator, &mut || sampler.next_1d()))
+    }
+
+    /// [`Heterogeneous::transmittance`] with the uniform numbers from `u`.
+    pub fn estimate(
+        &self,
+        ray: &Ray,
+        d_max: f32,
+        estimator: Estimator,
+        u: &mut impl FnMut() -> f32,
+    ) -> f32 {
+        let Some((t0, t1, o, d)) = self.clip(ray, d_max) else {
+            return 1.0;
         };
-        let mut tr = 1.0f32;
-        loop {
-            t -= (1.0 - sampler.next_1d()).ln() / self.majorant;
-            if t >= far {
-                return Vec3::splat(tr);
-            }
-            tr *= 1.0 - self.sigma_t(o + d * t) / self.majorant;
-            // Russian roulette on small estimates keeps long rays cheap, unbiased.
-            if tr < 0.1 {
-                let q = 0.75;
-                if sampler.next_1d() < q {
-                    return Vec3::ZERO;
+        let sigma = |t: f32| self.sigma_t(o + d * t);
+        let (maj, len) = (self.majorant, t1 - t0);
+        // The next tentative collision after `t` at rate `rate`.
+        let step = |t: f32, rate: f32, u: &mut dyn FnMut() -> f32| t - (1.0 - u()).ln() / rate;
+        match estimator {
+            Estimator::DeltaTracking => {
+                let mut t = t0;
+                loop {
+                    t = step(t, maj, u);
+                    if t >= t1 {
+                        return 1.0;
+                    }
+                    if u() * maj < sigma(t) {
+                        return 0.0;
+                    }
                 }
-                tr /= 1.0 - q;
+            }
+            Estimator::RatioTracking => {
+                let mut tr = 1.0f32;
+                let mut t = t0;
+                loop {
+                    t = step(t, maj, u);
+                    if t >= t1 {
+                        return tr;
+                    }
+                    tr *= 1.0 - sigma(t) / maj;
+                    if !roulette(&mut tr, u) {
+                        return 0.0;
+                    }
+                }
+            }
+            Estimator::ResidualRatioTracking => {
+                let control = self.scale * self.min_density;
+                let residual = maj - control;
+                let mut tr = (-control * len).exp();
+                if residual <= 0.0 {
+                    return tr;
+                }
+                let mut t = t0;
+                loop {
+                    t = step(t, residual, u);
+                    if t >= t1 {
+                        return tr;
+                    }
+                    tr *= 1.0 - (sigma(t) - control) / residual;
+                    if !roulette(&mut tr, u) {
+                        return 0.0;
+                    }
+                }
+            }
+            Estimator::NextFlightRatioTracking => {
+                let mut sum = (-maj * len).exp();
+                let mut w = 1.0f32;
+                let mut t = t0;
+                loop {
+                    t = step(t, maj, u);
+                    if t >= t1 || w == 0.0 {
+                        return sum;
+                    }
+                    w *= 1.0 - sigma(t) / maj;
+                    sum += w * (-maj * (t1 - t)).exp();
+                }
+            }
+            Estimator::PowerSeriesCmf => {
+                // τc = σ̄·d; each factor (σ̄ − σ(x))·d at a uniform point estimates τc − τ.
+                let lambda = (maj - self.scale * self.min_density) * len;
+                power_series(maj * len, lambda, u, &mut |u| {
+                    (maj - sigma(t0 + u() * len)) * len
+                })
+            }
+            Estimator::UnbiasedRayMarching => {
+                let steps = ((maj * len).ceil() as usize).clamp(1, 256);
+                let h = len / steps as f32;
+                let march = |u: &mut dyn FnMut() -> f32| {
+                    let off = u();
+                    (0..steps)
+                        .map(|j| sigma(t0 + (j as f32 + off) * h))
+                        .sum::<f32>()
+                        * h
+                };
+                let control = march(u);
+                power_series(control, 1.0, u, &mut |u| control - march(u))
             }
         }
     }
+}
+
+/// Russian roulette on a small ratio-tracking weight (unbiased; keeps long rays cheap):
+/// `false` when the estimate is terminated (it is then 0).
+#[inline]
+fn roulette(tr: &mut f32, u: &mut impl FnMut() -> f32) -> bool {
+    if *tr < 0.1 {
+        const Q: f32 = 0.75;
+        if u() < Q {
+            return false;
+        }
+        *tr /= 1.0 - Q;
+    }
+    true
+}
+
+/// The smallest order k at which the Poisson(λ) cumulative mass reaches `p`.
+fn cmf_order(lambda: f32, p: f32) -> u32 {
+    let mut term = (-lambda).exp();
+    let mut cmf = term;
+    let mut k = 0;
+    while cmf < p && k < 64 {
+        k += 1;
+        term *= lambda / k as f32;
+        cmf += term;
+    }
+    k
+}
+
+/// e^{−τc} Σₖ Πᵢ₌₁ᵏ Yᵢ / k! with `factor` drawing independent Yᵢ of mean τc − τ: every term
+/// up to the 90 % point of the Poisson(λ) cumulative mass (λ bounds |τc − τ|), then each
+/// further term with probability min(λ/k, 0.9), its weight divided by the probability of
+/// reaching it. Unbiased for e^{−τ}.
+fn power_series(
+    tau_c: f32,
+    lambda: f32,
+    u: &mut impl FnMut() -> f32,
+    factor: &mut impl FnMut(&mut dyn FnMut() -> f32) -> f32,
+) -> f32 {
+    let k0 = cmf_order(lambda, 0.9);
+    let (mut term, mut sum, mut reach) = (1.0f32, 1.0f32, 1.0f32);
+    for k in 1..=1024u32 {
+        if k > k0 {
+            let q = (lambda / k as f32).min(0.9);
+            if q <= 0.0 || u() >= q {
+                break;
+            }
+            reach *= q;
+        }
+        term *= factor(u) / k as f32;
+        sum += term / reach;
+    }
+    (-tau_c).exp() * sum
 }

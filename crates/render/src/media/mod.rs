@@ -15,6 +15,8 @@ pub use heterogeneous::Heterogeneous;
 pub use homogeneous::{Flight, Homogeneous};
 pub use phase::Phase;
 
+use base::TransmittanceEstimator;
+
 use crate::geometry::Ray;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
@@ -59,12 +61,18 @@ impl Medium {
     }
 
     /// The transmittance along `ray` (unit direction) over `[0, d_max)`: exact for
-    /// homogeneous media, an unbiased estimate (ratio tracking) for grids.
+    /// homogeneous media, an unbiased estimate by `estimator` for grids.
     #[inline]
-    pub fn transmittance(&self, ray: &Ray, d_max: f32, sampler: &mut Sampler) -> Vec3 {
+    pub fn transmittance(
+        &self,
+        ray: &Ray,
+        d_max: f32,
+        estimator: TransmittanceEstimator,
+        sampler: &mut Sampler,
+    ) -> Vec3 {
         match &self.kind {
             MediumKind::Homogeneous(h) => h.transmittance(d_max),
-            MediumKind::Heterogeneous(h) => h.transmittance(ray, d_max, sampler),
+            MediumKind::Heterogeneous(h) => h.transmittance(ray, d_max, estimator, sampler),
         }
     }
 }

@@ -1571,6 +1571,20 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
                 hide_emitters: pl.props.bool("hide_emitters", false)?,
                 equiangular: pl.props.bool("equiangular", true)?,
+                transmittance: match pl.props.string_opt("transmittance")? {
+                    None => TransmittanceEstimator::default(),
+                    Some((name, loc)) => {
+                        TransmittanceEstimator::from_name(name).ok_or_else(|| {
+                            err(
+                                loc,
+                                format!(
+                                    "transmittance '{name}': expected one of {}",
+                                    TransmittanceEstimator::ALL.map(|e| e.name()).join(", ")
+                                ),
+                            )
+                        })?
+                    }
+                },
             },
             "path" => IntegratorDesc::Path(PathDesc {
                 max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
