@@ -1,5 +1,6 @@
 //! Participating media, a file per kind: [`homogeneous`] (constant coefficients), and
-//! [`heterogeneous`] (a density grid, [`grid`]); phase functions in [`phase`].
+//! [`heterogeneous`] (a density grid, [`grid`], with its [`majorant`] grid); phase functions
+//! in [`phase`].
 //!
 //! Units: media work on rays with unit directions, so ray parameters are distances. The
 //! volumetric path tracer (`integrators::volpath`) asks a medium for a free flight
@@ -9,6 +10,7 @@
 pub mod grid;
 pub mod heterogeneous;
 pub mod homogeneous;
+pub mod majorant;
 pub mod phase;
 
 pub use heterogeneous::Heterogeneous;
