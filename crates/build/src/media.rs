@@ -3,8 +3,11 @@
 use render::math::{Mat4, Vec3};
 use render::media::grid::VoxelGrid;
 use render::media::heterogeneous::Albedo;
-use render::media::{Heterogeneous, Homogeneous, Medium, MediumKind, Phase};
-use scene::{MediumDesc, PhaseDesc, SceneDesc, VolumeDesc, VolumeFormat, VolumeParam};
+use render::media::{Blackbody, Emission, Heterogeneous, Homogeneous, Medium, MediumKind, Phase};
+use scene::spectra::{SpectrumUse, planck, sampled_to_rgb};
+use scene::{
+    MediumDesc, MediumEmission, PhaseDesc, SceneDesc, VolumeDesc, VolumeFormat, VolumeParam,
+};
 
 use crate::BuildError;
 
@@ -55,7 +58,46 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
         PhaseDesc::Isotropic => Phase::Isotropic,
         PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
     };
-    Ok(Medium { kind, phase })
+    let emission = match &m.emission {
+        None => None,
+        Some(MediumEmission::Radiance(VolumeParam::Const(le))) => {
+            Some(Emission::Const((*le).into()))
+        }
+        Some(MediumEmission::Radiance(VolumeParam::Grid(g))) => Some(Emission::Grid {
+            grid: grid(g)?,
+            to_grid: to_world(g)?.inverse(),
+            blackbody: None,
+        }),
+        Some(MediumEmission::Temperature { grid: g, scale }) => Some(Emission::Grid {
+            grid: grid(g)?,
+            to_grid: to_world(g)?.inverse(),
+            blackbody: Some(blackbody(*scale)),
+        }),
+    };
+    Ok(Medium {
+        kind,
+        phase,
+        emission,
+    })
+}
+
+/// Black-body radiance (Planck, Mitsuba's `blackbody` units) projected to linear sRGB as
+/// Mitsuba projects emission spectra, every 25 K up to 20,000 K, times `scale`.
+fn blackbody(scale: f32) -> Blackbody {
+    const STEP: f32 = 25.0;
+    let lambdas: Vec<f64> = (0..=94).map(|i| 360.0 + 5.0 * i as f64).collect();
+    let table = (0..=800)
+        .map(|i| {
+            let kelvin = i as f64 * STEP as f64;
+            if kelvin <= 0.0 {
+                return Vec3::ZERO;
+            }
+            let values: Vec<f64> = lambdas.iter().map(|&l| planck(l, kelvin)).collect();
+            sampled_to_rgb(&lambdas, &values, SpectrumUse::Emission).map_or(Vec3::ZERO, Vec3::from)
+                * scale
+        })
+        .collect();
+    Blackbody { table, step: STEP }
 }
 
 fn to_world(v: &VolumeDesc) -> Result<Mat4, BuildError> {

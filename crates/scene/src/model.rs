@@ -283,6 +283,8 @@ impl MediumInterface {
 pub struct MediumDesc {
     pub medium: Medium,
     pub phase: PhaseDesc,
+    /// Light the medium emits: the source term of the transfer equation is σa·Le.
+    pub emission: Option<MediumEmission>,
     pub name: Option<String>,
     pub loc: Loc,
 }
@@ -312,6 +314,17 @@ impl Medium {
             Medium::Heterogeneous { .. } => "heterogeneous",
         }
     }
+}
+
+/// What a medium emits.
+#[derive(Clone, Debug)]
+pub enum MediumEmission {
+    /// The emitted radiance Le (a constant or a grid: Mitsuba's `radiance`).
+    Radiance(VolumeParam),
+    /// A temperature field in kelvin (our extension): Le is the black-body radiance at that
+    /// temperature in Mitsuba's `blackbody` units (W·m⁻²·sr⁻¹·nm⁻¹), projected to RGB, times
+    /// `scale`.
+    Temperature { grid: Box<VolumeDesc>, scale: f32 },
 }
 
 /// A medium parameter: a constant or a grid.

@@ -125,9 +125,17 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                     d,
                     weight,
                     ratio: r,
+                    emit,
                 } => {
-                    throughput *= weight;
                     ratio *= r;
+                    // Emission by collision estimation.
+                    if let Some(e) = &m.emission
+                        && !(depth == 0 && cfg.hide_emitters)
+                    {
+                        let le = e.radiance(ray.at(d));
+                        result += throughput * emit * le * mis_hero(ratio);
+                    }
+                    throughput *= weight;
                     depth += 1;
                     if depth >= cfg.max_depth {
                         break;

@@ -108,6 +108,7 @@ impl Heterogeneous {
                         d: t,
                         weight: albedo,
                         ratio: Vec3::ONE,
+                        emit: Vec3::ONE - albedo,
                     };
                     return false;
                 }

@@ -25,8 +25,14 @@ pub struct Homogeneous {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Flight {
     /// A real collision at distance `d` (weight T(d)·σs/p_h(d)), after which the phase
-    /// function scatters the path.
-    Scatter { d: f32, weight: Vec3, ratio: Vec3 },
+    /// function scatters the path. `emit` (T(d)·σa/p_h(d)) weighs the medium's emitted
+    /// radiance there: the collision estimator of emission.
+    Scatter {
+        d: f32,
+        weight: Vec3,
+        ratio: Vec3,
+        emit: Vec3,
+    },
     /// No collision before `d_max` (weight T/P_h(pass)).
     Pass { weight: Vec3, ratio: Vec3 },
 }
@@ -72,6 +78,7 @@ impl Homogeneous {
                 d,
                 weight: tr * self.sigma_s / p_h,
                 ratio: pdf / p_h,
+                emit: tr * (self.sigma_t - self.sigma_s) / p_h,
             }
         } else {
             let tr = self.transmittance(d_max);
@@ -109,9 +116,9 @@ mod tests {
             let u = u * 3.0 - hero as f32;
             match m.sample(d_max, u, hero) {
                 Flight::Pass { weight, ratio } => pass += weight / (ratio.element_sum() / 3.0),
-                Flight::Scatter { d, weight, ratio } if d < x => {
-                    early += weight / (ratio.element_sum() / 3.0)
-                }
+                Flight::Scatter {
+                    d, weight, ratio, ..
+                } if d < x => early += weight / (ratio.element_sum() / 3.0),
                 Flight::Scatter { .. } => {}
             }
         }

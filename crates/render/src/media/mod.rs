@@ -20,7 +20,7 @@ pub use phase::Phase;
 use base::TransmittanceEstimator;
 
 use crate::geometry::Ray;
-use crate::math::Vec3;
+use crate::math::{Mat4, Vec3};
 use crate::sampling::Sampler;
 
 #[derive(Clone, Debug)]
@@ -29,11 +29,66 @@ pub enum MediumKind {
     Heterogeneous(Box<Heterogeneous>),
 }
 
-/// A medium of the scene: its coefficients and its phase function.
+/// A medium of the scene: its coefficients, its phase function and what it emits.
 #[derive(Clone, Debug)]
 pub struct Medium {
     pub kind: MediumKind,
     pub phase: Phase,
+    pub emission: Option<Emission>,
+}
+
+/// The radiance Le a medium emits (the source term is σa·Le).
+#[derive(Clone, Debug)]
+pub enum Emission {
+    Const(Vec3),
+    /// From a grid placed by `to_grid` (world → [0,1]³): RGB radiance, or a temperature
+    /// turned into radiance by `blackbody`.
+    Grid {
+        grid: grid::VoxelGrid,
+        to_grid: Mat4,
+        blackbody: Option<Blackbody>,
+    },
+}
+
+/// Black-body RGB radiance tabulated over temperature (kelvin), times a scale.
+#[derive(Clone, Debug)]
+pub struct Blackbody {
+    /// RGB at 0, `step`, 2·`step`, … kelvin (already scaled).
+    pub table: Vec<Vec3>,
+    pub step: f32,
+}
+
+impl Blackbody {
+    /// Linear interpolation in the table (clamped at its ends).
+    pub fn rgb(&self, kelvin: f32) -> Vec3 {
+        let x = (kelvin / self.step).max(0.0);
+        let i = (x as usize).min(self.table.len() - 2);
+        let f = (x - i as f32).min(1.0);
+        self.table[i] * (1.0 - f) + self.table[i + 1] * f
+    }
+}
+
+impl Emission {
+    /// Le at the world point `p` (zero outside a grid's box).
+    pub fn radiance(&self, p: Vec3) -> Vec3 {
+        match self {
+            Emission::Const(le) => *le,
+            Emission::Grid {
+                grid,
+                to_grid,
+                blackbody,
+            } => {
+                let q = to_grid.transform_point3a(p);
+                if !(q.cmpge(Vec3::ZERO).all() && q.cmple(Vec3::ONE).all()) {
+                    return Vec3::ZERO;
+                }
+                match blackbody {
+                    Some(b) => b.rgb(grid.scalar(q)),
+                    None => grid.rgb(q),
+                }
+            }
+        }
+    }
 }
 
 impl Medium {

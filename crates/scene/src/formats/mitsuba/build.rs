@@ -484,15 +484,28 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         let pl = self.ctx.plugin(c.elem)?;
         let mut phase = PhaseDesc::Isotropic;
         let mut grids: [Option<VolumeParam>; 2] = [None, None];
+        let mut emission = None;
         for ch in &pl.children {
             match (ch.elem.tag.as_str(), ch.name.as_deref()) {
                 ("phase", _) => phase = self.phase(ch)?,
                 ("volume", Some("sigma_t")) => grids[0] = Some(self.volume(ch)?),
                 ("volume", Some("albedo")) => grids[1] = Some(self.volume(ch)?),
+                ("volume", Some("radiance")) => {
+                    emission = Some(MediumEmission::Radiance(self.volume(ch)?));
+                }
+                ("volume", Some("temperature")) => match self.volume(ch)? {
+                    VolumeParam::Grid(grid) => {
+                        let scale = pl.props.float("emission_scale", 1.0)?;
+                        emission = Some(MediumEmission::Temperature { grid, scale });
+                    }
+                    VolumeParam::Const(_) => {
+                        return Err(err(&ch.loc, "a temperature must be a gridvolume"));
+                    }
+                },
                 ("volume", _) => {
                     return Err(err(
                         &ch.loc,
-                        "a volume in a medium needs name=\"sigma_t\" or name=\"albedo\"",
+                        "a volume in a medium needs name=\"sigma_t\", \"albedo\", \"radiance\" or \"temperature\"",
                     ));
                 }
                 (other, _) => {
@@ -570,12 +583,20 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             }
             _ => return Err(unknown_type(&pl, "homogeneous, heterogeneous")),
         };
+        if emission.is_none() && pl.props.has("radiance") {
+            let le = self.rgb(&pl, "radiance", Vec3::ZERO, true)?;
+            if !(le.is_finite() && le.cmpge(Vec3::ZERO).all()) {
+                return Err(err(pl.loc(), "medium 'radiance' must be finite and ≥ 0"));
+            }
+            emission = Some(MediumEmission::Radiance(VolumeParam::Const(le)));
+        }
         // Mitsuba's `sample_emitters` (next-event estimation from medium vertices) is always on.
         pl.props.bool("sample_emitters", true)?;
         self.ctx.finish(&pl);
         let id = self.scene.add_medium(MediumDesc {
             medium,
             phase,
+            emission,
             name: c.id().map(str::to_string),
             loc: pl.loc().clone(),
         });
