@@ -980,7 +980,11 @@ fn bad_media_are_errors_with_their_place() {
             r#"<medium type="homogeneous" name="interior"><phase type="hg"><float name="g" value="1"/></phase></medium>"#,
             "-1 < g < 1",
         ),
-        (r#"<medium type="homogeneous"/>"#, "interior"),
+        (r#"<medium type="homogeneous" name="inside"/>"#, "interior"),
+        (
+            r#"<medium type="heterogeneous"><string name="filename" value="missing.vol"/></medium>"#,
+            "missing.vol",
+        ),
         (r#"<medium type="smoke" name="interior"/>"#, "smoke"),
         (
             r#"<medium type="heterogeneous" name="interior"/>"#,
@@ -1000,5 +1004,44 @@ fn bad_media_are_errors_with_their_place() {
         };
         assert!(e.contains(want), "{medium}: {e}");
         assert!(e.contains("scene.xml:1:"), "{medium}: no location in {e}");
+    }
+}
+
+/// Nori's dialect: a medium without a name fills its mesh; a heterogeneous medium names its
+/// grid file itself and is placed by a bounding box.
+#[test]
+fn nori_style_media() {
+    let dir = write_scene(&[("scene.xml", ""), ("g.vol", "")]);
+    let dir = dir.parent().unwrap();
+    let text = r#"<scene>
+        <mesh type="sphere">
+            <bsdf type="dielectric"/>
+            <medium type="homogeneous"><color name="sigmaT" value="1 2 3"/><color name="albedo" value="0.5 0.5 0.5"/></medium>
+        </mesh>
+        <mesh type="sphere">
+            <medium type="heterogeneous">
+                <string name="filename" value="g.vol"/>
+                <point name="bboxMin" value="-1, 0, -2"/>
+                <point name="bboxMax" value="1, 4, 2"/>
+            </medium>
+        </mesh>
+    </scene>"#;
+    std::fs::write(dir.join("scene.xml"), text).unwrap();
+    let Document::Scene(s) = load(&dir.join("scene.xml"), &LoadOptions::default()).unwrap() else {
+        panic!("not a scene")
+    };
+    assert!(
+        s.shapes
+            .iter()
+            .all(|sh| sh.media.interior.is_some() && sh.media.exterior.is_none())
+    );
+    match &s.media[1].medium {
+        Medium::Heterogeneous { sigma_t, .. } => {
+            let p = sigma_t.to_world.transform_point3(Vec3::ONE);
+            assert!((p - Vec3::new(1.0, 4.0, 2.0)).length() < 1e-6, "{p}");
+            let q = sigma_t.to_world.transform_point3(Vec3::ZERO);
+            assert!((q - Vec3::new(-1.0, 0.0, -2.0)).length() < 1e-6, "{q}");
+        }
+        m => panic!("{m:?}"),
     }
 }

@@ -562,6 +562,9 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "heterogeneous" => {
                 let sigma_t = match sigma_t_grid {
                     Some(VolumeParam::Grid(g)) => g,
+                    // Nori's dialect: the grid file on the medium itself, placed by the box
+                    // `bbox_min`..`bbox_max` (the grid's [0,1]³ stretched over it).
+                    None if pl.props.has("filename") => self.nori_grid(&pl)?,
                     _ => {
                         return Err(err(
                             pl.loc(),
@@ -604,6 +607,40 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             self.media.insert(key.to_string(), id);
         }
         Ok(id)
+    }
+
+    /// A heterogeneous medium's grid given Nori's way: `filename` (`.vol`, or `.vdb` with
+    /// `grid_name`) on the medium, placed by `bbox_min`/`bbox_max` (default the unit cube).
+    fn nori_grid(&mut self, pl: &Plugin<'s>) -> Result<Box<VolumeDesc>> {
+        let path = self.ctx.file_param(pl, "heterogeneous medium")?;
+        let lo = pl.props.vector_opt("bbox_min")?.unwrap_or(Vec3::ZERO);
+        let hi = pl.props.vector_opt("bbox_max")?.unwrap_or(Vec3::ONE);
+        if !(lo.is_finite() && hi.is_finite() && hi.cmpgt(lo).all()) {
+            return Err(err(
+                pl.loc(),
+                format!("bbox_min {lo} must be below bbox_max {hi} on every axis"),
+            ));
+        }
+        let vdb = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
+        let format = if vdb {
+            let name = pl
+                .props
+                .string_opt("grid_name")?
+                .map_or("density", |(n, _)| n)
+                .to_string();
+            VolumeFormat::Vdb { grid_name: name }
+        } else {
+            VolumeFormat::MitsubaVol
+        };
+        Ok(Box::new(VolumeDesc {
+            path,
+            format,
+            to_world: Mat4::from_translation(lo) * Mat4::from_scale(hi - lo),
+            trilinear: true,
+            loc: pl.loc().clone(),
+        }))
     }
 
     /// A non-negative, finite constant colour parameter of a medium.
@@ -1175,12 +1212,15 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 "medium" => {
                     let m = Some(self.medium(c)?);
                     match c.name.as_deref() {
-                        Some("interior") => media.interior = m,
+                        // Nori's dialect: a medium without a name fills the mesh.
+                        Some("interior") | None => media.interior = m,
                         Some("exterior") => media.exterior = m,
-                        _ => {
+                        Some(other) => {
                             return Err(err(
                                 &c.loc,
-                                "a medium in a shape needs name=\"interior\" or name=\"exterior\"",
+                                format!(
+                                    "medium name '{other}': a medium in a shape is its \"interior\" or \"exterior\""
+                                ),
                             ));
                         }
                     }
@@ -1759,7 +1799,18 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
             }
         }
-        if !self.has_integrator && self.ctx.dialect == Dialect::Legacy {
+        let uses_media = self.scene.shapes.iter().any(|s| s.media.is_transition())
+            || self.scene.sensors.iter().any(|s| s.medium.is_some());
+        if !self.has_integrator && uses_media {
+            // Media need the volumetric path tracer; with its defaults.
+            self.scene.integrator = IntegratorDesc::VolPath {
+                max_depth: -1,
+                rr_depth: 5,
+                hide_emitters: false,
+                equiangular: true,
+                transmittance: TransmittanceEstimator::default(),
+            };
+        } else if !self.has_integrator && self.ctx.dialect == Dialect::Legacy {
             self.ctx.warn(
                 loc,
                 "no <integrator> given: using 'path' (Mitsuba's default)",
