@@ -22,6 +22,7 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
             hide_emitters,
             equiangular,
             transmittance,
+            sample_emission,
         } => Integrator::VolPath(VolPathConfig {
             max_depth: if *max_depth < 0 {
                 u32::MAX
@@ -32,6 +33,7 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
             hide_emitters: *hide_emitters,
             equiangular: *equiangular,
             transmittance: *transmittance,
+            sample_emission: *sample_emission,
         }),
         IntegratorDesc::Direct {
             emitter_samples,

@@ -3,7 +3,9 @@
 use render::math::{Mat4, Vec3};
 use render::media::grid::VoxelGrid;
 use render::media::heterogeneous::Albedo;
-use render::media::{Blackbody, Emission, Heterogeneous, Homogeneous, Medium, MediumKind, Phase};
+use render::media::{
+    Blackbody, Emission, EmissionSampler, Heterogeneous, Homogeneous, Medium, MediumKind, Phase,
+};
 use scene::spectra::{SpectrumUse, planck, sampled_to_rgb};
 use scene::{
     MediumDesc, MediumEmission, PhaseDesc, SceneDesc, VolumeDesc, VolumeFormat, VolumeParam,
@@ -74,10 +76,31 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
             blackbody: Some(blackbody(*scale)),
         }),
     };
+    let emission_sampler = match &emission {
+        Some(Emission::Grid {
+            grid,
+            to_grid,
+            blackbody,
+        }) => {
+            let lum = |c: Vec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+            EmissionSampler::new(grid, to_grid.inverse(), |i| {
+                let v = i * grid.channels;
+                match blackbody {
+                    Some(b) => lum(b.rgb(grid.data[v])),
+                    None if grid.channels == 3 => {
+                        lum(Vec3::new(grid.data[v], grid.data[v + 1], grid.data[v + 2]))
+                    }
+                    None => grid.data[v],
+                }
+            })
+        }
+        _ => None,
+    };
     Ok(Medium {
         kind,
         phase,
         emission,
+        emission_sampler,
     })
 }
 

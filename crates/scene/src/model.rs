@@ -734,6 +734,11 @@ pub enum IntegratorDesc {
         equiangular: bool,
         /// How shadow rays estimate the transmittance of grids (`transmittance`).
         transmittance: TransmittanceEstimator,
+        /// Importance-sample emission grids from scattering vertices (`sample_emission`,
+        /// our extension, off by default: without MIS it loses to collision estimation in
+        /// optically thick emitters, 12× the relMSE at equal time on the plume); off:
+        /// collision estimation only.
+        sample_emission: bool,
     },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },

@@ -965,6 +965,7 @@ fn media_on_shapes_sensors_and_emitters() {
             hide_emitters: false,
             equiangular: true,
             transmittance: TransmittanceEstimator::RatioTracking,
+            sample_emission: false,
         }
     ));
 }

@@ -46,6 +46,10 @@ pub struct VolPathConfig {
     pub equiangular: bool,
     /// How shadow rays estimate the transmittance of grids.
     pub transmittance: TransmittanceEstimator,
+    /// Sample points of emission grids by their radiance from every scattering vertex (the
+    /// collision estimator then leaves those vertices' segments alone); otherwise emission
+    /// is only found at collisions.
+    pub sample_emission: bool,
 }
 
 /// The power heuristic (β = 2).
@@ -57,6 +61,7 @@ fn mis(a: f32, b: f32) -> f32 {
 }
 
 /// Where a shadow ray starts.
+#[derive(Clone, Copy)]
 enum From<'a> {
     Surface(&'a SurfaceInteraction),
     Medium(Vec3, f32),
@@ -82,6 +87,9 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
     let hero = ((sampler.next_1d() * 3.0) as usize).min(2);
     let mut ratio = Vec3::ONE;
     let mis_hero = |ratio: Vec3| 3.0 / ratio.element_sum();
+    // Emission grids were sampled from the vertex the current segment started at: their
+    // emission met by collisions on it is already counted.
+    let mut emission_sampled = false;
     // Bounded: null crossings do not count as depth.
     for _ in 0..(1 << 16) {
         if throughput == Vec3::ZERO {
@@ -131,6 +139,7 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                     // Emission by collision estimation.
                     if let Some(e) = &m.emission
                         && !(depth == 0 && cfg.hide_emitters)
+                        && !(emission_sampled && m.emission_sampler.is_some())
                     {
                         let le = e.radiance(ray.at(d));
                         result += throughput * emit * le * mis_hero(ratio);
@@ -169,6 +178,19 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                                 * ls.li
                                 * (ph * w * mis_hero(ratio) / (ls.pdf * pmf));
                         }
+                    }
+                    if cfg.sample_emission {
+                        result += throughput
+                            * sample_emission(
+                                scene,
+                                From::Medium(p, ray.time),
+                                medium,
+                                cfg,
+                                sampler,
+                                |wi| Vec3::splat(m.phase.eval(wo, wi)),
+                            )
+                            * mis_hero(ratio);
+                        emission_sampled = true;
                     }
                     let (wi, pdf) = m.phase.sample(wo, sampler.next_2d());
                     ray = Ray::at_time(p, wi, ray.time);
@@ -239,6 +261,15 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
             break;
         };
         let wo = frame.to_local(si.wo);
+        emission_sampled = false;
+        if bsdf.has_smooth() && cfg.sample_emission && depth + 1 < cfg.max_depth {
+            result += throughput
+                * sample_emission(scene, From::Surface(&si), medium, cfg, sampler, |wi| {
+                    bsdf.eval(wo, frame.to_local(wi), TransportMode::Radiance)
+                })
+                * mis_hero(ratio);
+            emission_sampled = true;
+        }
         if bsdf.has_smooth() && depth + 1 < cfg.max_depth {
             let r = Receiver::from(&si);
             if let Some((_, ls, pmf)) = sample_light(scene, &r, sampler) {
@@ -272,6 +303,10 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
         };
         throughput *= bs.weight;
         eta *= bs.eta;
+        if bs.delta {
+            // Emission sampling could not follow a delta lobe: collisions count again.
+            emission_sampled = false;
+        }
         let wi = frame.to_world(bs.wi);
         medium = scene.medium_after(&si, wi, medium);
         ray = si.spawn_ray(wi);
@@ -398,6 +433,60 @@ impl Segment {
         let f = (-self.sigma_t * t).exp() * self.sigma_s * ph / ls.pdf;
         tr * ls.li * (f * mis(p_b, p_a) / p_b)
     }
+}
+
+/// Next-event estimation towards every emission grid from `from` (in `medium`): a point x
+/// chosen by the grid's emission, its σa·Le attenuated by the transmittance to it and
+/// divided by its density in solid angle and distance (pdf_V·|x − p|²); `f` is the phase
+/// function or BSDF (with its cosine) towards the point.
+fn sample_emission(
+    scene: &Scene,
+    from: From<'_>,
+    medium: Option<u32>,
+    cfg: &VolPathConfig,
+    sampler: &mut Sampler,
+    f: impl Fn(Vec3) -> Vec3,
+) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for m in &scene.media {
+        let (Some(es), Some(e)) = (&m.emission_sampler, &m.emission) else {
+            continue;
+        };
+        let (u, v, w) = (sampler.next_1d(), sampler.next_2d(), sampler.next_1d());
+        let Some((x, pdf_v)) = es.sample(u, v, w) else {
+            continue;
+        };
+        let (p, start) = match &from {
+            From::Surface(si) => (si.p, None),
+            From::Medium(p, _) => (*p, Some(medium)),
+        };
+        let to = x - p;
+        let d2 = to.length_squared();
+        if d2 <= 0.0 || pdf_v <= 0.0 {
+            continue;
+        }
+        let wi = to / d2.sqrt();
+        let source = m.sigma_a(x) * e.radiance(x);
+        let fv = f(wi);
+        if source == Vec3::ZERO || fv == Vec3::ZERO {
+            continue;
+        }
+        let start = match (start, &from) {
+            (Some(m), _) => m,
+            (None, From::Surface(si)) => scene.medium_after(si, wi, medium),
+            (None, From::Medium(..)) => medium,
+        };
+        let target = LightSample {
+            wi,
+            li: Vec3::ZERO,
+            pdf: 1.0,
+            delta: true,
+            target: ShadowTarget::Point(x),
+        };
+        let tr = transmittance(scene, from, &target, start, cfg.transmittance, sampler);
+        sum += fv * tr * source / (pdf_v * d2);
+    }
+    sum
 }
 
 /// The ray from `from` towards the light sample's target and its parameter range.

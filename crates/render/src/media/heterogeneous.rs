@@ -117,6 +117,19 @@ impl Heterogeneous {
         flight
     }
 
+    /// σa = σt·(1 − albedo) at the world point `p` (0 outside the grid's box).
+    pub fn sigma_a(&self, p: Vec3) -> Vec3 {
+        let q = self.to_grid.transform_point3a(p);
+        if !(q.cmpge(Vec3::ZERO).all() && q.cmple(Vec3::ONE).all()) {
+            return Vec3::ZERO;
+        }
+        let albedo = match &self.albedo {
+            Albedo::Const(a) => *a,
+            Albedo::Grid(g) => g.rgb(q),
+        };
+        self.sigma_t(q) * (Vec3::ONE - albedo)
+    }
+
     /// σt at distance `t` along the (unit-direction) ray, for tests and quadrature.
     pub fn sigma_t_along(&self, ray: &Ray, t: f32) -> f32 {
         let o = self.to_grid.transform_point3a(ray.o);

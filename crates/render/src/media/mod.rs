@@ -20,8 +20,9 @@ pub use phase::Phase;
 use base::TransmittanceEstimator;
 
 use crate::geometry::Ray;
-use crate::math::{Mat4, Vec3};
+use crate::math::{Mat4, Vec2, Vec3};
 use crate::sampling::Sampler;
+use crate::sampling::distrib::AliasTable;
 
 #[derive(Clone, Debug)]
 pub enum MediumKind {
@@ -35,6 +36,74 @@ pub struct Medium {
     pub kind: MediumKind,
     pub phase: Phase,
     pub emission: Option<Emission>,
+    /// Importance sampling of a grid emission (next-event estimation towards the volume).
+    pub emission_sampler: Option<EmissionSampler>,
+}
+
+/// Points of an emission grid chosen in proportion to the emitted radiance (the luminance of
+/// the largest Le a trilinear lookup in each voxel's cell can see, so that every point that
+/// emits can be chosen), uniformly inside the chosen cell.
+#[derive(Clone, Debug)]
+pub struct EmissionSampler {
+    table: AliasTable,
+    res: [usize; 3],
+    to_world: Mat4,
+    /// World volume of one cell.
+    cell_volume: f32,
+}
+
+impl EmissionSampler {
+    /// `None` when the grid emits nothing or its placement is singular.
+    pub fn new(
+        grid: &grid::VoxelGrid,
+        to_world: Mat4,
+        radiance: impl Fn(usize) -> f32,
+    ) -> Option<Self> {
+        let [nx, ny, nz] = grid.res;
+        let lum: Vec<f32> = (0..nx * ny * nz).map(&radiance).collect();
+        let mut w = vec![0.0f32; lum.len()];
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let mut m = 0.0f32;
+                    for dz in z.saturating_sub(1)..=(z + 1).min(nz - 1) {
+                        for dy in y.saturating_sub(1)..=(y + 1).min(ny - 1) {
+                            for dx in x.saturating_sub(1)..=(x + 1).min(nx - 1) {
+                                m = m.max(lum[(dz * ny + dy) * nx + dx]);
+                            }
+                        }
+                    }
+                    w[(z * ny + y) * nx + x] = m;
+                }
+            }
+        }
+        let det = to_world.determinant().abs();
+        if !(w.iter().any(|&v| v > 0.0) && det > 0.0 && det.is_finite()) {
+            return None;
+        }
+        Some(EmissionSampler {
+            table: AliasTable::new(&w),
+            res: grid.res,
+            to_world,
+            cell_volume: det / (nx * ny * nz) as f32,
+        })
+    }
+
+    /// A world point and its density per unit volume.
+    pub fn sample(&self, u: f32, v: Vec2, w: f32) -> Option<(Vec3, f32)> {
+        let (i, pmf) = self.table.sample(u);
+        if pmf <= 0.0 {
+            return None;
+        }
+        let [nx, ny, nz] = self.res;
+        let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+        let q = Vec3::new(
+            (x as f32 + v.x) / nx as f32,
+            (y as f32 + v.y) / ny as f32,
+            (z as f32 + w) / nz as f32,
+        );
+        Some((self.to_world.transform_point3a(q), pmf / self.cell_volume))
+    }
 }
 
 /// The radiance Le a medium emits (the source term is σa·Le).
@@ -99,6 +168,14 @@ impl Medium {
         match &self.kind {
             MediumKind::Homogeneous(h) => h.sample(d_max, sampler.next_1d(), hero),
             MediumKind::Heterogeneous(h) => h.sample(ray, d_max, sampler),
+        }
+    }
+
+    /// The absorption coefficient σa = σt − σs at the world point `p`.
+    pub fn sigma_a(&self, p: Vec3) -> Vec3 {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => h.sigma_t - h.sigma_s,
+            MediumKind::Heterogeneous(h) => h.sigma_a(p),
         }
     }
 

@@ -1632,6 +1632,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
                 hide_emitters: pl.props.bool("hide_emitters", false)?,
                 equiangular: pl.props.bool("equiangular", true)?,
+                sample_emission: pl.props.bool("sample_emission", false)?,
                 transmittance: match pl.props.string_opt("transmittance")? {
                     None => TransmittanceEstimator::default(),
                     Some((name, loc)) => {
@@ -1809,6 +1810,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 hide_emitters: false,
                 equiangular: true,
                 transmittance: TransmittanceEstimator::default(),
+                sample_emission: false,
             };
         } else if !self.has_integrator && self.ctx.dialect == Dialect::Legacy {
             self.ctx.warn(
