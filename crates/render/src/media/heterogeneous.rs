@@ -190,35 +190,17 @@ impl Heterogeneous {
                 });
                 tr
             }
-            Estimator::RatioTracking => {
-                let mut tr = 1.0f32;
-                self.majorants.walk(o, d, t0, t1, |ta, tb, _, hi| {
-                    if hi <= 0.0 {
-                        return true;
-                    }
-                    let mut t = ta;
-                    loop {
-                        t = step(t, hi, u);
-                        if t >= tb {
-                            break;
-                        }
-                        tr *= 1.0 - sigma(t) / hi;
-                        if !roulette(&mut tr, u) {
-                            tr = 0.0;
-                            return false;
-                        }
-                    }
-                    true
-                });
-                tr
-            }
-            Estimator::ResidualRatioTracking => {
-                // Per cell: e^{−σc·Δt} with the cell's smallest σt as control, times ratio
-                // tracking of the residual against the cell's spread.
+            // Ratio tracking is residual ratio tracking with a control of 0.
+            Estimator::RatioTracking | Estimator::ResidualRatioTracking => {
+                // Per cell: e^{−σc·Δt} with the control σc (the cell's smallest σt for the
+                // residual tracker), times ratio tracking of σt − σc against the cell's
+                // bound minus σc.
+                let residual = estimator == Estimator::ResidualRatioTracking;
                 let mut tr = 1.0f32;
                 self.majorants.walk(o, d, t0, t1, |ta, tb, lo, hi| {
-                    tr *= (-lo * (tb - ta)).exp();
-                    let rate = hi - lo;
+                    let control = if residual { lo } else { 0.0 };
+                    tr *= (-control * (tb - ta)).exp();
+                    let rate = hi - control;
                     if rate <= 0.0 {
                         return true;
                     }
@@ -226,15 +208,14 @@ impl Heterogeneous {
                     loop {
                         t = step(t, rate, u);
                         if t >= tb {
-                            break;
+                            return true;
                         }
-                        tr *= 1.0 - (sigma(t) - lo) / rate;
+                        tr *= 1.0 - (sigma(t) - control) / rate;
                         if !roulette(&mut tr, u) {
                             tr = 0.0;
                             return false;
                         }
                     }
-                    true
                 });
                 tr
             }

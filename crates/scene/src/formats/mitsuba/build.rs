@@ -182,6 +182,23 @@ fn usage_for(name: &str, emitter: bool) -> SpectrumUse {
     }
 }
 
+/// A grid file's format by its extension: OpenVDB (`.vdb`, with the plugin's `grid_name`,
+/// default `density`) or Mitsuba's `.vol`.
+fn grid_format(pl: &Plugin<'_>, path: &std::path::Path) -> Result<VolumeFormat> {
+    if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vdb"))
+    {
+        return Ok(VolumeFormat::MitsubaVol);
+    }
+    let name = pl
+        .props
+        .string_opt("grid_name")?
+        .map_or("density", |(n, _)| n)
+        .to_string();
+    Ok(VolumeFormat::Vdb { grid_name: name })
+}
+
 /// Builds one `SceneDesc` (a document holds one, or several for Nori t-tests).
 pub struct SceneBuilder<'c, 's> {
     pub ctx: &'c mut Ctx<'s>,
@@ -621,19 +638,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 format!("bbox_min {lo} must be below bbox_max {hi} on every axis"),
             ));
         }
-        let vdb = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
-        let format = if vdb {
-            let name = pl
-                .props
-                .string_opt("grid_name")?
-                .map_or("density", |(n, _)| n)
-                .to_string();
-            VolumeFormat::Vdb { grid_name: name }
-        } else {
-            VolumeFormat::MitsubaVol
-        };
+        let format = grid_format(pl, &path)?;
         Ok(Box::new(VolumeDesc {
             path,
             format,
@@ -681,19 +686,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "constvolume" => VolumeParam::Const(self.medium_rgb(&pl, "value", Vec3::ONE)?),
             "gridvolume" => {
                 let path = self.ctx.file_param(&pl, "gridvolume")?;
-                let vdb = path
-                    .extension()
-                    .is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
-                let format = if vdb {
-                    let name = pl
-                        .props
-                        .string_opt("grid_name")?
-                        .map_or("density", |(n, _)| n)
-                        .to_string();
-                    VolumeFormat::Vdb { grid_name: name }
-                } else {
-                    VolumeFormat::MitsubaVol
-                };
+                let format = grid_format(&pl, &path)?;
                 let trilinear = match pl.props.string_opt("filter_type")? {
                     None | Some(("trilinear", _)) => true,
                     Some(("nearest", _)) => false,
