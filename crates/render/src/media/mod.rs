@@ -10,6 +10,7 @@ pub mod grid;
 pub mod heterogeneous;
 pub mod homogeneous;
 pub mod phase;
+mod vdb;
 
 pub use heterogeneous::Heterogeneous;
 pub use homogeneous::{Flight, Homogeneous};
