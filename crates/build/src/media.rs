@@ -33,7 +33,7 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
             albedo,
             scale,
         } => {
-            let density = grid(sigma_t)?;
+            let (density, to_world) = grid(sigma_t)?;
             if density.channels != 1 {
                 return Err(BuildError {
                     loc: sigma_t.loc.clone(),
@@ -46,13 +46,24 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
             }
             let albedo = match albedo {
                 VolumeParam::Const(a) => Albedo::Const((*a).into()),
-                VolumeParam::Grid(g) => Albedo::Grid(grid(g)?),
+                VolumeParam::Grid(g) => {
+                    // The medium looks both grids up at the same grid-space point.
+                    let (albedo, albedo_to_world) = grid(g)?;
+                    if !albedo_to_world.abs_diff_eq(to_world, 1e-5 * max_abs(&to_world)) {
+                        return Err(BuildError {
+                            loc: g.loc.clone(),
+                            message: format!(
+                                "{}: an albedo grid must cover the same box of the world as the sigma_t grid ({})",
+                                g.path.display(),
+                                sigma_t.path.display()
+                            ),
+                        });
+                    }
+                    Albedo::Grid(albedo)
+                }
             };
             MediumKind::Heterogeneous(Box::new(Heterogeneous::new(
-                density,
-                albedo,
-                *scale,
-                to_world(sigma_t)?,
+                density, albedo, *scale, to_world,
             )))
         }
     };
@@ -65,16 +76,22 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
         Some(MediumEmission::Radiance(VolumeParam::Const(le))) => {
             Some(Emission::Const((*le).into()))
         }
-        Some(MediumEmission::Radiance(VolumeParam::Grid(g))) => Some(Emission::Grid {
-            grid: grid(g)?,
-            to_grid: to_world(g)?.inverse(),
-            blackbody: None,
-        }),
-        Some(MediumEmission::Temperature { grid: g, scale }) => Some(Emission::Grid {
-            grid: grid(g)?,
-            to_grid: to_world(g)?.inverse(),
-            blackbody: Some(blackbody(*scale)),
-        }),
+        Some(MediumEmission::Radiance(VolumeParam::Grid(g))) => {
+            let (grid, to_world) = grid(g)?;
+            Some(Emission::Grid {
+                grid,
+                to_grid: to_world.inverse(),
+                blackbody: None,
+            })
+        }
+        Some(MediumEmission::Temperature { grid: g, scale }) => {
+            let (grid, to_world) = grid(g)?;
+            Some(Emission::Grid {
+                grid,
+                to_grid: to_world.inverse(),
+                blackbody: Some(blackbody(*scale)),
+            })
+        }
     };
     let emission_sampler = match &emission {
         Some(Emission::Grid {
@@ -123,29 +140,34 @@ fn blackbody(scale: f32) -> Blackbody {
     Blackbody { table, step: STEP }
 }
 
-fn to_world(v: &VolumeDesc) -> Result<Mat4, BuildError> {
-    let det = v.to_world.determinant();
-    if det == 0.0 || !det.is_finite() {
-        return Err(BuildError {
-            loc: v.loc.clone(),
-            message: "the grid's to_world transform is singular or not finite".into(),
-        });
-    }
-    Ok(v.to_world)
+fn max_abs(m: &Mat4) -> f32 {
+    m.to_cols_array().iter().fold(0.0f32, |a, v| a.max(v.abs()))
 }
 
-fn grid(v: &VolumeDesc) -> Result<VoxelGrid, BuildError> {
+/// A grid and the map from its `[0,1]³` to the world: the scene's `to_world` for a `.vol`
+/// (the grid fills the unit cube of its space); for a `.vdb`, the scene's `to_world` after
+/// the map from the densified grid's `[0,1]³` to the VDB grid's own local space.
+fn grid(v: &VolumeDesc) -> Result<(VoxelGrid, Mat4), BuildError> {
     let fail = |message: String| BuildError {
         loc: v.loc.clone(),
         message,
     };
-    match &v.format {
-        VolumeFormat::MitsubaVol => {
-            VoxelGrid::read_vol(&v.path, v.trilinear).map_err(|e| fail(e.to_string()))
+    let (grid, to_world) = match &v.format {
+        VolumeFormat::MitsubaVol => (
+            VoxelGrid::read_vol(&v.path, v.trilinear).map_err(|e| fail(e.to_string()))?,
+            v.to_world,
+        ),
+        VolumeFormat::Vdb { grid_name } => {
+            let (grid, local_from_unit) = VoxelGrid::read_vdb(&v.path, grid_name, v.trilinear)
+                .map_err(|e| fail(e.to_string()))?;
+            (grid, v.to_world * local_from_unit)
         }
-        VolumeFormat::Vdb { grid_name } => Err(fail(format!(
-            "{}: OpenVDB grids ('{grid_name}') are not readable yet; convert the grid to a Mitsuba .vol file",
-            v.path.display()
-        ))),
+    };
+    let det = to_world.determinant();
+    if det == 0.0 || !det.is_finite() {
+        return Err(fail(
+            "the grid's to_world transform is singular or not finite".into(),
+        ));
     }
+    Ok((grid, to_world))
 }

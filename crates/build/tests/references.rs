@@ -86,8 +86,21 @@ fn check_with(
     } else {
         refs.join("scenes").join(scene_rel)
     };
+    check_file(name, &scene_file, defines, mitsuba_rel_mse, spp)
+}
+
+/// [`check_with`] for a scene file anywhere (the reference is still `references/<name>`).
+fn check_file(
+    name: &str,
+    scene_file: &Path,
+    defines: &[(&str, &str)],
+    mitsuba_rel_mse: f64,
+    spp: u32,
+) {
+    let Some(shared) = shared() else { return };
+    let refs = shared.join("references");
     let reference = load_reference(&refs.join(name)).expect("reference loads");
-    let batches = render_batches(&scene_file, defines, spp);
+    let batches = render_batches(scene_file, defines, spp);
     let parity = mean_image(&batches[..(PARITY_SPP / spp) as usize]);
     let rel_mse = rel_mse(&parity, &reference.mean).expect("same size");
     let result = compare(&reference, &TestImages::Batches(batches)).expect("comparable");
@@ -158,6 +171,28 @@ fn media_heterogeneous() {
         &[],
         0.0019,
     );
+}
+
+/// The same scene with the grid read from `plume.vdb` (the same values as OpenVDB grids, whose
+/// transform puts voxel centres where the `.vol`'s are): the scene is copied with the
+/// `filename` swapped, and checked against the same reference.
+#[test]
+fn media_heterogeneous_vdb() {
+    let Some(shared) = shared() else { return };
+    let scenes = shared.join("references/scenes");
+    let xml = std::fs::read_to_string(scenes.join("media-heterogeneous.xml")).expect("scene");
+    let vdb = scenes.join("plume.vdb");
+    let swapped = xml.replace(
+        r#"value="plume-density.vol""#,
+        &format!(r#"value="{}""#, vdb.display()),
+    );
+    assert_ne!(swapped, xml, "the scene names plume-density.vol");
+    let dir = std::env::temp_dir().join(format!("penumbra-refs-vdb-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    let scene_file = dir.join("media-heterogeneous-vdb.xml");
+    std::fs::write(&scene_file, swapped).expect("write the scene");
+    check_file("media-heterogeneous", &scene_file, &[], 0.0019, SPP);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Camera, spot light and surfaces inside one fog: sensor and exterior media, and the spot

@@ -1,9 +1,11 @@
 //! Structure-aware fuzzing of every loader on stable Rust (issue 18).
 //!
 //! Targets: Mitsuba/Nori XML, COMP30019 text, CENG795 JSON and XML, OBJ+MTL scenes, COLLADA,
-//! PLY (ASCII and binary), OBJ meshes and image textures (PNG, EXR). Seeds are the files of
-//! each kind under `scenes/` and `../shared/scenes` (up to 256 KiB; generated ones where
-//! there are none) and mutations are drawn from a fixed-seed SplitMix64 stream:
+//! PLY (ASCII and binary), OBJ meshes, image textures (PNG, EXR) and medium grids (Mitsuba
+//! `.vol`, OpenVDB `.vdb`). Seeds are the files of each kind under `scenes/` and
+//! `../shared/scenes` (up to 256 KiB; generated ones where there are none, and for grids the
+//! fixtures of `crates/render/tests/data`) and mutations are drawn from a fixed-seed
+//! SplitMix64 stream:
 //! - text formats: a number replaced by an edge value (NaN, ±inf, 1e39, 2³², −1, 0, …), a
 //!   token replaced by another token of the file, a line duplicated, deleted or moved, a line
 //!   of another seed of the same format spliced in, the text truncated;
@@ -41,6 +43,8 @@ enum Kind {
     Ply,
     Obj,
     Image,
+    /// A medium grid, read with `VoxelGrid::read_vol` or `read_vdb`.
+    Grid,
 }
 
 struct Target {
@@ -141,6 +145,20 @@ const TARGETS: &[Target] = &[
         name: "images",
         kind: Kind::Image,
         extensions: &["png", "exr"],
+        text: false,
+        accept: any,
+    },
+    Target {
+        name: "vol",
+        kind: Kind::Grid,
+        extensions: &["vol"],
+        text: false,
+        accept: any,
+    },
+    Target {
+        name: "vdb",
+        kind: Kind::Grid,
+        extensions: &["vdb"],
         text: false,
         accept: any,
     },
@@ -382,6 +400,32 @@ fn generated_seeds(t: &Target, dir: &Path) -> Vec<PathBuf> {
                 out.push(ascii);
             }
         }
+        "vol" => {
+            // 3×2×2 voxels of one channel and 2×2×1 of three (the two layouts read_vol takes).
+            for (name, res, channels) in [("one", [3i32, 2, 2], 1i32), ("rgb", [2, 2, 1], 3)] {
+                let mut b = b"VOL\x03".to_vec();
+                for v in [1, res[0], res[1], res[2], channels] {
+                    b.extend(v.to_le_bytes());
+                }
+                for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
+                    b.extend(v.to_le_bytes());
+                }
+                let n = res.iter().product::<i32>() * channels;
+                for i in 0..n {
+                    b.extend((0.1 * i as f32).to_le_bytes());
+                }
+                let p = dir.join(format!("generated-{name}.vol"));
+                std::fs::write(&p, b).expect("write a seed");
+                out.push(p);
+            }
+        }
+        "vdb" => {
+            // Written by OpenVDB (crates/render/tests/data/make_vdb.py): several grids, a
+            // tile, transforms vdb-rs reads and one it does not, a half-float grid.
+            for name in ["tiny.vdb", "small.vdb"] {
+                out.push(repo_root().join("crates/render/tests/data").join(name));
+            }
+        }
         "images" => {
             let mut img = render::film::Image::new(5, 3);
             for (i, p) in img.pixels.iter_mut().enumerate() {
@@ -439,6 +483,23 @@ fn load(kind: Kind, path: &Path, bytes: &[u8]) {
         }
         Kind::Image => {
             let _ = render::image_io::read_image_alpha(path, render::image_io::Decode::Srgb);
+        }
+        Kind::Grid => {
+            use render::media::grid::VoxelGrid;
+            if path.extension().is_some_and(|e| e == "vdb") {
+                // The grids of the seeds, and one that none has. read_vdb turns a panic of
+                // vdb-rs into an error, but its bounds walk is meant to leave vdb-rs nothing
+                // to fail on: such an error is a finding too.
+                for name in ["density", "fog_bg", "rotated", "half", "color", "missing"] {
+                    if let Err(e) = VoxelGrid::read_vdb(path, name, true)
+                        && e.message.contains("(vdb-rs) failed")
+                    {
+                        panic!("the preflight let through a file vdb-rs fails on: {e}");
+                    }
+                }
+            } else {
+                let _ = VoxelGrid::read_vol(path, true);
+            }
         }
     }
 }

@@ -492,3 +492,84 @@ fn a_rejected_comparison_exits_1_and_an_unwritable_output_3() {
         "{stderr}"
     );
 }
+
+/// Medium grids that cannot be used (issue 20): a truncated `.vol` or `.vdb`, a grid name the
+/// file lacks, a negative value, a NaN: exit 2, the scene's line and column, the grid file,
+/// the byte offset where the file is at fault, and what is wrong.
+#[test]
+fn unreadable_medium_grids_exit_2_with_the_file_and_offset() {
+    let dir = temp_dir("grids");
+    let data = repo_root().join("crates/render/tests/data");
+    let small = std::fs::read(data.join("small.vdb")).unwrap();
+    std::fs::write(dir.join("small.vdb"), &small).unwrap();
+    std::fs::write(dir.join("cut.vdb"), &small[..5000]).unwrap();
+    let vol = |values: &[f32]| {
+        let mut b = b"VOL\x03".to_vec();
+        for v in [1i32, 2, 1, 1, 1] {
+            b.extend(v.to_le_bytes());
+        }
+        for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
+            b.extend(v.to_le_bytes());
+        }
+        for v in values {
+            b.extend(v.to_le_bytes());
+        }
+        b
+    };
+    std::fs::write(dir.join("cut.vol"), &vol(&[0.5, 0.5])[..52]).unwrap();
+    std::fs::write(dir.join("nan.vol"), vol(&[0.5, f32::NAN])).unwrap();
+    let scene = dir.join("grid.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+    <default name="grid" value="density"/>
+    <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+    <shape type="cube">
+        <bsdf type="null"/>
+        <medium type="heterogeneous" name="interior">
+            <volume type="gridvolume" name="sigma_t">
+                <string name="filename" value="$file"/>
+                <string name="grid_name" value="$grid"/>
+            </volume>
+        </medium>
+    </shape>
+</scene>"#,
+    )
+    .unwrap();
+    let cases: &[(&str, &str, &[&str])] = &[
+        (
+            "cut.vol",
+            "density",
+            &["cut.vol (byte 52)", "truncated data"],
+        ),
+        ("nan.vol", "density", &["nan.vol (byte 52)", "NaN"]),
+        (
+            "cut.vdb",
+            "density",
+            &["cut.vdb (byte ", "past the end of the file"],
+        ),
+        (
+            "small.vdb",
+            "smoke",
+            &["no grid named 'smoke'", "'density', 'fog_bg'"],
+        ),
+        (
+            "small.vdb",
+            "negative",
+            &["grid 'negative'", "is -1", "≥ 0"],
+        ),
+        ("small.vdb", "color", &["not a float grid"]),
+    ];
+    for (file, grid, needles) in cases {
+        let out = penumbra()
+            .arg("render")
+            .arg(&scene)
+            .args(["-D", &format!("file={file}"), "-D", &format!("grid={grid}")])
+            .args(["--spp", "1", "-o"])
+            .arg(dir.join("out.exr"))
+            .output()
+            .unwrap();
+        assert_located_failure(&out, &scene, needles[0]);
+        assert_input_failure(&out, needles);
+    }
+}

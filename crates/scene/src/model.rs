@@ -334,9 +334,10 @@ pub enum VolumeParam {
     Grid(Box<VolumeDesc>),
 }
 
-/// A voxel grid read from a file, placed in the world: the grid fills the unit cube [0,1]³ of
-/// its own space (Mitsuba's `gridvolume`: the file's bounding box is ignored), mapped to the
-/// world by `to_world`.
+/// A voxel grid read from a file, placed in the world: a `.vol` grid fills the unit cube
+/// [0,1]³ of its own space (Mitsuba's `gridvolume`: the file's bounding box is ignored),
+/// mapped to the world by `to_world`; an OpenVDB grid sits in its own local space, where its
+/// transform puts it, and `to_world` maps that space to the world.
 #[derive(Clone, Debug)]
 pub struct VolumeDesc {
     pub path: PathBuf,

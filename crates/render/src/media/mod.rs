@@ -12,6 +12,7 @@ pub mod heterogeneous;
 pub mod homogeneous;
 pub mod majorant;
 pub mod phase;
+mod vdb;
 
 pub use heterogeneous::Heterogeneous;
 pub use homogeneous::{Flight, Homogeneous};
