@@ -153,9 +153,15 @@ impl PathRecorder for Collector {
 
 fn trace(scene: &Scene, integrator: &Integrator, args: &Args) -> Result<Collector, Failure> {
     let Integrator::Path(cfg) = integrator else {
-        return Err(Failure::input(
-            "debug-paths needs a path-tracing integrator (the scene asks for an AOV or `direct`)",
-        ));
+        return Err(Failure::input(format!(
+            "debug-paths records the path tracer's paths; the scene asks for '{}'{}",
+            integrator.name(),
+            if matches!(integrator, Integrator::VolPath(_)) {
+                " (recording volumetric paths is not supported yet)"
+            } else {
+                ""
+            }
+        )));
     };
     let (x, y) = args.pixel;
     if x >= scene.film.width || y >= scene.film.height {
