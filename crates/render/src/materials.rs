@@ -145,17 +145,12 @@ pub struct CourseLobe {
 impl RtMaterial {
     /// Mitsuba's default material: one-sided diffuse 0.5.
     pub fn default_diffuse() -> RtMaterial {
-        RtMaterial::plain(MaterialKind::Diffuse {
-            reflectance: TexRef::Const(Vec3::splat(0.5)),
-        })
-    }
-
-    /// A one-sided material of one model, with no ambient term.
-    pub fn plain(kind: MaterialKind) -> RtMaterial {
         RtMaterial {
             surface: Layer {
                 perturbs: Box::new([]),
-                then: Then::Model(Some(kind)),
+                then: Then::Model(Some(MaterialKind::Diffuse {
+                    reflectance: TexRef::Const(Vec3::splat(0.5)),
+                })),
             },
             ambient: Vec3::ZERO,
             absorption: None,

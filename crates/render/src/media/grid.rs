@@ -6,6 +6,12 @@ use std::path::Path;
 
 use crate::math::Vec3;
 
+/// Whether the grid-space point `q` lies in the grid's box [0,1]³.
+#[inline]
+pub fn inside(q: Vec3) -> bool {
+    q.cmpge(Vec3::ZERO).all() && q.cmple(Vec3::ONE).all()
+}
+
 /// The most values a grid may hold (2³⁰ floats: 4 GiB).
 const MAX_VALUES: usize = 1 << 30;
 

@@ -11,7 +11,7 @@
 
 use base::TransmittanceEstimator as Estimator;
 
-use super::grid::VoxelGrid;
+use super::grid::{self, VoxelGrid};
 use super::homogeneous::Flight;
 use super::majorant::MajorantGrid;
 use crate::geometry::Ray;
@@ -80,14 +80,10 @@ impl Heterogeneous {
 
     /// [`Heterogeneous::sample`] with the uniform numbers from `u`.
     pub fn sample_with(&self, ray: &Ray, d_max: f32, u: &mut impl FnMut() -> f32) -> Flight {
-        let pass = Flight::Pass {
-            weight: Vec3::ONE,
-            ratio: Vec3::ONE,
-        };
         let Some((t0, t1, o, d)) = self.clip(ray, d_max) else {
-            return pass;
+            return Flight::THROUGH;
         };
-        let mut flight = pass;
+        let mut flight = Flight::THROUGH;
         self.majorants.walk(o, d, t0, t1, |ta, tb, _, hi| {
             if hi <= 0.0 {
                 return true;
@@ -120,7 +116,7 @@ impl Heterogeneous {
     /// σa = σt·(1 − albedo) at the world point `p` (0 outside the grid's box).
     pub fn sigma_a(&self, p: Vec3) -> Vec3 {
         let q = self.to_grid.transform_point3a(p);
-        if !(q.cmpge(Vec3::ZERO).all() && q.cmple(Vec3::ONE).all()) {
+        if !grid::inside(q) {
             return Vec3::ZERO;
         }
         let albedo = match &self.albedo {
@@ -135,7 +131,7 @@ impl Heterogeneous {
         let o = self.to_grid.transform_point3a(ray.o);
         let d = self.to_grid.transform_vector3a(ray.d);
         let p = o + d * t;
-        if p.cmpge(Vec3::ZERO).all() && p.cmple(Vec3::ONE).all() {
+        if grid::inside(p) {
             self.sigma_t(p)
         } else {
             0.0

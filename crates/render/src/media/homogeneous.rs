@@ -37,6 +37,19 @@ pub enum Flight {
     Pass { weight: Vec3, ratio: Vec3 },
 }
 
+impl Flight {
+    /// No collision, throughput unchanged.
+    pub const THROUGH: Flight = Flight::Pass {
+        weight: Vec3::ONE,
+        ratio: Vec3::ONE,
+    };
+    /// No estimate at all (a zero-density sample): the path ends.
+    pub const ABSORBED: Flight = Flight::Pass {
+        weight: Vec3::ZERO,
+        ratio: Vec3::ONE,
+    };
+}
+
 impl Homogeneous {
     pub fn new(sigma_t: Vec3, albedo: Vec3) -> Homogeneous {
         Homogeneous {
@@ -69,10 +82,7 @@ impl Homogeneous {
             let pdf = self.sigma_t * tr;
             let p_h = pdf[hero];
             if p_h.is_nan() || p_h <= 0.0 {
-                return Flight::Pass {
-                    weight: Vec3::ZERO,
-                    ratio: Vec3::ONE,
-                };
+                return Flight::ABSORBED;
             }
             Flight::Scatter {
                 d,
@@ -84,10 +94,7 @@ impl Homogeneous {
             let tr = self.transmittance(d_max);
             let p_h = tr[hero];
             if p_h.is_nan() || p_h <= 0.0 {
-                return Flight::Pass {
-                    weight: Vec3::ZERO,
-                    ratio: Vec3::ONE,
-                };
+                return Flight::ABSORBED;
             }
             Flight::Pass {
                 weight: tr / p_h,

@@ -149,7 +149,7 @@ impl Emission {
                 blackbody,
             } => {
                 let q = to_grid.transform_point3a(p);
-                if !(q.cmpge(Vec3::ZERO).all() && q.cmple(Vec3::ONE).all()) {
+                if !grid::inside(q) {
                     return Vec3::ZERO;
                 }
                 match blackbody {

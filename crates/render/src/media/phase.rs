@@ -59,14 +59,6 @@ impl Phase {
             }
         }
     }
-
-    /// The mean cosine of the scattering angle.
-    pub fn mean_cosine(&self) -> f32 {
-        match *self {
-            Phase::Isotropic => 0.0,
-            Phase::HenyeyGreenstein { g } => g,
-        }
-    }
 }
 
 #[cfg(test)]
