@@ -5,7 +5,11 @@
 //! density of the direction sampled there and an event code saying how the path left it (or
 //! why it ended there): 0 camera, 1 non-delta reflection, 2 non-delta transmission, 3 specular
 //! reflection, 4 specular transmission, 5 escaped (a point far along the last direction),
-//! 6 absorbed, 7 Russian roulette, 8 maximum depth.
+//! 6 absorbed, 7 Russian roulette, 8 maximum depth, 9 scattering in a medium (a collision of
+//! the volumetric path tracer; its normal is zero), 10 a `null` boundary crossed.
+//!
+//! The path tracer's and the volumetric path tracer's paths are recorded; other integrators
+//! are refused with a message.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -14,8 +18,9 @@ use build::{BuildOptions, build};
 use render::geometry::Ray;
 use render::integrators::Integrator;
 use render::integrators::path::{
-    PathEnd, PathRecorder, RecordedScatter, RecordedVertex, li_recorded,
+    PathEnd, PathRecorder, RecordedScatter, RecordedVertex, VertexKind, li_recorded,
 };
+use render::integrators::volpath;
 use render::math::{UVec2, Vec3};
 use render::sampling::Sampler;
 use render::world::Scene;
@@ -76,6 +81,8 @@ struct Collector {
     /// Length used for the segment of an escaping path.
     far: f32,
     last_dir: Option<Vec3>,
+    /// The kind of the last vertex recorded.
+    last_kind: VertexKind,
 }
 
 impl Collector {
@@ -103,6 +110,7 @@ impl PathRecorder for Collector {
         });
     }
     fn vertex(&mut self, v: &RecordedVertex) {
+        self.last_kind = v.kind;
         self.push(Vertex {
             p: v.p,
             n: v.n,
@@ -116,11 +124,13 @@ impl PathRecorder for Collector {
         self.last_dir = Some(s.wi);
         if let Some(last) = self.vertices.last_mut() {
             last.pdf = s.pdf;
-            last.event = match (s.scatter.delta, s.scatter.transmission) {
-                (false, false) => 1,
-                (false, true) => 2,
-                (true, false) => 3,
-                (true, true) => 4,
+            last.event = match (self.last_kind, s.scatter.delta, s.scatter.transmission) {
+                (VertexKind::Medium, ..) => 9,
+                (VertexKind::Null, ..) => 10,
+                (_, false, false) => 1,
+                (_, false, true) => 2,
+                (_, true, false) => 3,
+                (_, true, true) => 4,
             };
         }
     }
@@ -152,16 +162,16 @@ impl PathRecorder for Collector {
 }
 
 fn trace(scene: &Scene, integrator: &Integrator, args: &Args) -> Result<Collector, Failure> {
-    let Integrator::Path(cfg) = integrator else {
-        return Err(Failure::input(format!(
-            "debug-paths records the path tracer's paths; the scene asks for '{}'{}",
-            integrator.name(),
-            if matches!(integrator, Integrator::VolPath(_)) {
-                " (recording volumetric paths is not supported yet)"
-            } else {
-                ""
-            }
-        )));
+    // Null crossings of volumetric paths do not count as depth: budget two vertices per level.
+    let (path, vol, max_vertices) = match integrator {
+        Integrator::Path(cfg) => (Some(cfg), None, cfg.max_depth),
+        Integrator::VolPath(cfg) => (None, Some(cfg), cfg.max_depth.saturating_mul(2)),
+        _ => {
+            return Err(Failure::input(format!(
+                "debug-paths records the paths of 'path' and 'volpath'; the scene asks for '{}'",
+                integrator.name(),
+            )));
+        }
     };
     let (x, y) = args.pixel;
     if x >= scene.film.width || y >= scene.film.height {
@@ -172,10 +182,10 @@ fn trace(scene: &Scene, integrator: &Integrator, args: &Args) -> Result<Collecto
     }
     // Every vertex is recorded (plus its edge) and written as text: budget for the depth
     // limit (or 64 vertices when paths are unbounded and only roulette ends them).
-    let vertices = if cfg.max_depth == u32::MAX {
+    let vertices = if max_vertices == u32::MAX {
         64
     } else {
-        u64::from(cfg.max_depth).min(1 << 16) + 2
+        u64::from(max_vertices).min(1 << 16) + 2
     };
     let per_vertex = (std::mem::size_of::<Vertex>() + 8 + BYTES_OF_TEXT_PER_VERTEX) as u64;
     crate::memory::check(
@@ -190,6 +200,7 @@ fn trace(scene: &Scene, integrator: &Integrator, args: &Args) -> Result<Collecto
         path: 0,
         far,
         last_dir: None,
+        last_kind: VertexKind::Surface,
     };
     let mut sampler = Sampler::new(scene.sampler.kind, args.count.max(1), scene.sampler.seed);
     for index in 0..args.count {
@@ -197,7 +208,11 @@ fn trace(scene: &Scene, integrator: &Integrator, args: &Args) -> Result<Collecto
         // The renderer's own camera sample (film position, lens, and shutter time when
         // something moves), so the paths are those of the render.
         let (_, cray) = render::render::camera_sample(scene, &mut sampler, UVec2::new(x, y), index);
-        li_recorded(scene, &cray, &mut sampler, cfg, &mut rec);
+        if let Some(cfg) = path {
+            li_recorded(scene, &cray, &mut sampler, cfg, &mut rec);
+        } else if let Some(cfg) = vol {
+            volpath::li_recorded(scene, &cray, &mut sampler, cfg, &mut rec);
+        }
     }
     Ok(rec)
 }
@@ -206,7 +221,7 @@ fn ply(c: &Collector) -> String {
     let mut s = String::new();
     let _ = write!(
         s,
-        "ply\nformat ascii 1.0\ncomment penumbra debug-paths: event 0 camera, 1 reflect, 2 transmit, 3 specular reflect, 4 specular transmit, 5 escaped, 6 absorbed, 7 roulette, 8 max depth\n\
+        "ply\nformat ascii 1.0\ncomment penumbra debug-paths: event 0 camera, 1 reflect, 2 transmit, 3 specular reflect, 4 specular transmit, 5 escaped, 6 absorbed, 7 roulette, 8 max depth, 9 medium scatter, 10 null crossing\n\
          element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
          property float nx\nproperty float ny\nproperty float nz\n\
          property float throughput_r\nproperty float throughput_g\nproperty float throughput_b\n\

@@ -81,3 +81,24 @@ fn json_and_errors() {
     let bad = run(&["--pixel", "1,2"], &out("bad.txt"));
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// Volumetric paths are recorded: through the smoke sphere of the media example some vertex
+/// is a medium collision (event 9, zero normal) and some a null crossing (event 10).
+#[test]
+fn volumetric_paths_record_medium_vertices() {
+    let o = out("vol.json");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/media/smoky-box.xml");
+    let r = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("debug-paths")
+        .arg(scene)
+        .args(["--pixel", "69,122", "--count", "8", "-o"])
+        .arg(&o)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let text = std::fs::read_to_string(&o).unwrap();
+    assert_eq!(text.matches("\"event\":0").count(), 8);
+    assert!(text.contains("\"n\":[0,0,0],\"throughput\""));
+    assert!(text.contains("\"event\":9"), "{text}");
+    assert!(text.contains("\"event\":10"), "{text}");
+}

@@ -86,6 +86,29 @@ impl Scene {
         self.accel.intersect(ray, t_max)
     }
 
+    /// The closest surface along `ray` (as [`Scene::intersect`] finds it) with its interaction
+    /// computed only when [`Closest::surface`] asks for it: the volumetric path tracer needs
+    /// only the distance when a medium collision comes first, and only the shape when a
+    /// shadow ray is blocked. Cut-outs are resolved at once.
+    #[inline]
+    pub fn closest(&self, ray: &Ray, t_max: f32) -> Closest {
+        let hit = self.hit(ray, t_max);
+        match hit {
+            Some(h) if self.shapes[h.shape as usize].opacity.is_some() => {
+                Closest::Surface(self.surface(ray, t_max, hit, |si| si.copied()))
+            }
+            _ => Closest::Hit(hit),
+        }
+    }
+
+    /// Whether `shape`'s material is an index-matched boundary (see [`RtMaterial::is_null`]).
+    #[inline]
+    pub fn shape_is_null(&self, shape: u32) -> bool {
+        self.shapes[shape as usize]
+            .material
+            .is_some_and(|m| self.materials[m as usize].is_null())
+    }
+
     /// `f` applied to the surface interaction of `hit`, the result of [`Scene::hit`] for the
     /// same `ray` and `t_max` (cut-outs skipped as [`Scene::intersect`] does). The interaction
     /// is computed in place and lent to `f`: the hot loops would otherwise copy its 144 bytes
@@ -212,7 +235,7 @@ impl Scene {
     /// Whether the surface at `si` is an index-matched boundary (see [`RtMaterial::is_null`]).
     #[inline]
     pub fn is_null(&self, si: &SurfaceInteraction) -> bool {
-        self.material(si).is_some_and(RtMaterial::is_null)
+        self.shape_is_null(si.shape)
     }
 
     /// The medium a path is in after leaving the surface at `si` in direction `d`, having been
@@ -279,5 +302,45 @@ impl LightScene for Scene {
     #[inline(always)]
     fn bounds(&self) -> (Vec3, Vec3) {
         self.bounds
+    }
+}
+
+/// The result of [`Scene::closest`]: a hit whose interaction is not computed yet, or (on a
+/// shape with cut-outs) the surface already resolved.
+pub enum Closest {
+    Hit(Option<Hit>),
+    Surface(Option<SurfaceInteraction>),
+}
+
+impl Closest {
+    /// The hit's ray parameter (`t_max` when nothing is hit). A surface found past cut-outs
+    /// has its `t` on a ray spawned beyond them, so its parameter is measured from `ray`'s
+    /// origin again.
+    #[inline]
+    pub fn t(&self, ray: &Ray, t_max: f32) -> f32 {
+        match self {
+            Closest::Hit(h) => h.as_ref().map_or(t_max, |h| h.t),
+            Closest::Surface(si) => si.as_ref().map_or(t_max, |si| {
+                (si.p - ray.o).dot(ray.d) / ray.d.length_squared()
+            }),
+        }
+    }
+
+    /// The shape hit, if any.
+    #[inline]
+    pub fn shape(&self) -> Option<u32> {
+        match self {
+            Closest::Hit(h) => h.as_ref().map(|h| h.shape),
+            Closest::Surface(si) => si.as_ref().map(|si| si.shape),
+        }
+    }
+
+    /// The surface interaction (what [`Scene::intersect`] returns for the same query).
+    #[inline]
+    pub fn surface(self, scene: &Scene, ray: &Ray, t_max: f32) -> Option<SurfaceInteraction> {
+        match self {
+            Closest::Hit(hit) => scene.surface(ray, t_max, hit, |si| si.copied()),
+            Closest::Surface(si) => si,
+        }
     }
 }

@@ -25,6 +25,10 @@ use base::TransmittanceEstimator;
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
+use crate::integrators::path::{
+    Contribution, NoRecorder, PathEnd, PathRecorder, RecordedScatter, RecordedVertex, Scatter,
+    VertexKind, Via,
+};
 use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::Vec3;
 use crate::media::Flight;
@@ -52,6 +56,13 @@ pub struct VolPathConfig {
     pub sample_emission: bool,
 }
 
+/// How a path leaves a medium collision, for recorders: a non-delta event (render layers
+/// count it as diffuse-like); the vertex's [`VertexKind::Medium`] tells it apart.
+const PHASE: Scatter = Scatter {
+    delta: false,
+    transmission: false,
+};
+
 /// The power heuristic (β = 2).
 #[inline]
 fn mis(a: f32, b: f32) -> f32 {
@@ -68,7 +79,29 @@ enum From<'a> {
 }
 
 /// The radiance arriving along one camera ray.
+#[inline]
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathConfig) -> Vec3 {
+    li_recorded(scene, cray, sampler, cfg, &mut NoRecorder)
+}
+
+/// Adds `l` to the estimate and tells the recorder where it came from.
+#[inline(always)]
+fn add<R: PathRecorder>(result: &mut Vec3, rec: &mut R, l: Vec3, c: Contribution) {
+    *result += l;
+    rec.contribution(l, c);
+}
+
+/// [`li`] with a recorder told about the path's vertices (surface, medium and null
+/// crossings), its directions and its contributions, as the path tracer's `li_recorded`
+/// does. With [`NoRecorder`] it is `li`.
+pub fn li_recorded<R: PathRecorder>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    cfg: &VolPathConfig,
+    rec: &mut R,
+) -> Vec3 {
+    rec.camera_ray(&cray.ray);
     let len = cray.ray.d.length();
     let mut ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
     let mut t_far = cray.t_max * len;
@@ -77,6 +110,8 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
     let mut result = Vec3::ZERO;
     let mut eta = 1.0f32;
     let mut depth = 0u32;
+    // How the path left its first scattering vertex (for the recorder's contributions).
+    let mut first: Option<Scatter> = None;
     // Emitters reached through delta events only (or directly) count without MIS.
     let mut specular_chain = !cfg.hide_emitters;
     // The last real scattering event (`None`: the camera) and its direction density.
@@ -93,26 +128,36 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
     // Bounded: null crossings do not count as depth.
     for _ in 0..(1 << 16) {
         if throughput == Vec3::ZERO {
+            rec.end(PathEnd::Absorbed);
             break;
         }
         if depth > cfg.rr_depth {
             // The path's effective weight is throughput / mean ratio.
             let q = ((throughput * mis_hero(ratio)).max_element() * eta * eta).min(0.95);
             if sampler.next_1d() >= q {
+                rec.end(PathEnd::Roulette);
                 break;
             }
             throughput /= q;
         }
         if depth >= cfg.max_depth {
+            rec.end(PathEnd::MaxDepth);
             break;
         }
-        let hit = scene.intersect(&ray, t_far);
+        // Contributions found from here: the emitter is one segment past the last event.
+        let found = |via| Contribution {
+            depth: depth + 1,
+            first,
+            via,
+        };
+        // The surface's interaction waits until no collision comes before it.
+        let closest = scene.closest(&ray, t_far);
         if let Some(m) = medium {
             let m = &scene.media[m as usize];
-            let d_surface = hit.as_ref().map_or(t_far, |si| si.t);
+            let d_surface = closest.t(&ray, t_far);
             // Equiangular sampling of this segment towards a point light (strategy B); the
             // collision's own next-event estimation below is strategy A.
-            let segment = (cfg.equiangular && depth + 1 < cfg.max_depth)
+            let mut segment = (cfg.equiangular && depth + 1 < cfg.max_depth)
                 .then(|| m.grey_homogeneous())
                 .flatten()
                 .map(|(sigma_t, sigma_s)| Segment {
@@ -122,11 +167,13 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                     sigma_t,
                     sigma_s,
                     estimator: cfg.transmittance,
+                    cached: None,
                 });
-            if let Some(seg) = &segment {
-                result += throughput
+            if let Some(seg) = &mut segment {
+                let l = throughput
                     * seg.equiangular(scene, m, medium, ray.time, sampler)
                     * mis_hero(ratio);
+                add(&mut result, rec, l, found(Via::EmitterSample));
             }
             match m.sample(&ray, d_surface, hero, sampler) {
                 Flight::Scatter {
@@ -142,16 +189,31 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                         && !(emission_sampled && m.emission_sampler.is_some())
                     {
                         let le = e.radiance(ray.at(d));
-                        result += throughput * emit * le * mis_hero(ratio);
+                        let l = throughput * emit * le * mis_hero(ratio);
+                        add(&mut result, rec, l, found(Via::Emission));
                     }
                     throughput *= weight;
                     depth += 1;
+                    let p = ray.at(d);
+                    rec.vertex(&RecordedVertex {
+                        p,
+                        n: Vec3::ZERO,
+                        depth,
+                        throughput: throughput * mis_hero(ratio),
+                        kind: VertexKind::Medium,
+                    });
                     if depth >= cfg.max_depth {
+                        rec.end(PathEnd::MaxDepth);
                         break;
                     }
-                    let p = ray.at(d);
                     let wo = -ray.d;
                     let r = Receiver::at(p);
+                    // Contributions from this vertex: one segment past it.
+                    let here = |via| Contribution {
+                        depth: depth + 1,
+                        first: first.or(Some(PHASE)),
+                        via,
+                    };
                     if let Some((i, ls, pmf)) = sample_light(scene, &r, sampler) {
                         let ph = m.phase.eval(wo, ls.wi);
                         let tr = transmittance(
@@ -163,7 +225,7 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                             sampler,
                         );
                         if tr != Vec3::ZERO {
-                            let w = match (&segment, scene.lights[i as usize].position()) {
+                            let w = match (&mut segment, scene.lights[i as usize].position()) {
                                 // A point light also reachable by strategy B.
                                 (Some(seg), Some(q)) => {
                                     let p_a = seg.sigma_t * (-seg.sigma_t * d).exp() * pmf;
@@ -173,14 +235,15 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                                 _ if ls.delta => 1.0,
                                 _ => mis(ls.pdf * pmf, ph),
                             };
-                            result += throughput
+                            let l = throughput
                                 * tr
                                 * ls.li
                                 * (ph * w * mis_hero(ratio) / (ls.pdf * pmf));
+                            add(&mut result, rec, l, here(Via::EmitterSample));
                         }
                     }
                     if cfg.sample_emission {
-                        result += throughput
+                        let l = throughput
                             * sample_emission(
                                 scene,
                                 From::Medium(p, ray.time),
@@ -190,9 +253,17 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                                 |wi| Vec3::splat(m.phase.eval(wo, wi)),
                             )
                             * mis_hero(ratio);
+                        add(&mut result, rec, l, here(Via::EmitterSample));
                         emission_sampled = true;
                     }
                     let (wi, pdf) = m.phase.sample(wo, sampler.next_2d());
+                    rec.scatter(&RecordedScatter {
+                        scatter: PHASE,
+                        wi,
+                        pdf,
+                        throughput: throughput * mis_hero(ratio),
+                    });
+                    first = first.or(Some(PHASE));
                     ray = Ray::at_time(p, wi, ray.time);
                     t_far = f32::INFINITY;
                     last = Some(r);
@@ -207,7 +278,7 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
             }
         }
 
-        let Some(si) = hit else {
+        let Some(si) = closest.surface(scene, &ray, t_far) else {
             if !(depth == 0 && cfg.hide_emitters) {
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
@@ -222,14 +293,16 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                         }
                         _ => 1.0,
                     };
-                    result += throughput * le * (w * mis_hero(ratio));
+                    let l = throughput * le * (w * mis_hero(ratio));
+                    add(&mut result, rec, l, found(Via::Emission));
                 }
                 if depth == 0
                     && let Some(bg) = scene.background
                 {
-                    result += bg;
+                    add(&mut result, rec, bg, found(Via::Emission));
                 }
             }
+            rec.end(PathEnd::Escaped);
             break;
         };
 
@@ -246,28 +319,59 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                     }
                     _ => 1.0,
                 };
-                result += throughput * le * (w * mis_hero(ratio));
+                let l = throughput * le * (w * mis_hero(ratio));
+                add(&mut result, rec, l, found(Via::Emission));
             }
         }
 
-        if scene.is_null(&si) {
+        let null = scene.is_null(&si);
+        rec.vertex(&RecordedVertex {
+            p: si.p,
+            n: si.shading.n,
+            depth: depth + 1,
+            throughput: throughput * mis_hero(ratio),
+            kind: if null {
+                VertexKind::Null
+            } else {
+                VertexKind::Surface
+            },
+        });
+        if null {
             // An index-matched boundary: cross it, in the same direction.
+            rec.scatter(&RecordedScatter {
+                scatter: Scatter {
+                    delta: true,
+                    transmission: true,
+                },
+                wi: ray.d,
+                pdf: 1.0,
+                throughput: throughput * mis_hero(ratio),
+            });
             medium = scene.medium_after(&si, ray.d, medium);
             ray = si.spawn_ray(ray.d);
             t_far = f32::INFINITY;
             continue;
         }
         let Some((bsdf, frame)) = scene.bsdf_at(&si) else {
+            rec.end(PathEnd::Absorbed);
             break;
         };
         let wo = frame.to_local(si.wo);
+        // Contributions from this vertex reach the emitter one segment past it; before the
+        // path leaves its first vertex, `first` is still unknown, as in the path tracer.
+        let here = |via| Contribution {
+            depth: depth + 2,
+            first,
+            via,
+        };
         emission_sampled = false;
         if bsdf.has_smooth() && cfg.sample_emission && depth + 1 < cfg.max_depth {
-            result += throughput
+            let l = throughput
                 * sample_emission(scene, From::Surface(&si), medium, cfg, sampler, |wi| {
                     bsdf.eval(wo, frame.to_local(wi), TransportMode::Radiance)
                 })
                 * mis_hero(ratio);
+            add(&mut result, rec, l, here(Via::EmitterSample));
             emission_sampled = true;
         }
         if bsdf.has_smooth() && depth + 1 < cfg.max_depth {
@@ -290,8 +394,9 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
                         } else {
                             mis(ls.pdf * pmf, pdf)
                         };
-                        result +=
+                        let l =
                             throughput * tr * f * ls.li * (w * mis_hero(ratio) / (ls.pdf * pmf));
+                        add(&mut result, rec, l, here(Via::EmitterSample));
                     }
                 }
             }
@@ -299,6 +404,7 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
         let u1 = sampler.next_1d();
         let u2 = sampler.next_2d();
         let Some(bs) = bsdf.sample(wo, u1, u2, TransportMode::Radiance) else {
+            rec.end(PathEnd::Absorbed);
             break;
         };
         throughput *= bs.weight;
@@ -308,6 +414,17 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
             emission_sampled = false;
         }
         let wi = frame.to_world(bs.wi);
+        let scatter = Scatter {
+            delta: bs.delta,
+            transmission: bs.transmission,
+        };
+        rec.scatter(&RecordedScatter {
+            scatter,
+            wi,
+            pdf: bs.pdf,
+            throughput: throughput * mis_hero(ratio),
+        });
+        first = first.or(Some(scatter));
         medium = scene.medium_after(&si, wi, medium);
         ray = si.spawn_ray(wi);
         t_far = f32::INFINITY;
@@ -334,6 +451,9 @@ fn sample_light(
     (ls.pdf > 0.0 && ls.li != Vec3::ZERO && pmf > 0.0).then_some((i, ls, pmf))
 }
 
+/// Δ, h and the angles a < b of a segment's ends seen from a light (see [`Segment::frame`]).
+type Angles = (f32, f32, f32, f32);
+
 /// A segment `o + t·d`, t ∈ [0, end), through a grey homogeneous medium, for equiangular
 /// sampling towards point lights (Kulla & Fajardo 2012): the density of t is proportional to
 /// 1/(h² + (t − Δ)²), h the light's distance from the line and Δ the foot of the
@@ -346,6 +466,9 @@ struct Segment {
     sigma_t: f32,
     sigma_s: f32,
     estimator: TransmittanceEstimator,
+    /// The last light position [`Segment::frame`] was computed for, and its result: the
+    /// collision's MIS weight asks again for the light strategy B chose (four `atan2` saved).
+    cached: Option<(Vec3, Option<Angles>)>,
 }
 
 impl Segment {
@@ -355,7 +478,18 @@ impl Segment {
     }
 
     /// Δ, h and the angles of the segment's ends seen from the light at `q`.
-    fn frame(&self, q: Vec3) -> Option<(f32, f32, f32, f32)> {
+    fn frame(&mut self, q: Vec3) -> Option<Angles> {
+        if let Some((at, f)) = self.cached
+            && at == q
+        {
+            return f;
+        }
+        let f = self.frame_uncached(q);
+        self.cached = Some((q, f));
+        f
+    }
+
+    fn frame_uncached(&self, q: Vec3) -> Option<Angles> {
         let delta = (q - self.o).dot(self.d);
         let h = (q - self.o - self.d * delta).length();
         if h.is_nan() || h <= 1e-6 * (1.0 + delta.abs()) {
@@ -371,7 +505,7 @@ impl Segment {
     }
 
     /// The density of distance `t` under equiangular sampling towards `q`.
-    fn pdf(&self, q: Vec3, t: f32) -> f32 {
+    fn pdf(&mut self, q: Vec3, t: f32) -> f32 {
         match self.frame(q) {
             Some((delta, h, a, b)) if (0.0..self.end).contains(&t) => {
                 h / ((b - a) * (h * h + (t - delta) * (t - delta)))
@@ -384,7 +518,7 @@ impl Segment {
     /// light, a distance by equiangular sampling and single scattering there towards the
     /// light, MIS-weighted against the free-flight collision's next-event estimation.
     fn equiangular(
-        &self,
+        &mut self,
         scene: &Scene,
         m: &crate::media::Medium,
         medium: Option<u32>,
@@ -519,22 +653,23 @@ fn transmittance(
     let (mut ray, mut t_max) = shadow_ray(&from, ls);
     let mut tr = Vec3::ONE;
     for _ in 0..256 {
-        let hit = scene.intersect(&ray, t_max);
+        let closest = scene.closest(&ray, t_max);
+        // A blocking surface ends the query before any medium is estimated.
+        if closest.shape().is_some_and(|s| !scene.shape_is_null(s)) {
+            return Vec3::ZERO;
+        }
         if let Some(m) = medium {
             let len = ray.d.length();
             let unit = Ray::at_time(ray.o, ray.d / len, ray.time);
-            let end = hit.as_ref().map_or(t_max, |si| si.t);
+            let end = closest.t(&ray, t_max);
             tr *= scene.media[m as usize].transmittance(&unit, end * len, estimator, sampler);
             if tr == Vec3::ZERO {
                 return tr;
             }
         }
-        let Some(si) = hit else {
+        let Some(si) = closest.surface(scene, &ray, t_max) else {
             return tr;
         };
-        if !scene.is_null(&si) {
-            return Vec3::ZERO;
-        }
         medium = scene.medium_after(&si, ray.d, medium);
         (ray, t_max) = shadow_ray(&From::Surface(&si), ls);
     }

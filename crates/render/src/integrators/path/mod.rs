@@ -44,7 +44,7 @@ pub use self::batched::li_batched;
 
 pub use self::record::{
     Contribution, DepthFilter, NoRecorder, PathEnd, PathRecorder, RecordedScatter, RecordedVertex,
-    Scatter, Via,
+    Scatter, VertexKind, Via,
 };
 use self::vertex::{PathState, Tracer};
 use crate::camera::CameraRay;

@@ -37,16 +37,28 @@ pub struct Contribution {
     pub via: Via,
 }
 
-/// A surface vertex as recorded.
+/// What a recorded vertex is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexKind {
+    /// A surface hit.
+    Surface,
+    /// A real collision in a participating medium (volumetric path tracer).
+    Medium,
+    /// An index-matched (`null`) boundary crossed without scattering (volumetric path tracer).
+    Null,
+}
+
+/// A vertex as recorded.
 #[derive(Clone, Copy, Debug)]
 pub struct RecordedVertex {
     pub p: Vec3,
-    /// Shading normal.
+    /// Shading normal (zero at a medium vertex).
     pub n: Vec3,
     /// Segments traced before reaching this vertex (1 for the first hit).
     pub depth: u32,
     /// Throughput of the path up to this vertex.
     pub throughput: Vec3,
+    pub kind: VertexKind,
 }
 
 /// A direction sampled at the last recorded vertex.

@@ -12,7 +12,9 @@
 use super::PathConfig;
 use super::batched::Shadows;
 use super::nee::{NeeContext, emission_weight, nee_pdf};
-use super::record::{Contribution, PathEnd, PathRecorder, RecordedVertex, Scatter, Via};
+use super::record::{
+    Contribution, PathEnd, PathRecorder, RecordedVertex, Scatter, VertexKind, Via,
+};
 use crate::bsdf::Bsdf;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
@@ -152,6 +154,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
             n: si.shading.n,
             depth: st.depth + 1,
             throughput: st.throughput,
+            kind: VertexKind::Surface,
         });
         if st.depth.saturating_add(1) >= cfg.max_depth {
             self.rec.end(PathEnd::MaxDepth);
