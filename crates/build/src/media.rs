@@ -146,7 +146,8 @@ fn max_abs(m: &Mat4) -> f32 {
 
 /// A grid and the map from its `[0,1]³` to the world: the scene's `to_world` for a `.vol`
 /// (the grid fills the unit cube of its space); for a `.vdb`, the scene's `to_world` after
-/// the map from the densified grid's `[0,1]³` to the VDB grid's own local space.
+/// the map from the densified grid's `[0,1]³` to the VDB grid's own local space, or (Nori's
+/// bounding box, `own_map` false) directly.
 fn grid(v: &VolumeDesc) -> Result<(VoxelGrid, Mat4), BuildError> {
     let fail = |message: String| BuildError {
         loc: v.loc.clone(),
@@ -157,10 +158,14 @@ fn grid(v: &VolumeDesc) -> Result<(VoxelGrid, Mat4), BuildError> {
             VoxelGrid::read_vol(&v.path, v.trilinear).map_err(|e| fail(e.to_string()))?,
             v.to_world,
         ),
-        VolumeFormat::Vdb { grid_name } => {
+        VolumeFormat::Vdb { grid_name, own_map } => {
             let (grid, local_from_unit) = VoxelGrid::read_vdb(&v.path, grid_name, v.trilinear)
                 .map_err(|e| fail(e.to_string()))?;
-            (grid, v.to_world * local_from_unit)
+            if *own_map {
+                (grid, v.to_world * local_from_unit)
+            } else {
+                (grid, v.to_world)
+            }
         }
     };
     let det = to_world.determinant();

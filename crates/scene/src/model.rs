@@ -352,8 +352,11 @@ pub struct VolumeDesc {
 pub enum VolumeFormat {
     /// Mitsuba's binary `.vol` (version 3, float32).
     MitsubaVol,
-    /// An OpenVDB file and the name of the grid to read.
-    Vdb { grid_name: String },
+    /// An OpenVDB file and the name of the grid to read. `own_map`: the grid's own
+    /// index-to-local map places its voxels in the space `to_world` starts from (Mitsuba
+    /// semantics, voxels land where OpenVDB puts them); otherwise the grid's active box is
+    /// the `[0,1]³` that `to_world` places (Nori's user-given bounding box).
+    Vdb { grid_name: String, own_map: bool },
 }
 
 /// How a medium scatters: the phase function.

@@ -184,7 +184,8 @@ fn usage_for(name: &str, emitter: bool) -> SpectrumUse {
 
 /// A grid file's format by its extension: OpenVDB (`.vdb`, with the plugin's `grid_name`,
 /// default `density`) or Mitsuba's `.vol`.
-fn grid_format(pl: &Plugin<'_>, path: &std::path::Path) -> Result<VolumeFormat> {
+/// The format of a grid file; `own_map` as [`VolumeFormat::Vdb`] says.
+fn grid_format(pl: &Plugin<'_>, path: &std::path::Path, own_map: bool) -> Result<VolumeFormat> {
     if !path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("vdb"))
@@ -196,7 +197,10 @@ fn grid_format(pl: &Plugin<'_>, path: &std::path::Path) -> Result<VolumeFormat> 
         .string_opt("grid_name")?
         .map_or("density", |(n, _)| n)
         .to_string();
-    Ok(VolumeFormat::Vdb { grid_name: name })
+    Ok(VolumeFormat::Vdb {
+        grid_name: name,
+        own_map,
+    })
 }
 
 /// Builds one `SceneDesc` (a document holds one, or several for Nori t-tests).
@@ -638,7 +642,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 format!("bbox_min {lo} must be below bbox_max {hi} on every axis"),
             ));
         }
-        let format = grid_format(pl, &path)?;
+        // The box holds the grid's active voxels, whatever the file's own placement.
+        let format = grid_format(pl, &path, false)?;
         Ok(Box::new(VolumeDesc {
             path,
             format,
@@ -686,7 +691,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "constvolume" => VolumeParam::Const(self.medium_rgb(&pl, "value", Vec3::ONE)?),
             "gridvolume" => {
                 let path = self.ctx.file_param(&pl, "gridvolume")?;
-                let format = grid_format(&pl, &path)?;
+                let format = grid_format(&pl, &path, true)?;
                 let trilinear = match pl.props.string_opt("filter_type")? {
                     None | Some(("trilinear", _)) => true,
                     Some(("nearest", _)) => false,
