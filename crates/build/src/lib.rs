@@ -72,12 +72,13 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
     })?;
 
     let (materials, default_material) = materials::materials(&desc.materials)?;
-    let media = media::media(desc)?;
+    let mut media = media::media(desc)?;
+    let beer = media::beer_media(&desc.materials, &mut media);
     let shapes::Shapes {
         mut shapes,
         protos,
         warning,
-    } = shapes::shapes(desc, opts, &materials, default_material)?;
+    } = shapes::shapes(desc, opts, &materials, default_material, &beer)?;
     let mut warnings: Vec<String> = warning.into_iter().collect();
     let has_motion = shapes
         .iter()
