@@ -95,29 +95,9 @@ struct MaterialResolver<'a> {
 impl MaterialResolver<'_> {
     fn material(&mut self, id: MaterialId) -> Result<RtMaterial, BuildError> {
         let m = &self.materials[id.0 as usize];
-        let absorption = match &m.material {
-            Material::Dielectric {
-                absorption: Some(sigma),
-                ..
-            }
-            | Material::PhongFamily {
-                ideal:
-                    Some(CourseIdeal {
-                        kind:
-                            CourseIdealKind::Dielectric {
-                                absorption: Some(sigma),
-                                ..
-                            },
-                        ..
-                    }),
-                ..
-            } if *sigma != PVec3::ZERO => Some((*sigma).into()),
-            _ => None,
-        };
         Ok(RtMaterial {
             surface: self.layer(id, &mut Vec::new(), 0, &m.loc)?,
             ambient: m.ambient.into(),
-            absorption,
             unlit: match &m.material {
                 Material::Unlit { color } => Some(color_ref(color)),
                 _ => None,
