@@ -72,12 +72,13 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
     })?;
 
     let (materials, default_material) = materials::materials(&desc.materials)?;
-    let media = media::media(desc)?;
+    let mut media = media::media(desc)?;
+    let beer = media::beer_media(&desc.materials, &mut media);
     let shapes::Shapes {
         mut shapes,
         protos,
         warning,
-    } = shapes::shapes(desc, opts, &materials, default_material)?;
+    } = shapes::shapes(desc, opts, &materials, default_material, &beer)?;
     let mut warnings: Vec<String> = warning.into_iter().collect();
     let has_motion = shapes
         .iter()
@@ -171,10 +172,17 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         })
         .map(Vec3::from)
         .sum();
-    let integrator = integrator::integrator(&integrator_desc).map_err(|e| BuildError {
+    let mut integrator = integrator::integrator(&integrator_desc).map_err(|e| BuildError {
         loc: Loc::file(&desc.source),
         message: e.to_string(),
     })?;
+    // Mitsuba's `path` ignores media, and so does ours for a scene that declares any. When
+    // every medium comes from Beer absorption (purely absorbing, homogeneous), the path
+    // tracer applies them, as the courses' tracers apply absorption inside their glass.
+    if let Integrator::Path(cfg) = &mut integrator {
+        cfg.media_absorption = desc.media.is_empty() && !media.is_empty();
+        debug_assert!(!cfg.media_absorption || media.iter().all(|m| m.is_purely_absorbing()));
+    }
     if ambient != Vec3::ZERO && !matches!(integrator_desc, IntegratorDesc::Whitted { .. }) {
         warnings.push(format!(
             "{}: warning: the ambient light is used only by the Whitted ray tracer; the {} integrator ignores it",

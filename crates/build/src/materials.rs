@@ -10,6 +10,7 @@ use render::math::PVec3;
 use render::textures::{ColorRef, FloatRef, TexRef};
 use scene::{
     ColorParam, CourseIdeal, CourseIdealKind, FloatParam, Loc, Material, MaterialDesc, MaterialId,
+    Rgb,
 };
 
 use crate::BuildError;
@@ -27,6 +28,43 @@ pub(crate) fn materials(materials: &[MaterialDesc]) -> Result<(Vec<RtMaterial>, 
     let default_material = list.len() as u32;
     list.push(RtMaterial::default_diffuse());
     Ok((list, default_material))
+}
+
+/// The material that declares the Beer–Lambert absorption inside shapes using material `id`,
+/// and its coefficient per unit length: `id` itself when it is a smooth dielectric (Mitsuba's
+/// or a course one) with a non-zero `absorption`, or the material that the normal maps, bump
+/// maps and masks around it wrap (they change the surface, not what lies behind it). A
+/// `twosided` material has no inside, so none through it.
+pub(crate) fn beer_absorption(
+    materials: &[MaterialDesc],
+    mut id: MaterialId,
+) -> Option<(MaterialId, Rgb)> {
+    // A chain of wrappers longer than the material list is a cycle.
+    for _ in 0..=materials.len() {
+        match &materials.get(id.0 as usize)?.material {
+            Material::NormalMap { nested, .. }
+            | Material::BumpMap { nested, .. }
+            | Material::Mask { nested, .. } => id = *nested,
+            Material::Dielectric {
+                absorption: Some(sigma),
+                ..
+            }
+            | Material::PhongFamily {
+                ideal:
+                    Some(CourseIdeal {
+                        kind:
+                            CourseIdealKind::Dielectric {
+                                absorption: Some(sigma),
+                                ..
+                            },
+                        ..
+                    }),
+                ..
+            } if *sigma != PVec3::ZERO => return Some((id, *sigma)),
+            _ => return None,
+        }
+    }
+    None
 }
 
 pub(crate) fn color_ref(p: &ColorParam) -> ColorRef {
@@ -57,29 +95,9 @@ struct MaterialResolver<'a> {
 impl MaterialResolver<'_> {
     fn material(&mut self, id: MaterialId) -> Result<RtMaterial, BuildError> {
         let m = &self.materials[id.0 as usize];
-        let absorption = match &m.material {
-            Material::Dielectric {
-                absorption: Some(sigma),
-                ..
-            }
-            | Material::PhongFamily {
-                ideal:
-                    Some(CourseIdeal {
-                        kind:
-                            CourseIdealKind::Dielectric {
-                                absorption: Some(sigma),
-                                ..
-                            },
-                        ..
-                    }),
-                ..
-            } if *sigma != PVec3::ZERO => Some((*sigma).into()),
-            _ => None,
-        };
         Ok(RtMaterial {
             surface: self.layer(id, &mut Vec::new(), 0, &m.loc)?,
             ambient: m.ambient.into(),
-            absorption,
             unlit: match &m.material {
                 Material::Unlit { color } => Some(color_ref(color)),
                 _ => None,

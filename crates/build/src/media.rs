@@ -1,4 +1,5 @@
-//! Medium factories: scene media to runtime ones, reading their grids.
+//! Medium factories: scene media to runtime ones, reading their grids; and the media that
+//! Beer–Lambert absorption inside dielectrics becomes ([`beer_media`]).
 
 use render::math::{Mat4, Vec3};
 use render::media::grid::VoxelGrid;
@@ -8,14 +9,34 @@ use render::media::{
 };
 use scene::spectra::{SpectrumUse, planck, sampled_to_rgb};
 use scene::{
-    MediumDesc, MediumEmission, PhaseDesc, SceneDesc, VolumeDesc, VolumeFormat, VolumeParam,
+    MaterialDesc, MaterialId, MediumDesc, MediumEmission, PhaseDesc, SceneDesc, VolumeDesc,
+    VolumeFormat, VolumeParam,
 };
 
 use crate::BuildError;
+use crate::materials::beer_absorption;
 
 /// The runtime media of `desc`, in order.
 pub(crate) fn media(desc: &SceneDesc) -> Result<Vec<Medium>, BuildError> {
     desc.media.iter().map(medium).collect()
+}
+
+/// Beer–Lambert absorption of dielectrics as media: one purely absorbing homogeneous medium
+/// ([`Medium::absorbing`], σt = σ exactly) per material that declares a coefficient, appended
+/// to `media`. Returns, per material, the medium inside the shapes that use it: the one of
+/// the dielectric it is or wraps (see [`beer_absorption`]), shared by every wrapper around
+/// that dielectric.
+pub(crate) fn beer_media(materials: &[MaterialDesc], media: &mut Vec<Medium>) -> Vec<Option<u32>> {
+    let mut own: Vec<Option<u32>> = vec![None; materials.len()];
+    (0..materials.len() as u32)
+        .map(|id| {
+            let (leaf, sigma) = beer_absorption(materials, MaterialId(id))?;
+            Some(*own[leaf.0 as usize].get_or_insert_with(|| {
+                media.push(Medium::absorbing(sigma.into()));
+                media.len() as u32 - 1
+            }))
+        })
+        .collect()
 }
 
 fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {

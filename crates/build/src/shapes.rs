@@ -22,12 +22,15 @@ pub(crate) struct Shapes {
 }
 
 /// Every shape of `desc`; `materials` are the resolved materials, `default_material` the
-/// index of Mitsuba's default diffuse among them.
+/// index of Mitsuba's default diffuse among them, `beer` the medium of Beer absorption inside
+/// each scene material (`media::beer_media`), which a shape without a declared interior gets
+/// as its interior.
 pub(crate) fn shapes(
     desc: &SceneDesc,
     opts: &BuildOptions,
     materials: &[RtMaterial],
     default_material: u32,
+    beer: &[Option<u32>],
 ) -> Result<Shapes, BuildError> {
     // Instancing: a mesh shared (same `Arc`) by two or more shapes that do not emit is a
     // prototype, built once in its object space; each of its shapes is an instance. A mesh
@@ -161,7 +164,10 @@ pub(crate) fn shapes(
                     _ => None,
                 }
             }),
-            interior: s.media.interior.map(|m| m.0),
+            interior: s.media.interior.map(|m| m.0).or_else(|| {
+                s.material
+                    .and_then(|m| beer.get(m.0 as usize).copied().flatten())
+            }),
             exterior: s.media.exterior.map(|m| m.0),
             reads: Reads {
                 tangent: !material.is_none_or(|m| materials[m as usize].isotropic()),

@@ -27,9 +27,6 @@ pub struct RtMaterial {
     pub surface: Layer,
     /// Ambient reflectance (the Whitted integrator's ambient term).
     pub ambient: Vec3,
-    /// Beer–Lambert absorption coefficient inside (a course dielectric with `absorption`),
-    /// applied by the path tracer over segments inside the shape.
-    pub absorption: Option<Vec3>,
     /// The colour an unlit surface (CENG795 `replace_all`) shows; it scatters nothing.
     pub unlit: Option<ColorRef>,
 }
@@ -153,7 +150,6 @@ impl RtMaterial {
                 })),
             },
             ambient: Vec3::ZERO,
-            absorption: None,
             unlit: None,
         }
     }

@@ -257,10 +257,13 @@ impl Scene {
         }
     }
 
-    /// The Beer–Lambert absorption coefficient inside the material at `si`, applied when a
-    /// path travels inside it.
-    pub fn interior_absorption(&self, si: &SurfaceInteraction) -> Option<Vec3> {
-        self.material(si)?.absorption
+    /// The medium on the far side of the surface at `si` for a path crossing it: the shape's
+    /// interior when it crosses from the front, its exterior otherwise (the path tracer's
+    /// choice, by the shading frame; `medium_after` decides by the geometric normal).
+    #[inline]
+    pub fn medium_across(&self, si: &SurfaceInteraction, from_front: bool) -> Option<u32> {
+        let s = &self.shapes[si.shape as usize];
+        if from_front { s.interior } else { s.exterior }
     }
 
     /// The colour an unlit surface shows at `si` (`None` for other materials).

@@ -6,7 +6,8 @@
 //! - conductor: `MirrorReflectance` · F_conductor(cos θo; n = `RefractionIndex`,
 //!   k = `AbsorptionIndex`) in the mirror direction;
 //! - dielectric: Fresnel reflection and refraction (index `RefractionIndex`; Beer–Lambert
-//!   absorption inside is applied by the integrator, as for Mitsuba's `dielectric`).
+//!   absorption inside is not the BSDF's: the build step makes it the shape's interior
+//!   medium, which the integrators apply).
 //!
 //! `Roughness` r > 0 (homework 3, "glossy reflections") perturbs the ideal direction w as the
 //! homework defines: with (u, v) an orthonormal pair perpendicular to w and ξ₁, ξ₂ uniform in

@@ -58,7 +58,9 @@ impl Homogeneous {
         }
     }
 
-    /// Transmittance over a distance `d`.
+    /// Transmittance over a distance `d`: `(-sigma_t * d).exp()` for finite `d` (the path
+    /// tracer's Beer–Lambert factor relies on exactly this expression), 0 or 1 per channel
+    /// over an infinite one.
     #[inline]
     pub fn transmittance(&self, d: f32) -> Vec3 {
         if d.is_infinite() {
@@ -107,6 +109,27 @@ impl Homogeneous {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The transmittance over a finite distance is the one expression
+    /// `(-sigma_t * d).exp()`, bit for bit (the path tracer's images depend on it), and an
+    /// infinite distance lets through only the channels without extinction.
+    #[test]
+    fn transmittance_is_the_beer_lambert_expression() {
+        let sigma = Vec3::new(0.105_360_5, 0.510_825_6, 1.609_438);
+        let m = Homogeneous::new(sigma, Vec3::ZERO);
+        assert_eq!(m.sigma_s, Vec3::ZERO);
+        for (t, len) in [
+            (0.37f32, 1.0f32),
+            (1.234_567, 0.999_999_9),
+            (1e-4, 3.0),
+            (7.5, 1.2),
+        ] {
+            let d = t * len;
+            assert_eq!(m.transmittance(d).to_array(), (-sigma * d).exp().to_array());
+        }
+        let m = Homogeneous::new(Vec3::new(0.5, 0.0, 2.0), Vec3::ZERO);
+        assert_eq!(m.transmittance(f32::INFINITY), Vec3::new(0.0, 1.0, 0.0));
+    }
 
     /// With a uniformly chosen hero and the MIS division by the mean ratio,
     /// E[weight/mean(ratio)·1{pass}] = T(d_max) and E[…·1{scatter before x}] = ∫₀ˣ T·σs, per

@@ -162,6 +162,36 @@ impl Emission {
 }
 
 impl Medium {
+    /// A purely absorbing homogeneous medium: σt = `sigma` exactly, albedo 0, isotropic
+    /// phase, no emission (Beer–Lambert absorption inside a course dielectric).
+    pub fn absorbing(sigma: Vec3) -> Medium {
+        Medium {
+            kind: MediumKind::Homogeneous(Homogeneous::new(sigma, Vec3::ZERO)),
+            phase: Phase::Isotropic,
+            emission: None,
+            emission_sampler: None,
+        }
+    }
+
+    /// Whether the medium only absorbs: homogeneous, with σs = 0 and no emission. Its whole
+    /// effect on a path is then its transmittance, which is what lets the surface path
+    /// tracer apply it (`integrators::path::PathConfig::media_absorption`).
+    pub fn is_purely_absorbing(&self) -> bool {
+        matches!(&self.kind, MediumKind::Homogeneous(h) if h.sigma_s == Vec3::ZERO)
+            && self.emission.is_none()
+    }
+
+    /// The analytic transmittance exp(−σt·`d`) over a distance `d` of a homogeneous medium
+    /// ([`Homogeneous::transmittance`]: for finite `d` the float expression
+    /// `(-sigma_t * d).exp()`, nothing else); `None` for a grid, which has none.
+    #[inline]
+    pub fn analytic_transmittance(&self, d: f32) -> Option<Vec3> {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => Some(h.transmittance(d)),
+            MediumKind::Heterogeneous(_) => None,
+        }
+    }
+
     /// A free flight along `ray` (unit direction) over `[0, d_max)`, with the path's hero
     /// channel `hero` (see [`Flight`]).
     #[inline]
@@ -209,5 +239,34 @@ impl Medium {
             MediumKind::Homogeneous(h) => h.transmittance(d_max),
             MediumKind::Heterogeneous(h) => h.transmittance(ray, d_max, estimator, sampler),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_absorbing_medium_is_beer_lambert() {
+        let sigma = Vec3::new(0.1, 0.0, 2.5);
+        let m = Medium::absorbing(sigma);
+        assert!(m.is_purely_absorbing());
+        assert_eq!(m.phase, Phase::Isotropic);
+        assert_eq!(m.sigma_a(Vec3::ZERO), sigma);
+        let d = 0.731 * 1.7;
+        assert_eq!(
+            m.analytic_transmittance(d).map(|t| t.to_array()),
+            Some((-sigma * d).exp().to_array())
+        );
+        let scattering = Medium {
+            kind: MediumKind::Homogeneous(Homogeneous::new(sigma, Vec3::splat(0.5))),
+            ..m.clone()
+        };
+        assert!(!scattering.is_purely_absorbing());
+        let glowing = Medium {
+            emission: Some(Emission::Const(Vec3::ONE)),
+            ..m
+        };
+        assert!(!glowing.is_purely_absorbing());
     }
 }

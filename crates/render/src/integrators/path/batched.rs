@@ -124,7 +124,7 @@ pub fn li_batched<T>(
             None => more = false,
             Some((tag, cray)) => slots.push(Slot {
                 sampler: sampler.clone(),
-                st: PathState::start(cfg, &cray),
+                st: PathState::start(scene, cfg, &cray),
                 result: Vec3::ZERO,
                 tag,
             }),
@@ -164,7 +164,7 @@ pub fn li_batched<T>(
             let s = &mut slots[k];
             match if more { next(&mut s.sampler) } else { None } {
                 Some((tag, cray)) => {
-                    s.st = PathState::start(cfg, &cray);
+                    s.st = PathState::start(scene, cfg, &cray);
                     let result = std::mem::replace(&mut s.result, Vec3::ZERO);
                     done(std::mem::replace(&mut s.tag, tag), result);
                 }

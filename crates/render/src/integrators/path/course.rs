@@ -50,6 +50,7 @@ impl PathConfig {
             caustics: true,
             clamp: None,
             only_depth: None,
+            media_absorption: false,
         }
     }
 

@@ -89,6 +89,17 @@ pub struct PathConfig {
     pub clamp: Option<f32>,
     /// Keep only contributions of paths with exactly this many segments.
     pub only_depth: Option<u32>,
+    /// Attenuate each segment by the transmittance of the medium it runs through: the path
+    /// starts in the camera's medium and, at every transmission, enters the shape's interior
+    /// when it crosses from the front (the side the shading normal points to) and its
+    /// exterior otherwise. Only purely absorbing homogeneous media can be applied this way
+    /// (no scattering, no emission: transmittance is then their whole effect; see
+    /// [`Medium::is_purely_absorbing`](crate::media::Medium::is_purely_absorbing)), and only
+    /// along the path: shadow rays are not attenuated (in a closed dielectric they are blocked
+    /// by its surface anyway). The build step sets it when every medium of the scene comes from
+    /// Beer–Lambert absorption in a dielectric (the course formats); off, as Mitsuba's `path`,
+    /// media are ignored.
+    pub media_absorption: bool,
 }
 
 impl PathConfig {
@@ -112,6 +123,7 @@ impl PathConfig {
             caustics: true,
             clamp: None,
             only_depth: None,
+            media_absorption: false,
         }
     }
 }
@@ -149,7 +161,7 @@ pub fn li_recorded(
         return result;
     }
     rec.camera_ray(&cray.ray);
-    let state = PathState::start(cfg, cray);
+    let state = PathState::start(scene, cfg, cray);
     Tracer {
         scene,
         cfg,

@@ -49,13 +49,9 @@ impl<R: PathRecorder> Tracer<'_, R> {
         next.throughput *= bs.weight;
         next.eta *= bs.eta;
         next.diffuse_seen |= !bs.delta;
-        if bs.transmission {
-            // Entering through the front (the side the normal points to) or leaving.
-            next.absorption = if wo.z > 0.0 {
-                scene.interior_absorption(si)
-            } else {
-                None
-            };
+        if bs.transmission && cfg.media_absorption {
+            // Entering through the front (the side the shading normal points to), or leaving.
+            next.medium = scene.medium_across(si, wo.z > 0.0);
         }
         next.ray = si.spawn_ray(v.frame.to_world(bs.wi));
         next.prev = Some(Previous {

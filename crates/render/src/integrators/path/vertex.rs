@@ -48,14 +48,15 @@ pub(super) struct PathState {
     pub(super) first: Option<Scatter>,
     /// Splitting still to be done at the next vertex.
     pub(super) split: bool,
-    /// Beer–Lambert absorption coefficient of the dielectric the path is inside, if any.
-    pub(super) absorption: Option<Vec3>,
+    /// The medium the path is in, when the configuration applies media
+    /// ([`PathConfig::media_absorption`]; otherwise always `None`).
+    pub(super) medium: Option<u32>,
     /// A non-delta bounce happened: emission found after delta bounces from here is caustic.
     pub(super) diffuse_seen: bool,
 }
 
 impl PathState {
-    pub(super) fn start(cfg: &PathConfig, cray: &CameraRay) -> PathState {
+    pub(super) fn start(scene: &Scene, cfg: &PathConfig, cray: &CameraRay) -> PathState {
         PathState {
             ray: cray.ray,
             t_max: cray.t_max,
@@ -65,7 +66,7 @@ impl PathState {
             prev: None,
             first: None,
             split: cfg.splitting > 1,
-            absorption: None,
+            medium: scene.camera_medium.filter(|_| cfg.media_absorption),
             diffuse_seen: false,
         }
     }
@@ -139,8 +140,12 @@ impl<R: PathRecorder> Tracer<'_, R> {
             return false;
         };
         st.t_max = f32::INFINITY;
-        if let Some(sigma) = st.absorption {
-            st.throughput *= (-sigma * (si.t * st.ray.d.length())).exp();
+        // Beer–Lambert over the segment (the ray's direction need not be a unit vector).
+        if let Some(m) = st.medium
+            && let Some(tr) =
+                self.scene.media[m as usize].analytic_transmittance(si.t * st.ray.d.length())
+        {
+            st.throughput *= tr;
         }
         self.emission(st, si);
         if self.unlit(st, si) {
