@@ -11,6 +11,7 @@ use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::lights::Receiver;
 use crate::math::{Vec2, Vec3};
 use crate::sampling::warp;
+use crate::shapes::SurfaceInteraction;
 
 impl<R: PathRecorder> Tracer<'_, R> {
     /// Draw the next direction at `v`, advance the state `next` to the next segment
@@ -18,7 +19,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// (`next` is then left partly updated and must not be used). In place: the state is
     /// large, and returning a new one cost two copies per bounce.
     pub(super) fn scatter(&mut self, v: &Shading, next: &mut PathState) -> bool {
-        let (scene, cfg) = (self.scene, self.cfg);
+        let cfg = self.cfg;
         let (si, bsdf, wo) = (v.si, v.bsdf, v.wo);
         let u1 = self.sampler.next_1d();
         let u2 = self.sampler.next_2d();
@@ -46,14 +47,49 @@ impl<R: PathRecorder> Tracer<'_, R> {
             self.rec.end(PathEnd::Absorbed);
             return false;
         }
+        self.advance(si, v.frame.to_world(bs.wi), &bs, wo.z > 0.0, next)
+    }
+
+    /// Mitsuba's `path` at a `null` surface (an index-matched boundary, which it does not
+    /// treat specially): the BSDF samples the straight continuation, a delta transmission of
+    /// weight 1 (Mitsuba's `Delta` flags include `Null`), so the crossing counts as a bounce
+    /// (depth, Russian roulette), has no emitter sampling (the surface is not smooth), and
+    /// an emitter found next counts without MIS.
+    #[cold]
+    pub(super) fn cross_null(&mut self, si: &SurfaceInteraction, next: &mut PathState) -> bool {
+        let bs = BsdfSample {
+            wi: -si.wo,
+            weight: Vec3::ONE,
+            pdf: 1.0,
+            delta: true,
+            transmission: true,
+            eta: 1.0,
+        };
+        let front = si.wo.dot(si.shading.n) > 0.0;
+        self.advance(si, -si.wo, &bs, front, next)
+    }
+
+    /// Advance `next` along the world direction `wi` of the sample `bs` leaving `si` (whose
+    /// incoming direction is on the front side when `front`): throughput, medium, Russian
+    /// roulette, and the recorder. `false` when the path ends.
+    #[inline(always)]
+    fn advance(
+        &mut self,
+        si: &SurfaceInteraction,
+        wi: Vec3,
+        bs: &BsdfSample,
+        front: bool,
+        next: &mut PathState,
+    ) -> bool {
+        let (scene, cfg) = (self.scene, self.cfg);
         next.throughput *= bs.weight;
         next.eta *= bs.eta;
         next.diffuse_seen |= !bs.delta;
         if bs.transmission && cfg.media_absorption {
             // Entering through the front (the side the shading normal points to), or leaving.
-            next.medium = scene.medium_across(si, wo.z > 0.0);
+            next.medium = scene.medium_across(si, front);
         }
-        next.ray = si.spawn_ray(v.frame.to_world(bs.wi));
+        next.ray = si.spawn_ray(wi);
         next.prev = Some(Previous {
             receiver: Receiver::from(si),
             dir_pdf: bs.pdf,

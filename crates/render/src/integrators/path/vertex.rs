@@ -166,6 +166,9 @@ impl<R: PathRecorder> Tracer<'_, R> {
             return false;
         }
         let Some((bsdf, frame)) = &bsdf else {
+            if scene.is_null(si) {
+                return self.cross_null(si, st);
+            }
             self.rec.end(PathEnd::Absorbed);
             return false;
         };
