@@ -193,10 +193,19 @@ impl Medium {
     }
 
     /// A free flight along `ray` (unit direction) over `[0, d_max)`, with the path's hero
-    /// channel `hero` (see [`Flight`]).
+    /// channel `hero` (see [`Flight`]). Through a purely absorbing homogeneous medium (Beer
+    /// absorption) no collision could scatter, so the flight passes with the analytic
+    /// transmittance as its weight: the same mean as sampling collisions that end the path,
+    /// without their noise.
     #[inline]
     pub fn sample(&self, ray: &Ray, d_max: f32, hero: usize, sampler: &mut Sampler) -> Flight {
         match &self.kind {
+            MediumKind::Homogeneous(h) if h.sigma_s == Vec3::ZERO && self.emission.is_none() => {
+                Flight::Pass {
+                    weight: h.transmittance(d_max),
+                    ratio: Vec3::ONE,
+                }
+            }
             MediumKind::Homogeneous(h) => h.sample(d_max, sampler.next_1d(), hero),
             MediumKind::Heterogeneous(h) => h.sample(ray, d_max, sampler),
         }
@@ -245,6 +254,29 @@ impl Medium {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Through Beer absorption a flight never collides: it passes with weight e^{−σt·d}.
+    #[test]
+    fn flights_through_an_absorbing_medium_pass_with_the_transmittance() {
+        let sigma = Vec3::new(0.1, 0.0, 2.5);
+        let m = Medium::absorbing(sigma);
+        let mut sampler = Sampler::new(base::SamplerKind::Independent, 1, 7);
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        for hero in 0..3 {
+            let f = m.sample(&ray, 0.8, hero, &mut sampler);
+            assert_eq!(
+                f,
+                Flight::Pass {
+                    weight: (-sigma * 0.8).exp(),
+                    ratio: Vec3::ONE
+                }
+            );
+        }
+        let beyond = m.sample(&ray, f32::INFINITY, 0, &mut sampler);
+        assert!(
+            matches!(beyond, Flight::Pass { weight, .. } if weight.x == 0.0 && weight.z == 0.0)
+        );
+    }
 
     #[test]
     fn an_absorbing_medium_is_beer_lambert() {
