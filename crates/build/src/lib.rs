@@ -191,6 +191,9 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         ));
     }
 
+    let has_nulls = shapes
+        .iter()
+        .any(|s| s.material.is_some_and(|m| materials[m as usize].is_null()));
     let mut scene = Scene {
         accel,
         shapes,
@@ -213,6 +216,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         bounds,
         triangle_count,
         has_cutouts,
+        has_nulls,
         has_motion,
     };
     scene.light_sampler =

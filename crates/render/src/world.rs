@@ -65,6 +65,9 @@ pub struct Scene {
     pub triangle_count: usize,
     /// Whether any shape has an [`ShapeInfo::opacity`] (only then do queries look at it).
     pub has_cutouts: bool,
+    /// Whether any shape is an index-matched (`null`) boundary: without one, whatever a
+    /// shadow ray hits blocks it, and `volpath` tests occlusion instead of walking hits.
+    pub has_nulls: bool,
     /// Whether any shape moves (only then do camera rays draw a time).
     pub has_motion: bool,
 }

@@ -651,6 +651,17 @@ fn transmittance(
     sampler: &mut Sampler,
 ) -> Vec3 {
     let (mut ray, mut t_max) = shadow_ray(&from, ls);
+    if !scene.has_nulls {
+        // Any surface blocks: one occlusion query, then the medium over the whole segment.
+        if scene.occluded(&ray, t_max) {
+            return Vec3::ZERO;
+        }
+        return medium.map_or(Vec3::ONE, |m| {
+            let len = ray.d.length();
+            let unit = Ray::at_time(ray.o, ray.d / len, ray.time);
+            scene.media[m as usize].transmittance(&unit, t_max * len, estimator, sampler)
+        });
+    }
     let mut tr = Vec3::ONE;
     for _ in 0..256 {
         let closest = scene.closest(&ray, t_max);
