@@ -17,3 +17,21 @@ pub fn shared_dir(rel: &str) -> Option<PathBuf> {
     eprintln!("notice: {} is absent; test skipped", p.display());
     None
 }
+
+/// Per channel, the z statistic of the mean of the differences `a[i] − b[i]` (paired
+/// samples, e.g. the pixels of two independent renders of the same image): the mean
+/// difference over its standard error. Values near 0 say the two have the same mean.
+pub fn z_of_mean_difference(a: &[[f32; 3]], b: &[[f32; 3]]) -> [f64; 3] {
+    assert_eq!(a.len(), b.len());
+    let n = a.len() as f64;
+    [0, 1, 2].map(|c| {
+        let d: Vec<f64> = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| f64::from(x[c]) - f64::from(y[c]))
+            .collect();
+        let mean = d.iter().sum::<f64>() / n;
+        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+        mean / (var / n).sqrt().max(1e-12)
+    })
+}

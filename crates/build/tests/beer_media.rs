@@ -15,6 +15,7 @@
 
 use std::path::PathBuf;
 
+use base::testing::z_of_mean_difference;
 use build::{BuildOptions, Built, build, render_desc};
 use render::integrators::Integrator;
 use render::math::Vec3;
@@ -203,7 +204,7 @@ Sphere "Ball" (0, -0.4, 2) 0.6 "Amber"
 Camera 60 (0, 0, 0) (0, 0, 0)
 "#;
 
-fn render_ball(desc: &SceneDesc, integrator: IntegratorDesc) -> Vec<Vec3> {
+fn render_ball(desc: &SceneDesc, integrator: IntegratorDesc) -> Vec<[f32; 3]> {
     let out = render_desc(
         desc,
         &BuildOptions {
@@ -216,7 +217,12 @@ fn render_ball(desc: &SceneDesc, integrator: IntegratorDesc) -> Vec<Vec3> {
     )
     .unwrap();
     assert_eq!(out.film.nonfinite_count(), 0);
-    out.film.develop().pixels
+    out.film
+        .develop()
+        .pixels
+        .iter()
+        .map(|p| p.to_array())
+        .collect()
 }
 
 fn volpath() -> IntegratorDesc {
@@ -228,17 +234,6 @@ fn volpath() -> IntegratorDesc {
         transmittance: TransmittanceEstimator::default(),
         sample_emission: false,
     }
-}
-
-/// Per channel: the z statistic of the mean pixel difference a − b.
-fn z_of_difference(a: &[Vec3], b: &[Vec3]) -> [f64; 3] {
-    let n = a.len() as f64;
-    [0, 1, 2].map(|c| {
-        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| (x[c] - y[c]) as f64).collect();
-        let mean = d.iter().sum::<f64>() / n;
-        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-        mean / (var / n).sqrt().max(1e-12)
-    })
 }
 
 /// |z| above which a channel rejects: two-sided, α = 0.001 over 3 channels (Šidák).
@@ -254,7 +249,7 @@ fn path_and_volpath_agree_on_absorbing_glass() {
     let desc = load("ball.txt", BALL);
     let path = render_ball(&desc, IntegratorDesc::Path(PathDesc::default()));
     let vol = render_ball(&desc, volpath());
-    let (z, crit) = (z_of_difference(&path, &vol), z_critical());
+    let (z, crit) = (z_of_mean_difference(&path, &vol), z_critical());
     println!("path − volpath: z = {z:.2?} (|z| < {crit:.2})");
     assert!(z.iter().all(|z| z.abs() < crit), "z = {z:?}");
 
@@ -266,7 +261,7 @@ fn path_and_volpath_agree_on_absorbing_glass() {
         }
     }
     let lost = render_ball(&clear, volpath());
-    let z = z_of_difference(&path, &lost);
+    let z = z_of_mean_difference(&path, &lost);
     println!("path − volpath without absorption: z = {z:.2?}");
     assert!(z.iter().any(|z| z.abs() >= crit), "z = {z:?}");
 }

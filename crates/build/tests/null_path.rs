@@ -6,12 +6,12 @@
 //! (z-test over 48² independent pixel differences, two-sided, α = 0.001 over 3 channels,
 //! Šidák). Absorbing at the sphere instead (the old behaviour) leaves a black disc: rejected.
 
+use base::testing::z_of_mean_difference;
 use build::{BuildOptions, render_desc};
-use render::math::Vec3;
 use scene::Document;
 use statrs::distribution::{ContinuousCDF, Normal};
 
-fn render(name: &str, sphere: &str) -> Vec<Vec3> {
+fn render(name: &str, sphere: &str) -> Vec<[f32; 3]> {
     let xml = format!(
         r#"<scene version="3.0.0">
     <integrator type="path"><integer name="max_depth" value="-1"/></integrator>
@@ -39,18 +39,12 @@ fn render(name: &str, sphere: &str) -> Vec<Vec3> {
     };
     let out = render_desc(&desc, &BuildOptions::default()).unwrap();
     assert_eq!(out.film.nonfinite_count(), 0);
-    out.film.develop().pixels
-}
-
-/// Per channel: the z statistic of the mean pixel difference a − b.
-fn z_of_difference(a: &[Vec3], b: &[Vec3]) -> [f64; 3] {
-    let n = a.len() as f64;
-    [0, 1, 2].map(|c| {
-        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| (x[c] - y[c]) as f64).collect();
-        let mean = d.iter().sum::<f64>() / n;
-        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-        mean / (var / n).sqrt().max(1e-12)
-    })
+    out.film
+        .develop()
+        .pixels
+        .iter()
+        .map(|p| p.to_array())
+        .collect()
 }
 
 #[test]
@@ -65,7 +59,7 @@ fn a_null_sphere_changes_nothing_in_expectation() {
     let crit = Normal::new(0.0, 1.0)
         .unwrap()
         .inverse_cdf(1.0 - (1.0 - (1.0 - 0.001f64).powf(1.0 / 3.0)) / 2.0);
-    let z = z_of_difference(&with, &without);
+    let z = z_of_mean_difference(&with, &without);
     println!("with − without the null sphere: z = {z:.2?} (|z| < {crit:.2})");
     assert!(z.iter().all(|z| z.abs() < crit), "z = {z:?}");
     // Not vacuous: a black (absorbing) sphere in the same place is rejected.
@@ -73,7 +67,7 @@ fn a_null_sphere_changes_nothing_in_expectation() {
         "black",
         &sphere(r#"<bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>"#),
     );
-    let z = z_of_difference(&black, &without);
+    let z = z_of_mean_difference(&black, &without);
     println!("with a black sphere: z = {z:.2?}");
     assert!(z.iter().any(|z| z.abs() >= crit), "z = {z:?}");
 }
