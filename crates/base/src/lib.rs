@@ -5,6 +5,8 @@
 //! textures, files to load) is scene model, in `penumbra-scene`, and only `penumbra-build`
 //! turns it into runtime objects.
 
+pub mod dispersion;
+
 use std::path::Path;
 
 /// Read a whole file, refusing anything but a regular file first: a device such as

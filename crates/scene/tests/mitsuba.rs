@@ -296,6 +296,7 @@ fn materials_and_named_iors() {
         <bsdf type="conductor" id="mirror"/>
         <bsdf type="roughconductor" id="gold"><string name="material" value="Au"/></bsdf>
         <bsdf type="dielectric" id="water"><string name="int_ior" value="water"/></bsdf>
+        <bsdf type="dielectric" id="flint"><string name="int_ior" value="glass-F11"/></bsdf>
         <bsdf type="roughplastic" id="plastic"/>
         <bsdf type="twosided" id="two"><bsdf type="diffuse"/><bsdf type="null"/></bsdf>
         <shape type="sphere"><ref id="two"/></shape>
@@ -325,6 +326,10 @@ fn materials_and_named_iors() {
     let (e, kk) = scene::formats::mitsuba::ior::conductor("Au").unwrap();
     assert_eq!((*eta, *k), (e, kk));
     assert!(matches!(by_name("water"), Material::Dielectric { int_ior, .. } if *int_ior == 1.333));
+    // pbrt-v4's dispersive glasses by name: the d-line index (SCHOTT SF11, n_d 1.78472).
+    assert!(
+        matches!(by_name("flint"), Material::Dielectric { int_ior, .. } if (*int_ior - 1.78472).abs() < 2e-4)
+    );
     assert!(
         matches!(by_name("plastic"), Material::RoughPlastic { int_ior, alpha, .. } if *int_ior == 1.49 && *alpha == 0.1)
     );

@@ -14,6 +14,7 @@ use super::tree::{Elem, Source, err, resolve_file};
 use crate::model::*;
 use crate::spectra::{self, SpectrumUse};
 use crate::{LoadError, Loc, Result, Warning};
+use base::dispersion::Dispersion;
 
 /// Largest accepted film side and pixel count (a bigger film would not fit in memory).
 const MAX_FILM_SIDE: i64 = 1 << 16;
@@ -320,7 +321,9 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         Ok(FloatParam::Const(pl.props.float(name, default)?))
     }
 
-    /// An index of refraction: a number or one of Mitsuba's names (`bk7`, `water`...).
+    /// An index of refraction: a number, one of Mitsuba's names (`bk7`, `water`...), or a
+    /// dispersive glass by pbrt-v4's name (`glass-BK7`...; see [`Dispersion::named`]), whose
+    /// index at the d line an RGB render uses.
     fn ior(&self, pl: &Plugin<'s>, name: &str, default: f32) -> Result<f32> {
         let Some(p) = pl.props.get(name) else {
             return Ok(default);
@@ -328,15 +331,18 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         let v = match &p.value {
             Value::Float(v) => *v as f32,
             Value::Int(v) => *v as f32,
-            Value::Str(s) => ior::dielectric(s).ok_or_else(|| {
-                err(
-                    &p.loc,
-                    format!(
-                        "unknown IOR name '{s}' (known: {})",
-                        ior::dielectric_names()
-                    ),
-                )
-            })?,
+            Value::Str(s) => ior::dielectric(s)
+                .or_else(|| Dispersion::named(s.trim()).map(|d| d.ior_rgb() as f32))
+                .ok_or_else(|| {
+                    err(
+                        &p.loc,
+                        format!(
+                            "unknown IOR name '{s}' (known: {}; dispersive: {})",
+                            ior::dielectric_names(),
+                            Dispersion::names().collect::<Vec<_>>().join(", ")
+                        ),
+                    )
+                })?,
             Value::Color(spec) => spec_to_rgb(spec, SpectrumUse::Unbounded, &p.loc)?.x,
             _ => {
                 return Err(err(
