@@ -7,7 +7,16 @@
 //! - `cie.rs` — lookups in those tables (linear interpolation, zero outside), their integrals
 //!   and the quadrature over the table.
 //! - `colorspace.rs` — linear sRGB ↔ XYZ.
+//! - `sampled.rs` — [`SampledWavelengths`] (4 wavelengths per path from the visible-XYZ
+//!   density, pbrt-v4's hero termination), [`SampledSpectrum`] (4 lanes, arithmetic, `to_xyz`)
+//!   and the [`Spectrum`] trait.
 
 pub mod cie;
 mod cie_data;
 pub mod colorspace;
+pub mod sampled;
+
+pub use sampled::{
+    N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum, sample_visible_wavelength,
+    visible_wavelength_pdf,
+};
