@@ -10,12 +10,15 @@
 //! - `sampled.rs` — [`SampledWavelengths`] (4 wavelengths per path from the visible-XYZ
 //!   density, pbrt-v4's hero termination), [`SampledSpectrum`] (4 lanes, arithmetic, `to_xyz`)
 //!   and the [`Spectrum`] trait.
+//! - `blackbody.rs` — Planck's law and [`BlackbodySpectrum`] (pbrt-v4's peak normalisation).
 
+pub mod blackbody;
 pub mod cie;
 mod cie_data;
 pub mod colorspace;
 pub mod sampled;
 
+pub use blackbody::{BlackbodySpectrum, planck};
 pub use sampled::{
     N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum, sample_visible_wavelength,
     visible_wavelength_pdf,
