@@ -36,8 +36,8 @@ pub fn table_lambda(i: usize) -> f64 {
 /// the table.
 #[inline]
 fn locate(lambda: f32) -> Option<(usize, f32)> {
-    // `!(a <= b)` also rejects NaN.
-    if !(lambda >= LAMBDA_MIN && lambda <= LAMBDA_MAX) {
+    // Also rejects NaN.
+    if !(LAMBDA_MIN..=LAMBDA_MAX).contains(&lambda) {
         return None;
     }
     let x = lambda - LAMBDA_MIN;

@@ -33,7 +33,7 @@ const VISIBLE_T0: f32 = -0.856_910_6;
 /// t₁ − t₀.
 const VISIBLE_SPAN: f32 = 1.827_502;
 /// a/(t₁ − t₀): the density's normalisation.
-const VISIBLE_NORM: f32 = 0.003_939_804_2;
+const VISIBLE_NORM: f32 = 0.003_939_804;
 
 /// A wavelength (nm) from the visible-XYZ density, by inversion of its CDF at `u` ∈ [0, 1).
 #[inline]
@@ -370,8 +370,8 @@ mod tests {
     fn wavelengths_are_stratified_and_terminate_like_pbrt() {
         let mut wl = SampledWavelengths::sample_visible(0.9);
         let expect = [0.9f32, 0.15, 0.4, 0.65].map(sample_visible_wavelength);
-        for i in 0..4 {
-            assert!((wl.lambda(i) - expect[i]).abs() < 1e-3);
+        for (i, e) in expect.into_iter().enumerate() {
+            assert!((wl.lambda(i) - e).abs() < 1e-3);
             assert_eq!(wl.pdf()[i], visible_wavelength_pdf(wl.lambda(i)));
         }
         assert!(!wl.secondary_terminated());
