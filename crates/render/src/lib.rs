@@ -23,6 +23,7 @@ pub mod post;
 pub mod render;
 pub mod sampling;
 pub mod shapes;
+pub mod spectral;
 pub mod stats;
 pub mod textures;
 pub mod world;

@@ -18,7 +18,7 @@ fn architecture_doc_names_every_module() {
     let root = root();
     let doc = std::fs::read_to_string(root.join("docs/architecture.md")).unwrap();
     let mut missing = Vec::new();
-    let mut dirs: Vec<PathBuf> = ["base", "scene", "build", "render", "cli"]
+    let mut dirs: Vec<PathBuf> = ["base", "scene", "build", "render", "cli", "tools"]
         .iter()
         .map(|c| root.join("crates").join(c).join("src"))
         .collect();
