@@ -5,6 +5,7 @@
 //! textures, files to load) is scene model, in `penumbra-scene`, and only `penumbra-build`
 //! turns it into runtime objects.
 
+pub mod cie_data;
 pub mod dispersion;
 
 use std::path::Path;

@@ -1,4 +1,4 @@
-//! CIE colorimetry on the 1 nm tables of `cie_data.rs`: the CIE 1931 2° colour-matching
+//! CIE colorimetry on the 1 nm tables of `base::cie_data`: the CIE 1931 2° colour-matching
 //! functions x̄, ȳ, z̄ and the standard illuminant D65, 360–830 nm.
 //!
 //! Lookups between the 1 nm samples interpolate linearly and are zero outside [360, 830] nm.
@@ -6,8 +6,8 @@
 //! integrates): ∫ȳ = [`CIE_Y_INTEGRAL`] ≈ 106.857. Quantities meant to be colorimetric (the
 //! upsampling tables, the round-trip tests) use that same rule.
 
-use super::cie_data;
 use crate::math::Vec3;
+use base::cie_data;
 
 pub use cie_data::{CIE_D65, CIE_X, CIE_Y, CIE_Z};
 

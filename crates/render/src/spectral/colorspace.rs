@@ -1,13 +1,13 @@
 //! Linear sRGB (ITU-R BT.709 primaries, D65 white) ↔ CIE XYZ.
 //!
-//! The matrices come from `cie_data.rs`: BT.709 primaries with the white point of the tabulated
+//! The matrices come from `base::cie_data`: BT.709 primaries with the white point of the tabulated
 //! D65 under the tabulated CMFs (x, y = 0.312727, 0.329023; the standard's rounded
 //! 0.3127, 0.3290 differs in the fifth digit), as pbrt-v4 builds its colour spaces. With them a
 //! flat unit reflectance under D65 is RGB (1, 1, 1) to rounding, which the upsampling tables and
 //! their round trip rely on. They agree with IEC 61966-2-1's printed matrix to 4e-4.
 
-use super::cie_data;
 use crate::math::{Mat3, PVec3, Vec3};
+use base::cie_data;
 
 pub use cie_data::{SRGB_TO_XYZ, XYZ_TO_SRGB};
 

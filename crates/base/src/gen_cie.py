@@ -16,7 +16,7 @@ Where the numbers come from (both are published CIE tables, shipped by PyPI pack
   spaces), so that a flat unit reflectance under D65 maps to RGB (1, 1, 1) exactly.
 
 Run (it makes its own virtual environment under /tmp when colour-science is not importable):
-    python3 crates/render/src/spectral/gen_cie.py
+    python3 crates/base/src/gen_cie.py
 """
 
 import os
