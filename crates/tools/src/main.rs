@@ -4,7 +4,7 @@
 //!   (`rgb2spec.rs`), checked by the upsampling round trip (`roundtrip.rs`) and written to
 //!   `crates/render/src/spectral/srgb_to_spectrum.bin`.
 //!
-//! The CIE tables themselves come from `crates/render/src/spectral/gen_cie.py`.
+//! The CIE tables themselves come from `crates/base/src/gen_cie.py`.
 
 mod rgb2spec;
 mod roundtrip;
