@@ -32,7 +32,7 @@ use crate::integrators::path::{
 use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::Vec3;
 use crate::media::Flight;
-use crate::sampling::Sampler;
+use crate::sampling::{Equiangular, Sampler};
 use crate::shapes::{SHADOW_EPSILON, SurfaceInteraction, offset_ray_origin};
 use crate::world::Scene;
 
@@ -451,14 +451,9 @@ fn sample_light(
     (ls.pdf > 0.0 && ls.li != Vec3::ZERO && pmf > 0.0).then_some((i, ls, pmf))
 }
 
-/// Δ, h and the angles a < b of a segment's ends seen from a light (see [`Segment::frame`]).
-type Angles = (f32, f32, f32, f32);
-
 /// A segment `o + t·d`, t ∈ [0, end), through a grey homogeneous medium, for equiangular
-/// sampling towards point lights (Kulla & Fajardo 2012): the density of t is proportional to
-/// 1/(h² + (t − Δ)²), h the light's distance from the line and Δ the foot of the
-/// perpendicular, which cancels the 1/r² of the light (a point light in fog otherwise has
-/// an estimator of unbounded variance near it).
+/// sampling towards point lights ([`Equiangular`]; a point light in fog otherwise has an
+/// estimator of unbounded variance near it).
 struct Segment {
     o: Vec3,
     d: Vec3,
@@ -466,9 +461,9 @@ struct Segment {
     sigma_t: f32,
     sigma_s: f32,
     estimator: TransmittanceEstimator,
-    /// The last light position [`Segment::frame`] was computed for, and its result: the
-    /// collision's MIS weight asks again for the light strategy B chose (four `atan2` saved).
-    cached: Option<(Vec3, Option<Angles>)>,
+    /// The last light position [`Segment::towards`] was asked for, and its distribution: the
+    /// collision's MIS weight asks again for the light strategy B chose (two `atan2` saved).
+    cached: Option<(Vec3, Option<Equiangular>)>,
 }
 
 impl Segment {
@@ -477,41 +472,21 @@ impl Segment {
         Receiver::at(self.o)
     }
 
-    /// Δ, h and the angles of the segment's ends seen from the light at `q`.
-    fn frame(&mut self, q: Vec3) -> Option<Angles> {
-        if let Some((at, f)) = self.cached
+    /// The equiangular distribution of the segment towards the light at `q`.
+    fn towards(&mut self, q: Vec3) -> Option<Equiangular> {
+        if let Some((at, e)) = self.cached
             && at == q
         {
-            return f;
+            return e;
         }
-        let f = self.frame_uncached(q);
-        self.cached = Some((q, f));
-        f
-    }
-
-    fn frame_uncached(&self, q: Vec3) -> Option<Angles> {
-        let delta = (q - self.o).dot(self.d);
-        let h = (q - self.o - self.d * delta).length();
-        if h.is_nan() || h <= 1e-6 * (1.0 + delta.abs()) {
-            return None;
-        }
-        let a = (-delta).atan2(h);
-        let b = if self.end.is_finite() {
-            (self.end - delta).atan2(h)
-        } else {
-            std::f32::consts::FRAC_PI_2
-        };
-        (b > a).then_some((delta, h, a, b))
+        let e = Equiangular::new(self.o, self.d, self.end, q);
+        self.cached = Some((q, e));
+        e
     }
 
     /// The density of distance `t` under equiangular sampling towards `q`.
     fn pdf(&mut self, q: Vec3, t: f32) -> f32 {
-        match self.frame(q) {
-            Some((delta, h, a, b)) if (0.0..self.end).contains(&t) => {
-                h / ((b - a) * (h * h + (t - delta) * (t - delta)))
-            }
-            _ => 0.0,
-        }
+        self.towards(q).map_or(0.0, |e| e.pdf(t))
     }
 
     /// Strategy B's estimate: a light chosen from the segment's start; if it is a point
@@ -535,14 +510,14 @@ impl Segment {
         let Some(q) = light.position() else {
             return Vec3::ZERO;
         };
-        let Some((delta, h, a, b)) = self.frame(q) else {
+        let Some(e) = self.towards(q) else {
             return Vec3::ZERO;
         };
-        let t = delta + h * (a + u * (b - a)).tan();
-        if !(t >= 0.0 && t < self.end) {
+        let t = e.sample(u);
+        let p_b = e.pdf(t) * pmf_b;
+        if p_b == 0.0 {
             return Vec3::ZERO;
         }
-        let p_b = h / ((b - a) * (h * h + (t - delta) * (t - delta))) * pmf_b;
         let x = self.o + self.d * t;
         let rx = Receiver::at(x);
         let Some(ls) = light.sample_li(scene, &rx, u2) else {

@@ -49,6 +49,7 @@ pub struct EmissionSampler {
     table: AliasTable,
     res: [usize; 3],
     to_world: Mat4,
+    to_grid: Mat4,
     /// World volume of one cell.
     cell_volume: f32,
 }
@@ -86,6 +87,7 @@ impl EmissionSampler {
             table: AliasTable::new(&w),
             res: grid.res,
             to_world,
+            to_grid: to_world.inverse(),
             cell_volume: det / (nx * ny * nz) as f32,
         })
     }
@@ -104,6 +106,19 @@ impl EmissionSampler {
             (z as f32 + w) / nz as f32,
         );
         Some((self.to_world.transform_point3a(q), pmf / self.cell_volume))
+    }
+
+    /// The density per unit volume with which [`EmissionSampler::sample`] picks the world
+    /// point `p`.
+    pub fn pdf(&self, p: Vec3) -> f32 {
+        let q = self.to_grid.transform_point3a(p);
+        if !(q.cmpge(Vec3::ZERO).all() && q.cmplt(Vec3::ONE).all()) {
+            return 0.0;
+        }
+        let [nx, ny, nz] = self.res;
+        let cell = |c: f32, n: usize| ((c * n as f32) as usize).min(n - 1);
+        let i = (cell(q.z, nz) * ny + cell(q.y, ny)) * nx + cell(q.x, nx);
+        self.table.pmf(i) / self.cell_volume
     }
 }
 
