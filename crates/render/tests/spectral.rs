@@ -155,23 +155,6 @@ fn blackbody_luminance_matches_plancks_law() {
     }
 }
 
-/// Linear sRGB of a spectrum by the 1 nm CIE tables: a reflectance lit by D65 (normalised so
-/// that white has Y = 1), or an emission (divided by ∫ȳ, as `SampledSpectrum::to_xyz`).
-fn spectrum_to_srgb(s: &impl render::spectral::Spectrum, reflectance: bool) -> [f64; 3] {
-    use render::spectral::cie::{CIE_D65, CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z};
-    use render::spectral::colorspace::{XYZ_TO_SRGB, mul3};
-    let (mut xyz, mut norm) = ([0.0f64; 3], 0.0);
-    for i in 0..CIE_SAMPLES {
-        let v = s.eval(360.0 + i as f32) as f64;
-        let light = if reflectance { CIE_D65[i] } else { 1.0 };
-        xyz[0] += v * light * CIE_X[i];
-        xyz[1] += v * light * CIE_Y[i];
-        xyz[2] += v * light * CIE_Z[i];
-        norm += light * CIE_Y[i];
-    }
-    mul3(&XYZ_TO_SRGB, xyz.map(|c| c / norm))
-}
-
 /// Issue 21, acceptance 2: every colour of the 16³ grid of [0, 1]³ (linear sRGB), upsampled
 /// through the checked-in table and integrated against the CIE 1931 observer — reflectances under
 /// D65 (white → Y = 1), emissions as they are — comes back as linear sRGB:
@@ -216,7 +199,7 @@ fn srgb_upsampling_round_trip() {
         &|rgb| {
             let s = RgbAlbedoSpectrum::new(table, rgb);
             assert!(s.max_value() <= 1.0);
-            spectrum_to_srgb(&s, true)
+            render::spectral::colorspace::spectrum_to_srgb(&s, true)
         },
         1.0,
     );
@@ -231,7 +214,12 @@ fn srgb_upsampling_round_trip() {
     for scale in [1.0, 5.0] {
         let tolerance = 1e-3 * scale;
         let unbounded = worst(
-            &|rgb| spectrum_to_srgb(&RgbUnboundedSpectrum::new(table, rgb), true),
+            &|rgb| {
+                render::spectral::colorspace::spectrum_to_srgb(
+                    &RgbUnboundedSpectrum::new(table, rgb),
+                    true,
+                )
+            },
             scale,
         );
         let illuminant = worst(
@@ -242,7 +230,7 @@ fn srgb_upsampling_round_trip() {
                     let d = render::spectral::cie::d65_unit_y(555.5) * rgb.x;
                     assert!((s.eval(555.5) - d).abs() <= 1e-5 * d.max(1.0));
                 }
-                spectrum_to_srgb(&s, false)
+                render::spectral::colorspace::spectrum_to_srgb(&s, false)
             },
             scale,
         );

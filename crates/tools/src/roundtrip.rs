@@ -3,9 +3,7 @@
 //! linear sRGB, for the three spectrum kinds. `crates/render/tests/spectral.rs` asserts the
 //! same on the checked-in table.
 
-use render::spectral::Spectrum;
-use render::spectral::cie::{self, CIE_D65, CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z};
-use render::spectral::colorspace::{XYZ_TO_SRGB, mul3};
+use render::spectral::colorspace::spectrum_to_srgb;
 use render::spectral::rgb::{
     RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum,
 };
@@ -29,22 +27,6 @@ impl Worst {
     }
 }
 
-/// XYZ of a reflectance under D65 (white Y = 1), or of an emission (÷ ∫ȳ), at the table's 1 nm
-/// samples.
-fn to_rgb(s: &impl Spectrum, under_d65: bool) -> [f64; 3] {
-    let mut xyz = [0.0; 3];
-    let mut norm = 0.0;
-    for i in 0..CIE_SAMPLES {
-        let v = s.eval(cie::table_lambda(i) as f32) as f64;
-        let light = if under_d65 { CIE_D65[i] } else { 1.0 };
-        xyz[0] += v * light * CIE_X[i];
-        xyz[1] += v * light * CIE_Y[i];
-        xyz[2] += v * light * CIE_Z[i];
-        norm += light * CIE_Y[i];
-    }
-    mul3(&XYZ_TO_SRGB, xyz.map(|c| c / norm))
-}
-
 /// Worst round trips of albedo (grid), unbounded (grid × `scale`, under D65) and illuminant
 /// (grid × `scale`, emitted) spectra over an `n`³ grid.
 pub fn round_trip(table: &RgbToSpectrumTable, n: usize, scale: f64) -> [Worst; 3] {
@@ -54,11 +36,20 @@ pub fn round_trip(table: &RgbToSpectrumTable, n: usize, scale: f64) -> [Worst; 3
             for k in 0..n {
                 let g = [i, j, k].map(|v| v as f64 / (n - 1) as f64);
                 let rgb = render::math::Vec3::new(g[0] as f32, g[1] as f32, g[2] as f32);
-                worst[0].add(g, to_rgb(&RgbAlbedoSpectrum::new(table, rgb), true));
+                worst[0].add(
+                    g,
+                    spectrum_to_srgb(&RgbAlbedoSpectrum::new(table, rgb), true),
+                );
                 let gs = g.map(|v| v * scale);
                 let rgbs = rgb * scale as f32;
-                worst[1].add(gs, to_rgb(&RgbUnboundedSpectrum::new(table, rgbs), true));
-                worst[2].add(gs, to_rgb(&RgbIlluminantSpectrum::new(table, rgbs), false));
+                worst[1].add(
+                    gs,
+                    spectrum_to_srgb(&RgbUnboundedSpectrum::new(table, rgbs), true),
+                );
+                worst[2].add(
+                    gs,
+                    spectrum_to_srgb(&RgbIlluminantSpectrum::new(table, rgbs), false),
+                );
             }
         }
     }

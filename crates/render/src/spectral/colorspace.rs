@@ -42,6 +42,24 @@ pub fn mul3(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
 }
 
+/// Linear sRGB of a spectrum, summed over the 1 nm CIE tables in double precision: a
+/// reflectance lit by D65 (normalised so that white has Y = 1) when `under_d65`, else an
+/// emission (divided by ∫ȳ, as `SampledSpectrum::to_xyz`). The reference of the upsampling
+/// round trips (tests and the table generator).
+pub fn spectrum_to_srgb(s: &impl super::Spectrum, under_d65: bool) -> [f64; 3] {
+    use super::cie::{CIE_D65, CIE_SAMPLES, CIE_X, CIE_Y, CIE_Z, table_lambda};
+    let (mut xyz, mut norm) = ([0.0f64; 3], 0.0);
+    for i in 0..CIE_SAMPLES {
+        let v = f64::from(s.eval(table_lambda(i) as f32));
+        let light = if under_d65 { CIE_D65[i] } else { 1.0 };
+        xyz[0] += v * light * CIE_X[i];
+        xyz[1] += v * light * CIE_Y[i];
+        xyz[2] += v * light * CIE_Z[i];
+        norm += light * CIE_Y[i];
+    }
+    mul3(&XYZ_TO_SRGB, xyz.map(|c| c / norm))
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::cie::{self, CIE_D65};
