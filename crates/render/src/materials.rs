@@ -18,6 +18,7 @@ use crate::bsdf::{
     RoughPlasticTables, ThinDielectric,
 };
 use crate::math::{Frame, Vec3};
+use crate::spectral::lanes::{ColorMode, RgbMode};
 use crate::shapes::SurfaceInteraction;
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, TexRef, Textures};
 
@@ -247,17 +248,27 @@ impl MaterialKind {
         }
     }
 
-    /// The BSDF with its parameters evaluated at `at`.
+    /// The BSDF with its parameters evaluated at `at` (RGB mode).
+    #[inline]
     pub fn bsdf<P: Params>(&self, p: &P, at: TexCoord) -> Bsdf {
+        self.bsdf_in(p, at, &RgbMode)
+    }
+
+    /// The BSDF with its parameters evaluated at `at` and converted to the colour type of
+    /// `m` (PROTOTYPE: only diffuse, smooth conductor/mirror and smooth dielectric convert;
+    /// the other models stay RGB and panic when used in spectral mode).
+    pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
             MaterialKind::Diffuse { reflectance } => {
-                Bsdf::Diffuse(Diffuse::new(p.color(reflectance, at)))
+                Bsdf::Diffuse(Diffuse::new(m.albedo(p.color(reflectance, at))))
             }
-            MaterialKind::Conductor { eta, k, specular } => {
-                Bsdf::Conductor(Conductor::new(*eta, *k, p.color(specular, at)))
-            }
+            MaterialKind::Conductor { eta, k, specular } => Bsdf::Conductor(Conductor::new(
+                m.unbounded(*eta),
+                m.unbounded(*k),
+                m.albedo(p.color(specular, at)),
+            )),
             MaterialKind::Mirror { reflectance } => {
-                Bsdf::Conductor(Conductor::mirror(p.color(reflectance, at)))
+                Bsdf::Conductor(Conductor::mirror(m.albedo(p.color(reflectance, at))))
             }
             MaterialKind::RoughConductor {
                 distribution,
@@ -280,9 +291,9 @@ impl MaterialKind {
                 reflectance,
                 transmittance,
             } => {
-                let mut d = Dielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(reflectance, at);
-                d.specular_transmittance = p.color(transmittance, at);
+                let mut d = Dielectric::with_lanes(*int_ior, *ext_ior);
+                d.specular_reflectance = m.albedo(p.color(reflectance, at));
+                d.specular_transmittance = m.albedo(p.color(transmittance, at));
                 Bsdf::Dielectric(d)
             }
             MaterialKind::ThinDielectric {
@@ -368,12 +379,12 @@ impl MaterialKind {
                 .with_absorption(*ior, *absorption);
                 match ideal {
                     None => Bsdf::PhongFamily(phong),
-                    Some(i) => Bsdf::from(CourseMaterial::new(
+                    Some(i) => Bsdf::Course(Box::new(CourseMaterial::new(
                         phong,
                         i.lobe,
                         i.reflectance,
                         i.roughness,
-                    )),
+                    ))),
                 }
             }
         }
@@ -384,3 +395,33 @@ impl MaterialKind {
 pub fn alpha(a: f32) -> f32 {
     a.max(1e-4)
 }
+
+/// PROTOTYPE (`lanes-proto`): keeps the spectral instantiation of the generic BSDFs in the
+/// binary (nothing calls it yet), so that RGB timings are measured with both copies linked.
+#[doc(hidden)]
+pub fn spectral_bsdf_smoke(
+    kind: &MaterialKind,
+    textures: &Textures,
+    at: TexCoord,
+    mode: &crate::spectral::lanes::SpectralMode,
+    wo: Vec3,
+    u: crate::math::Vec2,
+) -> crate::spectral::SampledSpectrum {
+    use crate::bsdf::TransportMode;
+    let b = kind.bsdf_in(textures, at, mode);
+    let f = b.eval(wo, Vec3::Z, TransportMode::Radiance);
+    match b.sample(wo, u.x, u, TransportMode::Radiance) {
+        Some(s) => f + s.weight,
+        None => f,
+    }
+}
+
+#[used]
+static SPECTRAL_BSDF_SMOKE: fn(
+    &MaterialKind,
+    &Textures,
+    TexCoord,
+    &crate::spectral::lanes::SpectralMode,
+    Vec3,
+    crate::math::Vec2,
+) -> crate::spectral::SampledSpectrum = spectral_bsdf_smoke;

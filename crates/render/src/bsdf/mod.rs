@@ -44,6 +44,7 @@ pub use rough_plastic::{RoughPlastic, RoughPlasticTables};
 pub use thin_dielectric::ThinDielectric;
 
 use crate::math::{Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 /// Which quantity a path carries: radiance (camera paths) or importance (light paths). Only
 /// matters for refraction, where radiance is scaled by 1/η² and importance is not.
@@ -56,11 +57,11 @@ pub enum TransportMode {
 
 /// The result of [`Bsdf::sample`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BsdfSample {
+pub struct BsdfSample<C: Color = Vec3> {
     /// Sampled direction (local frame, unit length).
     pub wi: Vec3,
     /// eval·|cos θi| / pdf (for delta lobes: the lobe's weight divided by its probability).
-    pub weight: Vec3,
+    pub weight: C,
     /// Solid-angle density of `wi`, or the discrete lobe probability when `delta` is set.
     pub pdf: f32,
     /// The direction comes from a delta (perfectly specular) lobe.
@@ -72,10 +73,10 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
-impl BsdfSample {
+impl<C: Color> BsdfSample<C> {
     /// A sample of a non-delta reflection lobe (no interface crossed).
     #[inline]
-    pub fn glossy_reflection(wi: Vec3, weight: Vec3, pdf: f32) -> BsdfSample {
+    pub fn glossy_reflection(wi: Vec3, weight: C, pdf: f32) -> BsdfSample<C> {
         BsdfSample {
             wi,
             weight,
@@ -87,30 +88,34 @@ impl BsdfSample {
     }
 }
 
-/// The operations every BSDF model implements (dispatched by the [`Bsdf`] enum).
-pub(crate) trait BsdfModel {
-    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
+/// The operations every BSDF model implements (dispatched by the [`Bsdf`] enum), in the
+/// colour type `C` (RGB `Vec3`, or `SampledSpectrum` for the models already generic).
+pub(crate) trait BsdfModel<C: Color = Vec3> {
+    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C;
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
     /// `(eval, pdf)` at once (Mitsuba's `eval_pdf`): models whose two share work override it.
-    fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (C, f32) {
         (self.eval(wo, wi, mode), self.pdf(wo, wi))
     }
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample>;
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>>;
     fn has_delta(&self) -> bool;
     fn has_smooth(&self) -> bool;
-    fn albedo(&self) -> Vec3;
+    fn albedo(&self) -> C;
 }
 
 /// Closed set of BSDF models.
 ///
 /// Lives on the stack, built per hit; kept small (no variant carries a table inline) because
 /// it is moved several times per path vertex.
+///
+/// PROTOTYPE: generic over the colour type; `Diffuse`, `Conductor` and `Dielectric` carry
+/// `C`, the other models are still RGB-only (see [`Color::from_rgb_unmigrated`]).
 #[derive(Clone, Debug)]
-pub enum Bsdf {
-    Diffuse(Diffuse),
-    Conductor(Conductor),
+pub enum Bsdf<C: Color = Vec3> {
+    Diffuse(Diffuse<C>),
+    Conductor(Conductor<C>),
     RoughConductor(RoughConductor),
-    Dielectric(Dielectric),
+    Dielectric(Dielectric<C>),
     ThinDielectric(ThinDielectric),
     RoughDielectric(RoughDielectric),
     Plastic(Plastic),
@@ -122,32 +127,72 @@ pub enum Bsdf {
     Course(Box<CourseMaterial>),
 }
 
+/// `$e` on the model inside `$self`; `$lift` turns an RGB-only model's result into `C`
+/// (the generic models' results pass through unchanged).
 macro_rules! dispatch {
-    ($self:expr, $b:ident => $e:expr) => {
+    ($self:expr, $b:ident => $e:expr, $r:ident => $lift:expr) => {
         match $self {
             Bsdf::Diffuse($b) => $e,
             Bsdf::Conductor($b) => $e,
-            Bsdf::RoughConductor($b) => $e,
             Bsdf::Dielectric($b) => $e,
-            Bsdf::ThinDielectric($b) => $e,
-            Bsdf::RoughDielectric($b) => $e,
-            Bsdf::Plastic($b) => $e,
-            Bsdf::RoughPlastic($b) => $e,
-            Bsdf::NoriMicrofacet($b) => $e,
-            Bsdf::PhongFamily($b) => $e,
+            Bsdf::RoughConductor($b) => {
+                let $r = $e;
+                $lift
+            }
+            Bsdf::ThinDielectric($b) => {
+                let $r = $e;
+                $lift
+            }
+            Bsdf::RoughDielectric($b) => {
+                let $r = $e;
+                $lift
+            }
+            Bsdf::Plastic($b) => {
+                let $r = $e;
+                $lift
+            }
+            Bsdf::RoughPlastic($b) => {
+                let $r = $e;
+                $lift
+            }
+            Bsdf::NoriMicrofacet($b) => {
+                let $r = $e;
+                $lift
+            }
+            Bsdf::PhongFamily($b) => {
+                let $r = $e;
+                $lift
+            }
             Bsdf::Course($b) => {
                 let $b = &**$b;
-                $e
+                let $r = $e;
+                $lift
             }
         }
     };
+    ($self:expr, $b:ident => $e:expr) => {
+        dispatch!($self, $b => $e, r => r)
+    };
 }
 
-impl Bsdf {
+/// An RGB-only model's sample in the colour type `C`.
+#[inline(always)]
+fn lift_sample<C: Color>(s: Option<BsdfSample>) -> Option<BsdfSample<C>> {
+    s.map(|s| BsdfSample {
+        wi: s.wi,
+        weight: C::from_rgb_unmigrated(s.weight),
+        pdf: s.pdf,
+        delta: s.delta,
+        transmission: s.transmission,
+        eta: s.eta,
+    })
+}
+
+impl<C: Color> Bsdf<C> {
     /// f(wo, wi)·|cos θi|; 0 for delta lobes.
     #[inline]
-    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
-        dispatch!(self, b => b.eval(wo, wi, mode))
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
+        dispatch!(self, b => b.eval(wo, wi, mode), r => C::from_rgb_unmigrated(r))
     }
 
     /// Solid-angle density of `sample`'s non-delta part.
@@ -159,14 +204,20 @@ impl Bsdf {
     /// [`Self::eval`] and [`Self::pdf`] with one dispatch (next-event estimation with MIS
     /// needs both).
     #[inline]
-    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
-        dispatch!(self, b => b.eval_pdf(wo, wi, mode))
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (C, f32) {
+        dispatch!(self, b => b.eval_pdf(wo, wi, mode), r => (C::from_rgb_unmigrated(r.0), r.1))
     }
 
     /// Sample a direction `wi` given `wo`, with `u1` choosing the lobe and `u2` the direction.
     #[inline]
-    pub fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
-        dispatch!(self, b => b.sample(wo, u1, u2, mode))
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        u1: f32,
+        u2: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample<C>> {
+        dispatch!(self, b => b.sample(wo, u1, u2, mode), r => lift_sample(r))
     }
 
     /// Has at least one delta (perfectly specular) lobe.
@@ -189,12 +240,19 @@ impl Bsdf {
 
     /// A colour for the albedo AOV.
     #[inline]
-    pub fn albedo(&self) -> Vec3 {
-        dispatch!(self, b => b.albedo())
+    pub fn albedo(&self) -> C {
+        dispatch!(self, b => b.albedo(), r => C::from_rgb_unmigrated(r))
     }
 }
 
 macro_rules! impl_from {
+    (generic $($t:ident),*) => {$(
+        impl<C: Color> From<$t<C>> for Bsdf<C> {
+            fn from(b: $t<C>) -> Bsdf<C> {
+                Bsdf::$t(b)
+            }
+        }
+    )*};
     ($($t:ident),*) => {$(
         impl From<$t> for Bsdf {
             fn from(b: $t) -> Bsdf {
@@ -203,11 +261,9 @@ macro_rules! impl_from {
         }
     )*};
 }
+impl_from!(generic Diffuse, Conductor, Dielectric);
 impl_from!(
-    Diffuse,
-    Conductor,
     RoughConductor,
-    Dielectric,
     ThinDielectric,
     RoughDielectric,
     Plastic,
