@@ -18,8 +18,8 @@ use crate::bsdf::{
     RoughPlasticTables, ThinDielectric,
 };
 use crate::math::{Frame, Vec3};
-use crate::spectral::lanes::{ColorMode, RgbMode};
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::{ColorMode, RgbMode};
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, TexRef, Textures};
 
 /// A material as the renderer uses it.

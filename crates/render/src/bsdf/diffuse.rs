@@ -5,8 +5,8 @@
 
 use super::{BsdfModel, BsdfSample, TransportMode, is_positive};
 use crate::math::{INV_PI, Vec2, Vec3};
-use crate::spectral::lanes::Color;
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Diffuse<C: Color = Vec3> {

@@ -15,9 +15,7 @@ use super::sampled::{N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Sp
 use crate::math::Vec3;
 use std::cell::Cell;
 use std::fmt::Debug;
-use std::ops::{
-    Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign,
-};
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// The per-lane colour a path carries. Left multiplication by a scalar (`f32 * C`) cannot be
 /// a supertrait bound (a `where f32: Mul<Self>` on the trait is not implied at use sites), so
