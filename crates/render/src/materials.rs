@@ -281,9 +281,9 @@ impl MaterialKind {
                 *distribution,
                 alpha(p.float(alpha_u, at)),
                 alpha(p.float(alpha_v, at)),
-                *eta,
-                *k,
-                p.color(specular, at),
+                m.unbounded(*eta),
+                m.unbounded(*k),
+                m.albedo(p.color(specular, at)),
             )),
             MaterialKind::Dielectric {
                 int_ior,
@@ -302,9 +302,9 @@ impl MaterialKind {
                 reflectance,
                 transmittance,
             } => {
-                let mut d = ThinDielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(reflectance, at);
-                d.specular_transmittance = p.color(transmittance, at);
+                let mut d = ThinDielectric::with_lanes(*int_ior, *ext_ior);
+                d.specular_reflectance = m.albedo(p.color(reflectance, at));
+                d.specular_transmittance = m.albedo(p.color(transmittance, at));
                 Bsdf::ThinDielectric(d)
             }
             MaterialKind::RoughDielectric {

@@ -114,9 +114,9 @@ pub(crate) trait BsdfModel<C: Color = Vec3> {
 pub enum Bsdf<C: Color = Vec3> {
     Diffuse(Diffuse<C>),
     Conductor(Conductor<C>),
-    RoughConductor(RoughConductor),
+    RoughConductor(RoughConductor<C>),
     Dielectric(Dielectric<C>),
-    ThinDielectric(ThinDielectric),
+    ThinDielectric(ThinDielectric<C>),
     RoughDielectric(RoughDielectric),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
@@ -135,14 +135,8 @@ macro_rules! dispatch {
             Bsdf::Diffuse($b) => $e,
             Bsdf::Conductor($b) => $e,
             Bsdf::Dielectric($b) => $e,
-            Bsdf::RoughConductor($b) => {
-                let $r = $e;
-                $lift
-            }
-            Bsdf::ThinDielectric($b) => {
-                let $r = $e;
-                $lift
-            }
+            Bsdf::RoughConductor($b) => $e,
+            Bsdf::ThinDielectric($b) => $e,
             Bsdf::RoughDielectric($b) => {
                 let $r = $e;
                 $lift
@@ -261,10 +255,14 @@ macro_rules! impl_from {
         }
     )*};
 }
-impl_from!(generic Diffuse, Conductor, Dielectric);
 impl_from!(
-    RoughConductor,
+    generic Diffuse,
+    Conductor,
+    Dielectric,
     ThinDielectric,
+    RoughConductor
+);
+impl_from!(
     RoughDielectric,
     Plastic,
     RoughPlastic,
