@@ -15,7 +15,7 @@ use base::PhongModel;
 use crate::bsdf::{
     Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, Microfacet, MicrofacetType,
     NoriMicrofacet, PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic,
-    RoughPlasticTables, ThinDielectric,
+    RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
 };
 use crate::math::{Frame, Vec3};
 use crate::shapes::SurfaceInteraction;
@@ -333,13 +333,17 @@ impl MaterialKind {
                 int_ior,
                 ext_ior,
                 nonlinear,
-            } => Bsdf::Plastic(Plastic::new(
-                p.color(diffuse, at),
-                p.color(specular, at),
-                *int_ior,
-                *ext_ior,
-                *nonlinear,
-            )),
+            } => {
+                let (d, s) = (p.color(diffuse, at), p.color(specular, at));
+                Bsdf::Plastic(Plastic::with_weight(
+                    m.albedo(d),
+                    m.albedo(s),
+                    *int_ior,
+                    *ext_ior,
+                    *nonlinear,
+                    rgb_sampling_weight(d, s),
+                ))
+            }
             MaterialKind::RoughPlastic {
                 microfacet,
                 eta,

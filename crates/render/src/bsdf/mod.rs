@@ -37,7 +37,7 @@ pub use diffuse::Diffuse;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use nori_microfacet::NoriMicrofacet;
 pub use phong::PhongFamily;
-pub use plastic::Plastic;
+pub use plastic::{Plastic, rgb_sampling_weight};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{RoughPlastic, RoughPlasticTables};
@@ -118,7 +118,7 @@ pub enum Bsdf<C: Color = Vec3> {
     Dielectric(Dielectric<C>),
     ThinDielectric(ThinDielectric<C>),
     RoughDielectric(RoughDielectric),
-    Plastic(Plastic),
+    Plastic(Plastic<C>),
     RoughPlastic(RoughPlastic),
     NoriMicrofacet(NoriMicrofacet),
     PhongFamily(PhongFamily),
@@ -141,10 +141,7 @@ macro_rules! dispatch {
                 let $r = $e;
                 $lift
             }
-            Bsdf::Plastic($b) => {
-                let $r = $e;
-                $lift
-            }
+            Bsdf::Plastic($b) => $e,
             Bsdf::RoughPlastic($b) => {
                 let $r = $e;
                 $lift
@@ -260,15 +257,10 @@ impl_from!(
     Conductor,
     Dielectric,
     ThinDielectric,
-    RoughConductor
+    RoughConductor,
+    Plastic
 );
-impl_from!(
-    RoughDielectric,
-    Plastic,
-    RoughPlastic,
-    NoriMicrofacet,
-    PhongFamily
-);
+impl_from!(RoughDielectric, RoughPlastic, NoriMicrofacet, PhongFamily);
 
 impl From<CourseMaterial> for Bsdf {
     fn from(b: CourseMaterial) -> Bsdf {
