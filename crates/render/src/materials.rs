@@ -351,14 +351,18 @@ impl MaterialKind {
                 diffuse,
                 specular,
                 nonlinear,
-            } => Bsdf::RoughPlastic(RoughPlastic::with_tables(
-                *microfacet,
-                *eta,
-                tables.clone(),
-                p.color(diffuse, at),
-                p.color(specular, at),
-                *nonlinear,
-            )),
+            } => {
+                let (d, s) = (p.color(diffuse, at), p.color(specular, at));
+                Bsdf::RoughPlastic(RoughPlastic::with_tables_weighted(
+                    *microfacet,
+                    *eta,
+                    tables.clone(),
+                    m.albedo(d),
+                    m.albedo(s),
+                    *nonlinear,
+                    rgb_sampling_weight(d, s),
+                ))
+            }
             MaterialKind::NoriMicrofacet(b) => Bsdf::NoriMicrofacet(*b),
             MaterialKind::Phong {
                 model,

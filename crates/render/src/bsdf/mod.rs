@@ -119,7 +119,7 @@ pub enum Bsdf<C: Color = Vec3> {
     ThinDielectric(ThinDielectric<C>),
     RoughDielectric(RoughDielectric),
     Plastic(Plastic<C>),
-    RoughPlastic(RoughPlastic),
+    RoughPlastic(RoughPlastic<C>),
     NoriMicrofacet(NoriMicrofacet),
     PhongFamily(PhongFamily),
     /// Boxed: the largest model by far, and only CENG795 scenes build it; inline it would grow
@@ -142,10 +142,7 @@ macro_rules! dispatch {
                 $lift
             }
             Bsdf::Plastic($b) => $e,
-            Bsdf::RoughPlastic($b) => {
-                let $r = $e;
-                $lift
-            }
+            Bsdf::RoughPlastic($b) => $e,
             Bsdf::NoriMicrofacet($b) => {
                 let $r = $e;
                 $lift
@@ -252,15 +249,8 @@ macro_rules! impl_from {
         }
     )*};
 }
-impl_from!(
-    generic Diffuse,
-    Conductor,
-    Dielectric,
-    ThinDielectric,
-    RoughConductor,
-    Plastic
-);
-impl_from!(RoughDielectric, RoughPlastic, NoriMicrofacet, PhongFamily);
+impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic);
+impl_from!(RoughDielectric, NoriMicrofacet, PhongFamily);
 
 impl From<CourseMaterial> for Bsdf {
     fn from(b: CourseMaterial) -> Bsdf {
@@ -276,12 +266,12 @@ pub(crate) fn reflect_z(w: Vec3) -> Vec3 {
 
 /// The sample of a mixture of reflection lobes once the direction `wi` is chosen: the
 /// weight is the full `eval / pdf` (both over all lobes), as a one-sample MIS estimate.
-pub(crate) fn mixture_reflection_sample<B: BsdfModel>(
+pub(crate) fn mixture_reflection_sample<C: Color, B: BsdfModel<C>>(
     b: &B,
     wo: Vec3,
     wi: Vec3,
     mode: TransportMode,
-) -> Option<BsdfSample> {
+) -> Option<BsdfSample<C>> {
     if wi.z <= 0.0 {
         return None;
     }
