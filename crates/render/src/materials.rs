@@ -363,7 +363,7 @@ impl MaterialKind {
                     rgb_sampling_weight(d, s),
                 ))
             }
-            MaterialKind::NoriMicrofacet(b) => Bsdf::NoriMicrofacet(*b),
+            MaterialKind::NoriMicrofacet(b) => Bsdf::NoriMicrofacet(b.map_lanes(|c| m.albedo(c))),
             MaterialKind::Phong {
                 model,
                 normalized,

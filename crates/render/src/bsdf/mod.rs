@@ -120,7 +120,7 @@ pub enum Bsdf<C: Color = Vec3> {
     RoughDielectric(RoughDielectric),
     Plastic(Plastic<C>),
     RoughPlastic(RoughPlastic<C>),
-    NoriMicrofacet(NoriMicrofacet),
+    NoriMicrofacet(NoriMicrofacet<C>),
     PhongFamily(PhongFamily),
     /// Boxed: the largest model by far, and only CENG795 scenes build it; inline it would grow
     /// every `Bsdf` moved through the path loop from 80 to 112 bytes.
@@ -143,10 +143,7 @@ macro_rules! dispatch {
             }
             Bsdf::Plastic($b) => $e,
             Bsdf::RoughPlastic($b) => $e,
-            Bsdf::NoriMicrofacet($b) => {
-                let $r = $e;
-                $lift
-            }
+            Bsdf::NoriMicrofacet($b) => $e,
             Bsdf::PhongFamily($b) => {
                 let $r = $e;
                 $lift
@@ -249,8 +246,8 @@ macro_rules! impl_from {
         }
     )*};
 }
-impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic);
-impl_from!(RoughDielectric, NoriMicrofacet, PhongFamily);
+impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic, NoriMicrofacet);
+impl_from!(RoughDielectric, PhongFamily);
 
 impl From<CourseMaterial> for Bsdf {
     fn from(b: CourseMaterial) -> Bsdf {
