@@ -316,15 +316,15 @@ impl MaterialKind {
                 reflectance,
                 transmittance,
             } => {
-                let mut d = RoughDielectric::new(
+                let mut d = RoughDielectric::with_lanes(
                     *distribution,
                     alpha(p.float(alpha_u, at)),
                     alpha(p.float(alpha_v, at)),
                     *int_ior,
                     *ext_ior,
                 );
-                d.specular_reflectance = p.color(reflectance, at);
-                d.specular_transmittance = p.color(transmittance, at);
+                d.specular_reflectance = m.albedo(p.color(reflectance, at));
+                d.specular_transmittance = m.albedo(p.color(transmittance, at));
                 Bsdf::RoughDielectric(d)
             }
             MaterialKind::Plastic {

@@ -117,7 +117,7 @@ pub enum Bsdf<C: Color = Vec3> {
     RoughConductor(RoughConductor<C>),
     Dielectric(Dielectric<C>),
     ThinDielectric(ThinDielectric<C>),
-    RoughDielectric(RoughDielectric),
+    RoughDielectric(RoughDielectric<C>),
     Plastic(Plastic<C>),
     RoughPlastic(RoughPlastic<C>),
     NoriMicrofacet(NoriMicrofacet<C>),
@@ -137,10 +137,7 @@ macro_rules! dispatch {
             Bsdf::Dielectric($b) => $e,
             Bsdf::RoughConductor($b) => $e,
             Bsdf::ThinDielectric($b) => $e,
-            Bsdf::RoughDielectric($b) => {
-                let $r = $e;
-                $lift
-            }
+            Bsdf::RoughDielectric($b) => $e,
             Bsdf::Plastic($b) => $e,
             Bsdf::RoughPlastic($b) => $e,
             Bsdf::NoriMicrofacet($b) => $e,
@@ -246,8 +243,8 @@ macro_rules! impl_from {
         }
     )*};
 }
-impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic, NoriMicrofacet);
-impl_from!(RoughDielectric, PhongFamily);
+impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic, NoriMicrofacet, RoughDielectric);
+impl_from!(PhongFamily);
 
 impl From<CourseMaterial> for Bsdf {
     fn from(b: CourseMaterial) -> Bsdf {
