@@ -386,7 +386,7 @@ impl MaterialKind {
                 )
                 .with_absorption(*ior, *absorption);
                 match ideal {
-                    None => Bsdf::PhongFamily(phong),
+                    None => Bsdf::PhongFamily(phong.map_lanes(|c| m.albedo(c))),
                     Some(i) => Bsdf::Course(Box::new(CourseMaterial::new(
                         phong,
                         i.lobe,

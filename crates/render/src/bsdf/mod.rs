@@ -121,7 +121,7 @@ pub enum Bsdf<C: Color = Vec3> {
     Plastic(Plastic<C>),
     RoughPlastic(RoughPlastic<C>),
     NoriMicrofacet(NoriMicrofacet<C>),
-    PhongFamily(PhongFamily),
+    PhongFamily(PhongFamily<C>),
     /// Boxed: the largest model by far, and only CENG795 scenes build it; inline it would grow
     /// every `Bsdf` moved through the path loop from 80 to 112 bytes.
     Course(Box<CourseMaterial>),
@@ -141,10 +141,7 @@ macro_rules! dispatch {
             Bsdf::Plastic($b) => $e,
             Bsdf::RoughPlastic($b) => $e,
             Bsdf::NoriMicrofacet($b) => $e,
-            Bsdf::PhongFamily($b) => {
-                let $r = $e;
-                $lift
-            }
+            Bsdf::PhongFamily($b) => $e,
             Bsdf::Course($b) => {
                 let $b = &**$b;
                 let $r = $e;
@@ -243,8 +240,7 @@ macro_rules! impl_from {
         }
     )*};
 }
-impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic, NoriMicrofacet, RoughDielectric);
-impl_from!(PhongFamily);
+impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic, NoriMicrofacet, RoughDielectric, PhongFamily);
 
 impl From<CourseMaterial> for Bsdf {
     fn from(b: CourseMaterial) -> Bsdf {
