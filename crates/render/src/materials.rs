@@ -255,8 +255,10 @@ impl MaterialKind {
     }
 
     /// The BSDF with its parameters evaluated at `at` and converted to the colour type of
-    /// `m` (PROTOTYPE: only diffuse, smooth conductor/mirror and smooth dielectric convert;
-    /// the other models stay RGB and panic when used in spectral mode).
+    /// `m`: reflectances and transmittances as albedo spectra (clamped to [0, 1] in spectral
+    /// mode, also the unnormalised CENG795 Phong kd/ks), conductor η and k as unbounded
+    /// spectra; IORs stay scalar. Lobe-selection weights and other fixed 3-channel or
+    /// channel-mean arithmetic are computed from the RGB values in every mode.
     pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
             MaterialKind::Diffuse { reflectance } => {
@@ -387,12 +389,10 @@ impl MaterialKind {
                 .with_absorption(*ior, *absorption);
                 match ideal {
                     None => Bsdf::PhongFamily(phong.map_lanes(|c| m.albedo(c))),
-                    Some(i) => Bsdf::Course(Box::new(CourseMaterial::new(
-                        phong,
-                        i.lobe,
-                        i.reflectance,
-                        i.roughness,
-                    ))),
+                    Some(i) => Bsdf::Course(Box::new(
+                        CourseMaterial::new(phong, i.lobe, i.reflectance, i.roughness)
+                            .map_lanes(|c| m.albedo(c)),
+                    )),
                 }
             }
         }

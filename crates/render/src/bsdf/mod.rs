@@ -89,7 +89,7 @@ impl<C: Color> BsdfSample<C> {
 }
 
 /// The operations every BSDF model implements (dispatched by the [`Bsdf`] enum), in the
-/// colour type `C` (RGB `Vec3`, or `SampledSpectrum` for the models already generic).
+/// colour type `C` (RGB `Vec3` or `SampledSpectrum`).
 pub(crate) trait BsdfModel<C: Color = Vec3> {
     fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C;
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
@@ -108,8 +108,8 @@ pub(crate) trait BsdfModel<C: Color = Vec3> {
 /// Lives on the stack, built per hit; kept small (no variant carries a table inline) because
 /// it is moved several times per path vertex.
 ///
-/// PROTOTYPE: generic over the colour type; `Diffuse`, `Conductor` and `Dielectric` carry
-/// `C`, the other models are still RGB-only (see [`Color::from_rgb_unmigrated`]).
+/// PROTOTYPE: generic over the colour type `C` (RGB `Vec3` or `SampledSpectrum`), as every
+/// model is; the runtime material converts the RGB parameters through a `ColorMode`.
 #[derive(Clone, Debug)]
 pub enum Bsdf<C: Color = Vec3> {
     Diffuse(Diffuse<C>),
@@ -124,13 +124,12 @@ pub enum Bsdf<C: Color = Vec3> {
     PhongFamily(PhongFamily<C>),
     /// Boxed: the largest model by far, and only CENG795 scenes build it; inline it would grow
     /// every `Bsdf` moved through the path loop from 80 to 112 bytes.
-    Course(Box<CourseMaterial>),
+    Course(Box<CourseMaterial<C>>),
 }
 
-/// `$e` on the model inside `$self`; `$lift` turns an RGB-only model's result into `C`
-/// (the generic models' results pass through unchanged).
+/// `$e` on the model inside `$self`.
 macro_rules! dispatch {
-    ($self:expr, $b:ident => $e:expr, $r:ident => $lift:expr) => {
+    ($self:expr, $b:ident => $e:expr) => {
         match $self {
             Bsdf::Diffuse($b) => $e,
             Bsdf::Conductor($b) => $e,
@@ -144,34 +143,17 @@ macro_rules! dispatch {
             Bsdf::PhongFamily($b) => $e,
             Bsdf::Course($b) => {
                 let $b = &**$b;
-                let $r = $e;
-                $lift
+                $e
             }
         }
     };
-    ($self:expr, $b:ident => $e:expr) => {
-        dispatch!($self, $b => $e, r => r)
-    };
-}
-
-/// An RGB-only model's sample in the colour type `C`.
-#[inline(always)]
-fn lift_sample<C: Color>(s: Option<BsdfSample>) -> Option<BsdfSample<C>> {
-    s.map(|s| BsdfSample {
-        wi: s.wi,
-        weight: C::from_rgb_unmigrated(s.weight),
-        pdf: s.pdf,
-        delta: s.delta,
-        transmission: s.transmission,
-        eta: s.eta,
-    })
 }
 
 impl<C: Color> Bsdf<C> {
     /// f(wo, wi)·|cos θi|; 0 for delta lobes.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
-        dispatch!(self, b => b.eval(wo, wi, mode), r => C::from_rgb_unmigrated(r))
+        dispatch!(self, b => b.eval(wo, wi, mode))
     }
 
     /// Solid-angle density of `sample`'s non-delta part.
@@ -184,7 +166,7 @@ impl<C: Color> Bsdf<C> {
     /// needs both).
     #[inline]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (C, f32) {
-        dispatch!(self, b => b.eval_pdf(wo, wi, mode), r => (C::from_rgb_unmigrated(r.0), r.1))
+        dispatch!(self, b => b.eval_pdf(wo, wi, mode))
     }
 
     /// Sample a direction `wi` given `wo`, with `u1` choosing the lobe and `u2` the direction.
@@ -196,7 +178,7 @@ impl<C: Color> Bsdf<C> {
         u2: Vec2,
         mode: TransportMode,
     ) -> Option<BsdfSample<C>> {
-        dispatch!(self, b => b.sample(wo, u1, u2, mode), r => lift_sample(r))
+        dispatch!(self, b => b.sample(wo, u1, u2, mode))
     }
 
     /// Has at least one delta (perfectly specular) lobe.
@@ -220,30 +202,34 @@ impl<C: Color> Bsdf<C> {
     /// A colour for the albedo AOV.
     #[inline]
     pub fn albedo(&self) -> C {
-        dispatch!(self, b => b.albedo(), r => C::from_rgb_unmigrated(r))
+        dispatch!(self, b => b.albedo())
     }
 }
 
 macro_rules! impl_from {
-    (generic $($t:ident),*) => {$(
+    ($($t:ident),*) => {$(
         impl<C: Color> From<$t<C>> for Bsdf<C> {
             fn from(b: $t<C>) -> Bsdf<C> {
                 Bsdf::$t(b)
             }
         }
     )*};
-    ($($t:ident),*) => {$(
-        impl From<$t> for Bsdf {
-            fn from(b: $t) -> Bsdf {
-                Bsdf::$t(b)
-            }
-        }
-    )*};
 }
-impl_from!(generic Diffuse, Conductor, Dielectric, ThinDielectric, RoughConductor, Plastic, RoughPlastic, NoriMicrofacet, RoughDielectric, PhongFamily);
+impl_from!(
+    Diffuse,
+    Conductor,
+    Dielectric,
+    ThinDielectric,
+    RoughConductor,
+    RoughDielectric,
+    Plastic,
+    RoughPlastic,
+    NoriMicrofacet,
+    PhongFamily
+);
 
-impl From<CourseMaterial> for Bsdf {
-    fn from(b: CourseMaterial) -> Bsdf {
+impl<C: Color> From<CourseMaterial<C>> for Bsdf<C> {
+    fn from(b: CourseMaterial<C>) -> Bsdf<C> {
         Bsdf::Course(Box::new(b))
     }
 }
