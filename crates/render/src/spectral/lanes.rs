@@ -6,9 +6,8 @@
 //! `Color` through a [`ColorMode`]: the identity in RGB mode, Jakob–Hanika upsampling evaluated
 //! at the path's wavelengths in spectral mode.
 //!
-//! Only the diffuse, smooth conductor and smooth dielectric BSDFs are generic so far; the
-//! other models are RGB-only and reach the generic `Bsdf` through
-//! [`Color::from_rgb_unmigrated`] (identity for RGB, a panic for spectra).
+//! Every BSDF model is generic; where a model does fixed 3-channel or channel-mean
+//! arithmetic (lobe-selection weights), it is done on the RGB parameters in every mode.
 
 use super::rgb::{RgbAlbedoSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum};
 use super::sampled::{N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum};
@@ -56,10 +55,6 @@ pub trait Color:
     /// selection weights) keep working as heuristics but change their noise, not their mean.
     fn mean(self) -> f32;
     fn is_black(self) -> bool;
-    /// PROTOTYPE ONLY: a colour computed by a model not yet generic. Identity in RGB mode; in
-    /// spectral mode there is no sound conversion (a reflectance RGB is not a value at four
-    /// wavelengths), so it panics.
-    fn from_rgb_unmigrated(rgb: Vec3) -> Self;
 }
 
 impl Color for Vec3 {
@@ -91,10 +86,6 @@ impl Color for Vec3 {
     fn is_black(self) -> bool {
         self == Vec3::ZERO
     }
-    #[inline(always)]
-    fn from_rgb_unmigrated(rgb: Vec3) -> Self {
-        rgb
-    }
 }
 
 impl Color for SampledSpectrum {
@@ -125,9 +116,6 @@ impl Color for SampledSpectrum {
     #[inline(always)]
     fn is_black(self) -> bool {
         SampledSpectrum::is_black(self)
-    }
-    fn from_rgb_unmigrated(_rgb: Vec3) -> Self {
-        panic!("BSDF model not yet generic over the colour type (lanes prototype)")
     }
 }
 
@@ -295,5 +283,79 @@ mod tests {
         assert!(s.transmission && (s.eta - eta).abs() < 1e-6);
         // RGB mode ignores the dispersion.
         assert_eq!(RgbMode.smooth_eta(Some(&ior), 1.5168), 1.5168);
+    }
+
+    /// Every BSDF model runs in spectral mode (no RGB bridge is left to panic): the weights
+    /// and values are finite and non-negative at every lane.
+    #[test]
+    fn every_model_runs_in_spectral_mode() {
+        use crate::bsdf::{
+            CourseMaterial, IdealLobe, Microfacet, MicrofacetType, NoriMicrofacet, PhongFamily,
+            Plastic, RoughConductor, RoughDielectric, RoughPlastic, RoughPlasticTables,
+            ThinDielectric, rgb_sampling_weight,
+        };
+        let m = spectral(0.4);
+        let (d, s) = (Vec3::new(0.7, 0.2, 0.1), Vec3::splat(0.9));
+        let a = |c: Vec3| m.albedo(c);
+        let beckmann = MicrofacetType::Beckmann;
+        let mf = Microfacet::isotropic(beckmann, 0.2);
+        let phong = PhongFamily::new(
+            base::PhongModel::TorranceSparrow,
+            false,
+            true,
+            30.0,
+            d,
+            s,
+            1.5,
+        );
+        let models: Vec<Bsdf<SampledSpectrum>> = vec![
+            ThinDielectric::with_lanes(1.5, 1.0).into(),
+            RoughConductor::new(
+                beckmann,
+                0.2,
+                0.3,
+                m.unbounded(Vec3::new(0.2, 0.9, 1.1)),
+                m.unbounded(Vec3::new(3.9, 2.4, 2.2)),
+                a(s),
+            )
+            .into(),
+            Plastic::with_weight(a(d), a(s), 1.5, 1.0, false, rgb_sampling_weight(d, s)).into(),
+            RoughPlastic::with_tables_weighted(
+                mf,
+                1.5,
+                std::sync::Arc::new(RoughPlasticTables::new(mf, 1.5)),
+                a(d),
+                a(s),
+                true,
+                rgb_sampling_weight(d, s),
+            )
+            .into(),
+            NoriMicrofacet::new(0.2, 1.5, 1.0, d).map_lanes(a).into(),
+            RoughDielectric::with_lanes(beckmann, 0.2, 0.2, 1.5, 1.0).into(),
+            phong.map_lanes(a).into(),
+            CourseMaterial::new(phong, IdealLobe::Conductor { eta: 0.37, k: 2.82 }, s, 0.1)
+                .map_lanes(a)
+                .into(),
+        ];
+        let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let ok =
+            |c: SampledSpectrum| (0..N_SPECTRUM_SAMPLES).all(|i| c[i].is_finite() && c[i] >= 0.0);
+        for b in &models {
+            let mut sampled = 0;
+            for k in 0..64 {
+                let u = Vec2::new(
+                    (k as f32 + 0.5) / 64.0,
+                    ((k * 37) % 64) as f32 / 64.0 + 0.005,
+                );
+                if let Some(smp) = b.sample(wo, u.x, u, TransportMode::Radiance) {
+                    assert!(ok(smp.weight), "{b:?}: {:?}", smp.weight);
+                    sampled += 1;
+                    let (f, _) = b.eval_pdf(wo, smp.wi, TransportMode::Radiance);
+                    assert!(ok(f));
+                }
+            }
+            assert!(sampled > 0, "{b:?}");
+            assert!(ok(b.albedo()));
+        }
     }
 }
