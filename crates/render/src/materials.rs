@@ -15,10 +15,11 @@ use base::PhongModel;
 use crate::bsdf::{
     Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, Microfacet, MicrofacetType,
     NoriMicrofacet, PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic,
-    RoughPlasticTables, ThinDielectric,
+    RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
 };
 use crate::math::{Frame, Vec3};
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::{ColorMode, RgbMode};
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, TexRef, Textures};
 
 /// A material as the renderer uses it.
@@ -247,17 +248,29 @@ impl MaterialKind {
         }
     }
 
-    /// The BSDF with its parameters evaluated at `at`.
+    /// The BSDF with its parameters evaluated at `at` (RGB mode).
+    #[inline]
     pub fn bsdf<P: Params>(&self, p: &P, at: TexCoord) -> Bsdf {
+        self.bsdf_in(p, at, &RgbMode)
+    }
+
+    /// The BSDF with its parameters evaluated at `at` and converted to the colour type of
+    /// `m`: reflectances and transmittances as albedo spectra (clamped to [0, 1] in spectral
+    /// mode, also the unnormalised CENG795 Phong kd/ks), conductor η and k as unbounded
+    /// spectra; IORs stay scalar. Lobe-selection weights and other fixed 3-channel or
+    /// channel-mean arithmetic are computed from the RGB values in every mode.
+    pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
             MaterialKind::Diffuse { reflectance } => {
-                Bsdf::Diffuse(Diffuse::new(p.color(reflectance, at)))
+                Bsdf::Diffuse(Diffuse::new(m.albedo(p.color(reflectance, at))))
             }
-            MaterialKind::Conductor { eta, k, specular } => {
-                Bsdf::Conductor(Conductor::new(*eta, *k, p.color(specular, at)))
-            }
+            MaterialKind::Conductor { eta, k, specular } => Bsdf::Conductor(Conductor::new(
+                m.unbounded(*eta),
+                m.unbounded(*k),
+                m.albedo(p.color(specular, at)),
+            )),
             MaterialKind::Mirror { reflectance } => {
-                Bsdf::Conductor(Conductor::mirror(p.color(reflectance, at)))
+                Bsdf::Conductor(Conductor::mirror(m.albedo(p.color(reflectance, at))))
             }
             MaterialKind::RoughConductor {
                 distribution,
@@ -270,9 +283,9 @@ impl MaterialKind {
                 *distribution,
                 alpha(p.float(alpha_u, at)),
                 alpha(p.float(alpha_v, at)),
-                *eta,
-                *k,
-                p.color(specular, at),
+                m.unbounded(*eta),
+                m.unbounded(*k),
+                m.albedo(p.color(specular, at)),
             )),
             MaterialKind::Dielectric {
                 int_ior,
@@ -280,9 +293,9 @@ impl MaterialKind {
                 reflectance,
                 transmittance,
             } => {
-                let mut d = Dielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(reflectance, at);
-                d.specular_transmittance = p.color(transmittance, at);
+                let mut d = Dielectric::with_lanes(*int_ior, *ext_ior);
+                d.specular_reflectance = m.albedo(p.color(reflectance, at));
+                d.specular_transmittance = m.albedo(p.color(transmittance, at));
                 Bsdf::Dielectric(d)
             }
             MaterialKind::ThinDielectric {
@@ -291,9 +304,9 @@ impl MaterialKind {
                 reflectance,
                 transmittance,
             } => {
-                let mut d = ThinDielectric::new(*int_ior, *ext_ior);
-                d.specular_reflectance = p.color(reflectance, at);
-                d.specular_transmittance = p.color(transmittance, at);
+                let mut d = ThinDielectric::with_lanes(*int_ior, *ext_ior);
+                d.specular_reflectance = m.albedo(p.color(reflectance, at));
+                d.specular_transmittance = m.albedo(p.color(transmittance, at));
                 Bsdf::ThinDielectric(d)
             }
             MaterialKind::RoughDielectric {
@@ -305,15 +318,15 @@ impl MaterialKind {
                 reflectance,
                 transmittance,
             } => {
-                let mut d = RoughDielectric::new(
+                let mut d = RoughDielectric::with_lanes(
                     *distribution,
                     alpha(p.float(alpha_u, at)),
                     alpha(p.float(alpha_v, at)),
                     *int_ior,
                     *ext_ior,
                 );
-                d.specular_reflectance = p.color(reflectance, at);
-                d.specular_transmittance = p.color(transmittance, at);
+                d.specular_reflectance = m.albedo(p.color(reflectance, at));
+                d.specular_transmittance = m.albedo(p.color(transmittance, at));
                 Bsdf::RoughDielectric(d)
             }
             MaterialKind::Plastic {
@@ -322,13 +335,17 @@ impl MaterialKind {
                 int_ior,
                 ext_ior,
                 nonlinear,
-            } => Bsdf::Plastic(Plastic::new(
-                p.color(diffuse, at),
-                p.color(specular, at),
-                *int_ior,
-                *ext_ior,
-                *nonlinear,
-            )),
+            } => {
+                let (d, s) = (p.color(diffuse, at), p.color(specular, at));
+                Bsdf::Plastic(Plastic::with_weight(
+                    m.albedo(d),
+                    m.albedo(s),
+                    *int_ior,
+                    *ext_ior,
+                    *nonlinear,
+                    rgb_sampling_weight(d, s),
+                ))
+            }
             MaterialKind::RoughPlastic {
                 microfacet,
                 eta,
@@ -336,15 +353,19 @@ impl MaterialKind {
                 diffuse,
                 specular,
                 nonlinear,
-            } => Bsdf::RoughPlastic(RoughPlastic::with_tables(
-                *microfacet,
-                *eta,
-                tables.clone(),
-                p.color(diffuse, at),
-                p.color(specular, at),
-                *nonlinear,
-            )),
-            MaterialKind::NoriMicrofacet(b) => Bsdf::NoriMicrofacet(*b),
+            } => {
+                let (d, s) = (p.color(diffuse, at), p.color(specular, at));
+                Bsdf::RoughPlastic(RoughPlastic::with_tables_weighted(
+                    *microfacet,
+                    *eta,
+                    tables.clone(),
+                    m.albedo(d),
+                    m.albedo(s),
+                    *nonlinear,
+                    rgb_sampling_weight(d, s),
+                ))
+            }
+            MaterialKind::NoriMicrofacet(b) => Bsdf::NoriMicrofacet(b.map_lanes(|c| m.albedo(c))),
             MaterialKind::Phong {
                 model,
                 normalized,
@@ -367,12 +388,10 @@ impl MaterialKind {
                 )
                 .with_absorption(*ior, *absorption);
                 match ideal {
-                    None => Bsdf::PhongFamily(phong),
-                    Some(i) => Bsdf::from(CourseMaterial::new(
-                        phong,
-                        i.lobe,
-                        i.reflectance,
-                        i.roughness,
+                    None => Bsdf::PhongFamily(phong.map_lanes(|c| m.albedo(c))),
+                    Some(i) => Bsdf::Course(Box::new(
+                        CourseMaterial::new(phong, i.lobe, i.reflectance, i.roughness)
+                            .map_lanes(|c| m.albedo(c)),
                     )),
                 }
             }
@@ -384,3 +403,33 @@ impl MaterialKind {
 pub fn alpha(a: f32) -> f32 {
     a.max(1e-4)
 }
+
+/// PROTOTYPE (`lanes-proto`): keeps the spectral instantiation of the generic BSDFs in the
+/// binary (nothing calls it yet), so that RGB timings are measured with both copies linked.
+#[doc(hidden)]
+pub fn spectral_bsdf_smoke(
+    kind: &MaterialKind,
+    textures: &Textures,
+    at: TexCoord,
+    mode: &crate::spectral::lanes::SpectralMode,
+    wo: Vec3,
+    u: crate::math::Vec2,
+) -> crate::spectral::SampledSpectrum {
+    use crate::bsdf::TransportMode;
+    let b = kind.bsdf_in(textures, at, mode);
+    let f = b.eval(wo, Vec3::Z, TransportMode::Radiance);
+    match b.sample(wo, u.x, u, TransportMode::Radiance) {
+        Some(s) => f + s.weight,
+        None => f,
+    }
+}
+
+#[used]
+static SPECTRAL_BSDF_SMOKE: fn(
+    &MaterialKind,
+    &Textures,
+    TexCoord,
+    &crate::spectral::lanes::SpectralMode,
+    Vec3,
+    crate::math::Vec2,
+) -> crate::spectral::SampledSpectrum = spectral_bsdf_smoke;

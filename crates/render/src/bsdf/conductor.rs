@@ -8,16 +8,17 @@
 use super::fresnel::fresnel_conductor;
 use super::{BsdfModel, BsdfSample, TransportMode, reflect_z};
 use crate::math::{Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Conductor {
-    pub eta: Vec3,
-    pub k: Vec3,
-    pub specular_reflectance: Vec3,
+pub struct Conductor<C: Color = Vec3> {
+    pub eta: C,
+    pub k: C,
+    pub specular_reflectance: C,
 }
 
-impl Conductor {
-    pub fn new(eta: Vec3, k: Vec3, specular_reflectance: Vec3) -> Conductor {
+impl<C: Color> Conductor<C> {
+    pub fn new(eta: C, k: C, specular_reflectance: C) -> Conductor<C> {
         Conductor {
             eta,
             k,
@@ -26,26 +27,26 @@ impl Conductor {
     }
 
     /// A perfect mirror with the given reflectance.
-    pub fn mirror(reflectance: Vec3) -> Conductor {
-        Conductor::new(Vec3::ZERO, Vec3::ZERO, reflectance)
+    pub fn mirror(reflectance: C) -> Conductor<C> {
+        Conductor::new(C::ZERO, C::ZERO, reflectance)
     }
 
     /// Reflectance for a direction with cosine `cos_theta` (> 0).
-    pub fn reflectance(&self, cos_theta: f32) -> Vec3 {
+    pub fn reflectance(&self, cos_theta: f32) -> C {
         self.specular_reflectance * fresnel_conductor(cos_theta, self.eta, self.k)
     }
 }
 
-impl BsdfModel for Conductor {
-    fn eval(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> Vec3 {
-        Vec3::ZERO
+impl<C: Color> BsdfModel<C> for Conductor<C> {
+    fn eval(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> C {
+        C::ZERO
     }
 
     fn pdf(&self, _wo: Vec3, _wi: Vec3) -> f32 {
         0.0
     }
 
-    fn sample(&self, wo: Vec3, _u1: f32, _u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, _u1: f32, _u2: Vec2, _mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -65,7 +66,7 @@ impl BsdfModel for Conductor {
     fn has_smooth(&self) -> bool {
         false
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.reflectance(1.0)
     }
 }

@@ -24,6 +24,7 @@
 
 use super::{BsdfModel, BsdfSample, Conductor, Dielectric, PhongFamily, TransportMode, mean};
 use crate::math::{Frame, Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 /// The ideal part of a course material.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,13 +42,15 @@ pub enum IdealLobe {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CourseMaterial {
-    pub phong: PhongFamily,
+pub struct CourseMaterial<C: Color = Vec3> {
+    pub phong: PhongFamily<C>,
     pub ideal: IdealLobe,
     /// `MirrorReflectance` (mirror and conductor).
-    pub reflectance: Vec3,
+    pub reflectance: C,
     pub roughness: f32,
-    /// Probability of choosing the ideal lobe when the Phong lobes can scatter (wo.z > 0).
+    /// Probability of choosing the ideal lobe when the Phong lobes can scatter (wo.z > 0):
+    /// from RGB channel means (fixed 3-channel arithmetic), kept in spectral mode so that the
+    /// lobe choice does not depend on the path's wavelengths.
     ideal_prob: f32,
 }
 
@@ -72,16 +75,32 @@ impl CourseMaterial {
         m
     }
 
-    fn ideal_albedo(&self) -> Vec3 {
+    /// The same material with its colours (Phong kd, ks and the mirror reflectance)
+    /// converted by `f` (e.g. a `ColorMode`'s albedo upsampling); the lobe probabilities stay
+    /// the RGB ones.
+    pub fn map_lanes<D: Color>(&self, f: impl Fn(Vec3) -> D) -> CourseMaterial<D> {
+        CourseMaterial {
+            phong: self.phong.map_lanes(&f),
+            ideal: self.ideal,
+            reflectance: f(self.reflectance),
+            roughness: self.roughness,
+            ideal_prob: self.ideal_prob,
+        }
+    }
+}
+
+impl<C: Color> CourseMaterial<C> {
+    fn ideal_albedo(&self) -> C {
         match self.ideal {
             IdealLobe::Mirror => self.reflectance,
             IdealLobe::Conductor { eta, k } => self.conductor(eta, k).reflectance(1.0),
-            IdealLobe::Dielectric { .. } => Vec3::ONE,
+            IdealLobe::Dielectric { .. } => C::ONE,
         }
     }
 
-    fn conductor(&self, eta: f32, k: f32) -> Conductor {
-        Conductor::new(Vec3::splat(eta), Vec3::splat(k), self.reflectance)
+    /// The course's scalar n + ik: the same at every lane (a constant spectrum).
+    fn conductor(&self, eta: f32, k: f32) -> Conductor<C> {
+        Conductor::new(C::splat(eta), C::splat(k), self.reflectance)
     }
 
     /// Probability of the ideal lobe for this `wo`: below the surface only it scatters.
@@ -89,11 +108,19 @@ impl CourseMaterial {
         if wo.z > 0.0 { self.ideal_prob } else { 1.0 }
     }
 
-    fn sample_ideal(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample_ideal(
+        &self,
+        wo: Vec3,
+        u1: f32,
+        u2: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample<C>> {
         let s = match self.ideal {
             IdealLobe::Mirror => Conductor::mirror(self.reflectance).sample(wo, u1, u2, mode),
             IdealLobe::Conductor { eta, k } => self.conductor(eta, k).sample(wo, u1, u2, mode),
-            IdealLobe::Dielectric { eta } => Dielectric::new(eta, 1.0).sample(wo, u1, u2, mode),
+            IdealLobe::Dielectric { eta } => {
+                Dielectric::with_lanes(eta, 1.0).sample(wo, u1, u2, mode)
+            }
         }?;
         if self.roughness <= 0.0 {
             return Some(s);
@@ -111,8 +138,8 @@ pub fn perturb(w: Vec3, r: f32, u: Vec2) -> Vec3 {
     (w + r * (u.x - 0.5) * f.s + r * (u.y - 0.5) * f.t).normalize()
 }
 
-impl BsdfModel for CourseMaterial {
-    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for CourseMaterial<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
         self.phong.eval(wo, wi, mode)
     }
 
@@ -120,12 +147,12 @@ impl BsdfModel for CourseMaterial {
         (1.0 - self.ideal_prob(wo)) * self.phong.pdf(wo, wi)
     }
 
-    fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (C, f32) {
         let (f, p) = self.phong.eval_pdf(wo, wi, mode);
         (f, (1.0 - self.ideal_prob(wo)) * p)
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>> {
         let p = self.ideal_prob(wo);
         if u1 < p {
             let mut s = self.sample_ideal(wo, u1 / p, u2, mode)?;
@@ -147,7 +174,7 @@ impl BsdfModel for CourseMaterial {
     fn has_smooth(&self) -> bool {
         self.ideal_prob < 1.0
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.phong.albedo() + self.ideal_albedo()
     }
 }

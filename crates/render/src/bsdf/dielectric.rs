@@ -10,35 +10,45 @@
 use super::fresnel::{fresnel_dielectric, refract_z};
 use super::{BsdfModel, BsdfSample, TransportMode, reflect_z};
 use crate::math::{Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Dielectric {
-    /// Relative index int_ior / ext_ior.
+pub struct Dielectric<C: Color = Vec3> {
+    /// Relative index int_ior / ext_ior. One scalar for every lane: in spectral mode a
+    /// dispersive index is resolved at the hero wavelength by the `ColorMode`, which then
+    /// terminates the secondary wavelengths.
     pub eta: f32,
-    pub specular_reflectance: Vec3,
-    pub specular_transmittance: Vec3,
+    pub specular_reflectance: C,
+    pub specular_transmittance: C,
 }
 
 impl Dielectric {
+    /// An RGB dielectric (the constructor names no colour, so it cannot infer the lanes).
     pub fn new(int_ior: f32, ext_ior: f32) -> Dielectric {
+        Dielectric::with_lanes(int_ior, ext_ior)
+    }
+}
+
+impl<C: Color> Dielectric<C> {
+    pub fn with_lanes(int_ior: f32, ext_ior: f32) -> Dielectric<C> {
         Dielectric {
             eta: int_ior / ext_ior,
-            specular_reflectance: Vec3::ONE,
-            specular_transmittance: Vec3::ONE,
+            specular_reflectance: C::ONE,
+            specular_transmittance: C::ONE,
         }
     }
 }
 
-impl BsdfModel for Dielectric {
-    fn eval(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> Vec3 {
-        Vec3::ZERO
+impl<C: Color> BsdfModel<C> for Dielectric<C> {
+    fn eval(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> C {
+        C::ZERO
     }
 
     fn pdf(&self, _wo: Vec3, _wi: Vec3) -> f32 {
         0.0
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, _u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, _u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z == 0.0 {
             return None;
         }
@@ -74,7 +84,7 @@ impl BsdfModel for Dielectric {
     fn has_smooth(&self) -> bool {
         false
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.specular_transmittance
     }
 }

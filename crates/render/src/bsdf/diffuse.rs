@@ -6,10 +6,11 @@
 use super::{BsdfModel, BsdfSample, TransportMode, is_positive};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Diffuse {
-    pub reflectance: Vec3,
+pub struct Diffuse<C: Color = Vec3> {
+    pub reflectance: C,
 }
 
 impl Default for Diffuse {
@@ -20,16 +21,16 @@ impl Default for Diffuse {
     }
 }
 
-impl Diffuse {
-    pub fn new(reflectance: Vec3) -> Diffuse {
+impl<C: Color> Diffuse<C> {
+    pub fn new(reflectance: C) -> Diffuse<C> {
         Diffuse { reflectance }
     }
 }
 
-impl BsdfModel for Diffuse {
-    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for Diffuse<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         self.reflectance * (INV_PI * wi.z)
     }
@@ -41,9 +42,9 @@ impl BsdfModel for Diffuse {
         cosine_hemisphere_pdf(wi)
     }
 
-    fn eval_pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> (Vec3, f32) {
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> (C, f32) {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return (Vec3::ZERO, 0.0);
+            return (C::ZERO, 0.0);
         }
         (
             self.reflectance * (INV_PI * wi.z),
@@ -51,7 +52,7 @@ impl BsdfModel for Diffuse {
         )
     }
 
-    fn sample(&self, wo: Vec3, _u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, _u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -69,7 +70,7 @@ impl BsdfModel for Diffuse {
     fn has_smooth(&self) -> bool {
         true
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.reflectance
     }
 }

@@ -1,6 +1,7 @@
 //! Fresnel equations with Mitsuba 3's conventions (`include/mitsuba/render/fresnel.h`).
 
 use crate::math::{Vec3, safe_sqrt};
+use crate::spectral::lanes::Color;
 
 /// Unpolarised Fresnel reflectance of a smooth dielectric interface.
 ///
@@ -66,14 +67,10 @@ pub fn fresnel_conductor_1(cos_theta_i: f32, eta: f32, k: f32) -> f32 {
     0.5 * (rs + rp)
 }
 
-/// [`fresnel_conductor_1`] per RGB channel.
+/// [`fresnel_conductor_1`] per lane (RGB channel or wavelength).
 #[inline]
-pub fn fresnel_conductor(cos_theta_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
-    Vec3::new(
-        fresnel_conductor_1(cos_theta_i, eta.x, k.x),
-        fresnel_conductor_1(cos_theta_i, eta.y, k.y),
-        fresnel_conductor_1(cos_theta_i, eta.z, k.z),
-    )
+pub fn fresnel_conductor<C: Color>(cos_theta_i: f32, eta: C, k: C) -> C {
+    C::from_fn(|i| fresnel_conductor_1(cos_theta_i, eta.lane(i), k.lane(i)))
 }
 
 /// Hemispherical average of the dielectric Fresnel reflectance ∫ F(μ) 2μ dμ, with the fits

@@ -37,13 +37,14 @@ pub use diffuse::Diffuse;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use nori_microfacet::NoriMicrofacet;
 pub use phong::PhongFamily;
-pub use plastic::Plastic;
+pub use plastic::{Plastic, rgb_sampling_weight};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{RoughPlastic, RoughPlasticTables};
 pub use thin_dielectric::ThinDielectric;
 
 use crate::math::{Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 /// Which quantity a path carries: radiance (camera paths) or importance (light paths). Only
 /// matters for refraction, where radiance is scaled by 1/η² and importance is not.
@@ -56,11 +57,11 @@ pub enum TransportMode {
 
 /// The result of [`Bsdf::sample`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BsdfSample {
+pub struct BsdfSample<C: Color = Vec3> {
     /// Sampled direction (local frame, unit length).
     pub wi: Vec3,
     /// eval·|cos θi| / pdf (for delta lobes: the lobe's weight divided by its probability).
-    pub weight: Vec3,
+    pub weight: C,
     /// Solid-angle density of `wi`, or the discrete lobe probability when `delta` is set.
     pub pdf: f32,
     /// The direction comes from a delta (perfectly specular) lobe.
@@ -72,10 +73,10 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
-impl BsdfSample {
+impl<C: Color> BsdfSample<C> {
     /// A sample of a non-delta reflection lobe (no interface crossed).
     #[inline]
-    pub fn glossy_reflection(wi: Vec3, weight: Vec3, pdf: f32) -> BsdfSample {
+    pub fn glossy_reflection(wi: Vec3, weight: C, pdf: f32) -> BsdfSample<C> {
         BsdfSample {
             wi,
             weight,
@@ -87,48 +88,53 @@ impl BsdfSample {
     }
 }
 
-/// The operations every BSDF model implements (dispatched by the [`Bsdf`] enum).
-pub(crate) trait BsdfModel {
-    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
+/// The operations every BSDF model implements (dispatched by the [`Bsdf`] enum), in the
+/// colour type `C` (RGB `Vec3` or `SampledSpectrum`).
+pub(crate) trait BsdfModel<C: Color = Vec3> {
+    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C;
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
     /// `(eval, pdf)` at once (Mitsuba's `eval_pdf`): models whose two share work override it.
-    fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (C, f32) {
         (self.eval(wo, wi, mode), self.pdf(wo, wi))
     }
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample>;
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>>;
     fn has_delta(&self) -> bool;
     fn has_smooth(&self) -> bool;
-    fn albedo(&self) -> Vec3;
+    fn albedo(&self) -> C;
 }
 
 /// Closed set of BSDF models.
 ///
 /// Lives on the stack, built per hit; kept small (no variant carries a table inline) because
 /// it is moved several times per path vertex.
+///
+/// PROTOTYPE: generic over the colour type `C` (RGB `Vec3` or `SampledSpectrum`), as every
+/// model is; the runtime material converts the RGB parameters through a `ColorMode`.
 #[derive(Clone, Debug)]
-pub enum Bsdf {
-    Diffuse(Diffuse),
-    Conductor(Conductor),
-    RoughConductor(RoughConductor),
-    Dielectric(Dielectric),
-    ThinDielectric(ThinDielectric),
-    RoughDielectric(RoughDielectric),
-    Plastic(Plastic),
-    RoughPlastic(RoughPlastic),
-    NoriMicrofacet(NoriMicrofacet),
-    PhongFamily(PhongFamily),
+pub enum Bsdf<C: Color = Vec3> {
+    Diffuse(Diffuse<C>),
+    Conductor(Conductor<C>),
+    RoughConductor(RoughConductor<C>),
+    Dielectric(Dielectric<C>),
+    ThinDielectric(ThinDielectric<C>),
+    RoughDielectric(RoughDielectric<C>),
+    Plastic(Plastic<C>),
+    RoughPlastic(RoughPlastic<C>),
+    NoriMicrofacet(NoriMicrofacet<C>),
+    PhongFamily(PhongFamily<C>),
     /// Boxed: the largest model by far, and only CENG795 scenes build it; inline it would grow
     /// every `Bsdf` moved through the path loop from 80 to 112 bytes.
-    Course(Box<CourseMaterial>),
+    Course(Box<CourseMaterial<C>>),
 }
 
+/// `$e` on the model inside `$self`.
 macro_rules! dispatch {
     ($self:expr, $b:ident => $e:expr) => {
         match $self {
             Bsdf::Diffuse($b) => $e,
             Bsdf::Conductor($b) => $e,
-            Bsdf::RoughConductor($b) => $e,
             Bsdf::Dielectric($b) => $e,
+            Bsdf::RoughConductor($b) => $e,
             Bsdf::ThinDielectric($b) => $e,
             Bsdf::RoughDielectric($b) => $e,
             Bsdf::Plastic($b) => $e,
@@ -143,10 +149,10 @@ macro_rules! dispatch {
     };
 }
 
-impl Bsdf {
+impl<C: Color> Bsdf<C> {
     /// f(wo, wi)·|cos θi|; 0 for delta lobes.
     #[inline]
-    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
         dispatch!(self, b => b.eval(wo, wi, mode))
     }
 
@@ -159,13 +165,19 @@ impl Bsdf {
     /// [`Self::eval`] and [`Self::pdf`] with one dispatch (next-event estimation with MIS
     /// needs both).
     #[inline]
-    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (C, f32) {
         dispatch!(self, b => b.eval_pdf(wo, wi, mode))
     }
 
     /// Sample a direction `wi` given `wo`, with `u1` choosing the lobe and `u2` the direction.
     #[inline]
-    pub fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        u1: f32,
+        u2: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample<C>> {
         dispatch!(self, b => b.sample(wo, u1, u2, mode))
     }
 
@@ -189,15 +201,15 @@ impl Bsdf {
 
     /// A colour for the albedo AOV.
     #[inline]
-    pub fn albedo(&self) -> Vec3 {
+    pub fn albedo(&self) -> C {
         dispatch!(self, b => b.albedo())
     }
 }
 
 macro_rules! impl_from {
     ($($t:ident),*) => {$(
-        impl From<$t> for Bsdf {
-            fn from(b: $t) -> Bsdf {
+        impl<C: Color> From<$t<C>> for Bsdf<C> {
+            fn from(b: $t<C>) -> Bsdf<C> {
                 Bsdf::$t(b)
             }
         }
@@ -206,9 +218,9 @@ macro_rules! impl_from {
 impl_from!(
     Diffuse,
     Conductor,
-    RoughConductor,
     Dielectric,
     ThinDielectric,
+    RoughConductor,
     RoughDielectric,
     Plastic,
     RoughPlastic,
@@ -216,8 +228,8 @@ impl_from!(
     PhongFamily
 );
 
-impl From<CourseMaterial> for Bsdf {
-    fn from(b: CourseMaterial) -> Bsdf {
+impl<C: Color> From<CourseMaterial<C>> for Bsdf<C> {
+    fn from(b: CourseMaterial<C>) -> Bsdf<C> {
         Bsdf::Course(Box::new(b))
     }
 }
@@ -230,12 +242,12 @@ pub(crate) fn reflect_z(w: Vec3) -> Vec3 {
 
 /// The sample of a mixture of reflection lobes once the direction `wi` is chosen: the
 /// weight is the full `eval / pdf` (both over all lobes), as a one-sample MIS estimate.
-pub(crate) fn mixture_reflection_sample<B: BsdfModel>(
+pub(crate) fn mixture_reflection_sample<C: Color, B: BsdfModel<C>>(
     b: &B,
     wo: Vec3,
     wi: Vec3,
     mode: TransportMode,
-) -> Option<BsdfSample> {
+) -> Option<BsdfSample<C>> {
     if wi.z <= 0.0 {
         return None;
     }

@@ -16,14 +16,16 @@ use super::microfacet::{Microfacet, MicrofacetType};
 use super::{BsdfModel, BsdfSample, TransportMode, mixture_reflection_sample, reflect_z_about};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct NoriMicrofacet {
+pub struct NoriMicrofacet<C: Color = Vec3> {
     pub distribution: Microfacet,
     /// Relative index intIOR / extIOR.
     pub eta: f32,
-    pub kd: Vec3,
-    /// 1 − max(kd).
+    pub kd: C,
+    /// 1 − max(kd) over the RGB channels (fixed 3-channel arithmetic, kept in spectral mode:
+    /// a scalar specular weight, the same at every wavelength).
     pub ks: f32,
 }
 
@@ -36,12 +38,23 @@ impl NoriMicrofacet {
             ks: (1.0 - kd.max_element()).clamp(0.0, 1.0),
         }
     }
+
+    /// The same BSDF with `kd` converted by `f` (e.g. a `ColorMode`'s albedo upsampling);
+    /// `ks` stays the RGB one.
+    pub fn map_lanes<D: Color>(&self, f: impl Fn(Vec3) -> D) -> NoriMicrofacet<D> {
+        NoriMicrofacet {
+            distribution: self.distribution,
+            eta: self.eta,
+            kd: f(self.kd),
+            ks: self.ks,
+        }
+    }
 }
 
-impl BsdfModel for NoriMicrofacet {
-    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for NoriMicrofacet<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         let h = (wo + wi).normalize();
         let d = self.distribution.eval(h);
@@ -52,7 +65,7 @@ impl BsdfModel for NoriMicrofacet {
         } else {
             0.0
         };
-        (self.kd * INV_PI + Vec3::splat(spec)) * wi.z
+        (self.kd * INV_PI + C::splat(spec)) * wi.z
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -64,7 +77,7 @@ impl BsdfModel for NoriMicrofacet {
         self.ks * spec + (1.0 - self.ks) * cosine_hemisphere_pdf(wi)
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -83,7 +96,7 @@ impl BsdfModel for NoriMicrofacet {
     fn has_smooth(&self) -> bool {
         true
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.kd
     }
 }

@@ -31,21 +31,24 @@ use super::reflect_z_about;
 use super::{BsdfModel, BsdfSample, TransportMode, mean, mixture_reflection_sample, reflect_z};
 use crate::math::{Frame, INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectral::lanes::Color;
 use base::PhongModel;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PhongFamily {
+pub struct PhongFamily<C: Color = Vec3> {
     pub model: PhongModel,
     pub normalized: bool,
     pub kd_fresnel: bool,
     pub exponent: f32,
-    pub kd: Vec3,
-    pub ks: Vec3,
+    pub kd: C,
+    pub ks: C,
     /// Schlick's F₀ from the refraction index.
     pub f0: f32,
     /// Complex index (n, k) of a conductor: exact conductor Fresnel instead of Schlick's.
     pub conductor: Option<(f32, f32)>,
-    /// Probability of sampling the specular lobe.
+    /// Probability of sampling the specular lobe: from the RGB channel means of kd and ks
+    /// (fixed 3-channel arithmetic), kept in spectral mode so that the lobe choice does not
+    /// depend on the path's wavelengths.
     spec_prob: f32,
 }
 
@@ -87,9 +90,28 @@ impl PhongFamily {
         b
     }
 
+    /// The same BSDF with kd and ks converted by `f` (e.g. a `ColorMode`'s albedo
+    /// upsampling; negative channels are clamped in RGB first); the lobe probability and the
+    /// Fresnel parameters stay the RGB ones.
+    pub fn map_lanes<D: Color>(&self, f: impl Fn(Vec3) -> D) -> PhongFamily<D> {
+        PhongFamily {
+            model: self.model,
+            normalized: self.normalized,
+            kd_fresnel: self.kd_fresnel,
+            exponent: self.exponent,
+            kd: f(self.kd),
+            ks: f(self.ks),
+            f0: self.f0,
+            conductor: self.conductor,
+            spec_prob: self.spec_prob,
+        }
+    }
+}
+
+impl<C: Color> PhongFamily<C> {
     /// With `k > 0`, Torrance–Sparrow uses the Fresnel reflectance of a conductor of complex
     /// index `eta + i k`; otherwise nothing changes.
-    pub fn with_absorption(mut self, eta: f32, k: f32) -> PhongFamily {
+    pub fn with_absorption(mut self, eta: f32, k: f32) -> PhongFamily<C> {
         if k > 0.0 && eta.is_finite() && k.is_finite() {
             self.conductor = Some((eta.max(0.0), k));
         }
@@ -136,10 +158,10 @@ impl PhongFamily {
     }
 }
 
-impl BsdfModel for PhongFamily {
-    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for PhongFamily<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         let p = self.exponent;
         let cos_i = wi.z;
@@ -168,7 +190,7 @@ impl BsdfModel for PhongFamily {
                 let cos_o = wo.z;
                 let woh = wo.dot(h);
                 if woh <= 0.0 {
-                    return Vec3::ZERO;
+                    return C::ZERO;
                 }
                 let d = (p + 2.0) * 0.5 * INV_PI * lobe;
                 let g = (2.0 * h.z * cos_o / woh)
@@ -198,7 +220,7 @@ impl BsdfModel for PhongFamily {
         self.spec_prob * s + (1.0 - self.spec_prob) * cosine_hemisphere_pdf(wi)
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -229,7 +251,7 @@ impl BsdfModel for PhongFamily {
     fn has_smooth(&self) -> bool {
         true
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.kd
     }
 }

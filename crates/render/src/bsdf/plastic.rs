@@ -15,15 +15,18 @@ use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance};
 use super::{BsdfModel, BsdfSample, TransportMode, is_positive, mean, reflect_z};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Plastic {
-    pub diffuse_reflectance: Vec3,
-    pub specular_reflectance: Vec3,
+pub struct Plastic<C: Color = Vec3> {
+    pub diffuse_reflectance: C,
+    pub specular_reflectance: C,
     /// Relative index int_ior / ext_ior.
     pub eta: f32,
     pub nonlinear: bool,
-    /// Probability weight of the specular lobe (see the module docs).
+    /// Probability weight of the specular lobe (see the module docs). Always computed from
+    /// the RGB parameters (channel means, fixed 3-channel arithmetic), also in spectral mode:
+    /// RGB stays bit-exact and the lobe choice does not depend on the path's wavelengths.
     pub specular_sampling_weight: f32,
     /// Diffuse Fresnel reflectance of the inside of the coating, F_dr(1/η).
     pub fdr_int: f32,
@@ -38,26 +41,51 @@ impl Plastic {
         ext_ior: f32,
         nonlinear: bool,
     ) -> Plastic {
+        Plastic::with_weight(
+            diffuse_reflectance,
+            specular_reflectance,
+            int_ior,
+            ext_ior,
+            nonlinear,
+            rgb_sampling_weight(diffuse_reflectance, specular_reflectance),
+        )
+    }
+}
+
+/// The specular sampling weight of RGB reflectances (fixed 3-channel means; see
+/// [`Plastic::specular_sampling_weight`]).
+pub fn rgb_sampling_weight(diffuse: Vec3, specular: Vec3) -> f32 {
+    sampling_weight(mean(diffuse), mean(specular))
+}
+
+impl<C: Color> Plastic<C> {
+    /// A plastic in any colour type, with the specular sampling weight given (computed from
+    /// the RGB parameters by [`rgb_sampling_weight`]).
+    pub fn with_weight(
+        diffuse_reflectance: C,
+        specular_reflectance: C,
+        int_ior: f32,
+        ext_ior: f32,
+        nonlinear: bool,
+        specular_sampling_weight: f32,
+    ) -> Plastic<C> {
         let eta = int_ior / ext_ior;
         Plastic {
             diffuse_reflectance,
             specular_reflectance,
             eta,
             nonlinear,
-            specular_sampling_weight: sampling_weight(
-                mean(diffuse_reflectance),
-                mean(specular_reflectance),
-            ),
+            specular_sampling_weight,
             fdr_int: fresnel_diffuse_reflectance(1.0 / eta),
         }
     }
 
     /// Diffuse albedo after the internal-scattering correction.
     #[inline]
-    fn corrected_diffuse(&self) -> Vec3 {
+    fn corrected_diffuse(&self) -> C {
         let d = self.diffuse_reflectance;
         if self.nonlinear {
-            d / (Vec3::ONE - d * self.fdr_int)
+            d / (C::ONE - d * self.fdr_int)
         } else {
             d / (1.0 - self.fdr_int)
         }
@@ -78,10 +106,10 @@ pub fn sampling_weight(diffuse_mean: f32, specular_mean: f32) -> f32 {
     if s > 0.0 { specular_mean / s } else { 0.5 }
 }
 
-impl BsdfModel for Plastic {
-    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for Plastic<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         let f_o = fresnel_dielectric(wo.z, self.eta).0;
         let f_i = fresnel_dielectric(wi.z, self.eta).0;
@@ -97,7 +125,7 @@ impl BsdfModel for Plastic {
         (1.0 - self.prob_specular(f_o)) * cosine_hemisphere_pdf(wi)
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -135,7 +163,7 @@ impl BsdfModel for Plastic {
     fn has_smooth(&self) -> bool {
         true
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.diffuse_reflectance
     }
 }

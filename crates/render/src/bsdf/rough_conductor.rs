@@ -10,24 +10,25 @@ use super::fresnel::fresnel_conductor;
 use super::microfacet::{Microfacet, MicrofacetType};
 use super::{BsdfModel, BsdfSample, TransportMode, is_positive, reflect_z_about};
 use crate::math::{Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RoughConductor {
+pub struct RoughConductor<C: Color = Vec3> {
     pub distribution: Microfacet,
-    pub eta: Vec3,
-    pub k: Vec3,
-    pub specular_reflectance: Vec3,
+    pub eta: C,
+    pub k: C,
+    pub specular_reflectance: C,
 }
 
-impl RoughConductor {
+impl<C: Color> RoughConductor<C> {
     pub fn new(
         kind: MicrofacetType,
         alpha_u: f32,
         alpha_v: f32,
-        eta: Vec3,
-        k: Vec3,
-        specular_reflectance: Vec3,
-    ) -> RoughConductor {
+        eta: C,
+        k: C,
+        specular_reflectance: C,
+    ) -> RoughConductor<C> {
         RoughConductor {
             distribution: Microfacet::new(kind, alpha_u, alpha_v),
             eta,
@@ -37,15 +38,15 @@ impl RoughConductor {
     }
 }
 
-impl BsdfModel for RoughConductor {
-    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for RoughConductor<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         let h = (wo + wi).normalize();
         let d = self.distribution.eval(h);
         if d == 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         let g = self.distribution.g(wo, wi, h);
         let f = fresnel_conductor(wo.dot(h), self.eta, self.k);
@@ -60,7 +61,7 @@ impl BsdfModel for RoughConductor {
         self.distribution.eval(h) * self.distribution.smith_g1(wo, h) / (4.0 * wo.z)
     }
 
-    fn sample(&self, wo: Vec3, _u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, _u1: f32, u2: Vec2, _mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -82,7 +83,7 @@ impl BsdfModel for RoughConductor {
     fn has_smooth(&self) -> bool {
         true
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.specular_reflectance * fresnel_conductor(1.0, self.eta, self.k)
     }
 }

@@ -12,17 +12,22 @@ use super::fresnel::{fresnel_dielectric, refract_m};
 use super::microfacet::{Microfacet, MicrofacetType};
 use super::{BsdfModel, BsdfSample, TransportMode, is_positive, reflect_z_about};
 use crate::math::{Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RoughDielectric {
+pub struct RoughDielectric<C: Color = Vec3> {
     pub distribution: Microfacet,
-    /// Relative index int_ior / ext_ior.
+    /// Relative index int_ior / ext_ior: one scalar for every lane (no dispersion; a
+    /// dispersive rough interface would need the hero-wavelength termination of the smooth
+    /// dielectric, not done here).
     pub eta: f32,
-    pub specular_reflectance: Vec3,
-    pub specular_transmittance: Vec3,
+    pub specular_reflectance: C,
+    pub specular_transmittance: C,
 }
 
 impl RoughDielectric {
+    /// An RGB rough dielectric (the constructor names no colour, so it cannot infer the
+    /// lanes).
     pub fn new(
         kind: MicrofacetType,
         alpha_u: f32,
@@ -30,11 +35,23 @@ impl RoughDielectric {
         int_ior: f32,
         ext_ior: f32,
     ) -> RoughDielectric {
+        RoughDielectric::with_lanes(kind, alpha_u, alpha_v, int_ior, ext_ior)
+    }
+}
+
+impl<C: Color> RoughDielectric<C> {
+    pub fn with_lanes(
+        kind: MicrofacetType,
+        alpha_u: f32,
+        alpha_v: f32,
+        int_ior: f32,
+        ext_ior: f32,
+    ) -> RoughDielectric<C> {
         RoughDielectric {
             distribution: Microfacet::new(kind, alpha_u, alpha_v),
             eta: int_ior / ext_ior,
-            specular_reflectance: Vec3::ONE,
-            specular_transmittance: Vec3::ONE,
+            specular_reflectance: C::ONE,
+            specular_transmittance: C::ONE,
         }
     }
 
@@ -70,14 +87,14 @@ impl RoughDielectric {
     }
 }
 
-impl BsdfModel for RoughDielectric {
-    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for RoughDielectric<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
         let Some((m, eta, reflect)) = self.half_vector(wo, wi) else {
-            return Vec3::ZERO;
+            return C::ZERO;
         };
         let d = self.distribution.eval(m);
         if d == 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         let f = fresnel_dielectric(wo.dot(m), self.eta).0;
         let g = self.distribution.g(wo, wi, m);
@@ -112,7 +129,7 @@ impl BsdfModel for RoughDielectric {
         prob * jacobian
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>> {
         let cos_o = wo.z;
         if cos_o == 0.0 {
             return None;
@@ -166,7 +183,7 @@ impl BsdfModel for RoughDielectric {
     fn has_smooth(&self) -> bool {
         true
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.specular_transmittance
     }
 }

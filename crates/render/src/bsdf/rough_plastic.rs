@@ -20,12 +20,11 @@ use std::sync::Arc;
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Microfacet, MicrofacetType, eval_reflectance, eval_transmittance};
-use super::plastic::sampling_weight;
-use super::{
-    BsdfModel, BsdfSample, TransportMode, mean, mixture_reflection_sample, reflect_z_about,
-};
+use super::plastic::rgb_sampling_weight;
+use super::{BsdfModel, BsdfSample, TransportMode, mixture_reflection_sample, reflect_z_about};
 use crate::math::{INV_PI, Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectral::lanes::Color;
 
 /// Resolution of the transmittance table (Mitsuba's `MI_ROUGH_TRANSMITTANCE_RES`).
 pub const ROUGH_TRANSMITTANCE_RES: usize = 64;
@@ -64,14 +63,15 @@ impl RoughPlasticTables {
 }
 
 #[derive(Clone, Debug, PartialEq)]
-pub struct RoughPlastic {
+pub struct RoughPlastic<C: Color = Vec3> {
     pub distribution: Microfacet,
     /// Relative index int_ior / ext_ior.
     pub eta: f32,
-    pub diffuse_reflectance: Vec3,
-    pub specular_reflectance: Vec3,
+    pub diffuse_reflectance: C,
+    pub specular_reflectance: C,
     pub nonlinear: bool,
-    /// mean(specular) / (mean(diffuse) + mean(specular)), from the texture means.
+    /// mean(specular) / (mean(diffuse) + mean(specular)), from the texture means. Always
+    /// computed from the RGB parameters (fixed 3-channel means), also in spectral mode.
     pub specular_sampling_weight: f32,
     /// Shared with the material (built once per material): keeps the per-hit `Bsdf` small.
     pub tables: Arc<RoughPlasticTables>,
@@ -109,16 +109,37 @@ impl RoughPlastic {
         specular_reflectance: Vec3,
         nonlinear: bool,
     ) -> RoughPlastic {
+        RoughPlastic::with_tables_weighted(
+            distribution,
+            eta,
+            tables,
+            diffuse_reflectance,
+            specular_reflectance,
+            nonlinear,
+            rgb_sampling_weight(diffuse_reflectance, specular_reflectance),
+        )
+    }
+}
+
+impl<C: Color> RoughPlastic<C> {
+    /// [`RoughPlastic::with_tables`] in any colour type, with the specular sampling weight
+    /// given (computed from the RGB parameters by [`rgb_sampling_weight`]).
+    pub fn with_tables_weighted(
+        distribution: Microfacet,
+        eta: f32,
+        tables: Arc<RoughPlasticTables>,
+        diffuse_reflectance: C,
+        specular_reflectance: C,
+        nonlinear: bool,
+        specular_sampling_weight: f32,
+    ) -> RoughPlastic<C> {
         RoughPlastic {
             distribution,
             eta,
             diffuse_reflectance,
             specular_reflectance,
             nonlinear,
-            specular_sampling_weight: sampling_weight(
-                mean(diffuse_reflectance),
-                mean(specular_reflectance),
-            ),
+            specular_sampling_weight,
             tables,
         }
     }
@@ -131,10 +152,10 @@ impl RoughPlastic {
     }
 }
 
-impl BsdfModel for RoughPlastic {
-    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+impl<C: Color> BsdfModel<C> for RoughPlastic<C> {
+    fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return C::ZERO;
         }
         let h = (wo + wi).normalize();
         let d = self.distribution.eval(h);
@@ -143,14 +164,14 @@ impl BsdfModel for RoughPlastic {
             let g = self.distribution.g(wo, wi, h);
             self.specular_reflectance * (f * d * g / (4.0 * wo.z))
         } else {
-            Vec3::ZERO
+            C::ZERO
         };
         let t_o = self.tables.transmittance(wo.z);
         let t_i = self.tables.transmittance(wi.z);
         let rd = self.diffuse_reflectance;
         let r_int = self.tables.internal_reflectance;
         let diff = if self.nonlinear {
-            rd / (Vec3::ONE - rd * r_int)
+            rd / (C::ONE - rd * r_int)
         } else {
             rd / (1.0 - r_int)
         };
@@ -167,7 +188,7 @@ impl BsdfModel for RoughPlastic {
         p_spec * spec + (1.0 - p_spec) * cosine_hemisphere_pdf(wi)
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -187,7 +208,7 @@ impl BsdfModel for RoughPlastic {
     fn has_smooth(&self) -> bool {
         true
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.diffuse_reflectance
     }
 }

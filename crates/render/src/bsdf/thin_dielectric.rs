@@ -9,20 +9,29 @@
 use super::fresnel::fresnel_dielectric;
 use super::{BsdfModel, BsdfSample, TransportMode, reflect_z};
 use crate::math::{Vec2, Vec3};
+use crate::spectral::lanes::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ThinDielectric {
+pub struct ThinDielectric<C: Color = Vec3> {
+    /// Relative index int_ior / ext_ior: one scalar for every lane (no dispersion).
     pub eta: f32,
-    pub specular_reflectance: Vec3,
-    pub specular_transmittance: Vec3,
+    pub specular_reflectance: C,
+    pub specular_transmittance: C,
 }
 
 impl ThinDielectric {
+    /// An RGB thin dielectric (the constructor names no colour, so it cannot infer the lanes).
     pub fn new(int_ior: f32, ext_ior: f32) -> ThinDielectric {
+        ThinDielectric::with_lanes(int_ior, ext_ior)
+    }
+}
+
+impl<C: Color> ThinDielectric<C> {
+    pub fn with_lanes(int_ior: f32, ext_ior: f32) -> ThinDielectric<C> {
         ThinDielectric {
             eta: int_ior / ext_ior,
-            specular_reflectance: Vec3::ONE,
-            specular_transmittance: Vec3::ONE,
+            specular_reflectance: C::ONE,
+            specular_transmittance: C::ONE,
         }
     }
 
@@ -33,16 +42,16 @@ impl ThinDielectric {
     }
 }
 
-impl BsdfModel for ThinDielectric {
-    fn eval(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> Vec3 {
-        Vec3::ZERO
+impl<C: Color> BsdfModel<C> for ThinDielectric<C> {
+    fn eval(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> C {
+        C::ZERO
     }
 
     fn pdf(&self, _wo: Vec3, _wi: Vec3) -> f32 {
         0.0
     }
 
-    fn sample(&self, wo: Vec3, u1: f32, _u2: Vec2, _mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u1: f32, _u2: Vec2, _mode: TransportMode) -> Option<BsdfSample<C>> {
         if wo.z == 0.0 {
             return None;
         }
@@ -75,7 +84,7 @@ impl BsdfModel for ThinDielectric {
     fn has_smooth(&self) -> bool {
         false
     }
-    fn albedo(&self) -> Vec3 {
+    fn albedo(&self) -> C {
         self.specular_transmittance
     }
 }
