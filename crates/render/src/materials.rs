@@ -403,33 +403,3 @@ impl MaterialKind {
 pub fn alpha(a: f32) -> f32 {
     a.max(1e-4)
 }
-
-/// PROTOTYPE (`lanes-proto`): keeps the spectral instantiation of the generic BSDFs in the
-/// binary (nothing calls it yet), so that RGB timings are measured with both copies linked.
-#[doc(hidden)]
-pub fn spectral_bsdf_smoke(
-    kind: &MaterialKind,
-    textures: &Textures,
-    at: TexCoord,
-    mode: &crate::spectral::lanes::SpectralMode,
-    wo: Vec3,
-    u: crate::math::Vec2,
-) -> crate::spectral::SampledSpectrum {
-    use crate::bsdf::TransportMode;
-    let b = kind.bsdf_in(textures, at, mode);
-    let f = b.eval(wo, Vec3::Z, TransportMode::Radiance);
-    match b.sample(wo, u.x, u, TransportMode::Radiance) {
-        Some(s) => f + s.weight,
-        None => f,
-    }
-}
-
-#[used]
-static SPECTRAL_BSDF_SMOKE: fn(
-    &MaterialKind,
-    &Textures,
-    TexCoord,
-    &crate::spectral::lanes::SpectralMode,
-    Vec3,
-    crate::math::Vec2,
-) -> crate::spectral::SampledSpectrum = spectral_bsdf_smoke;

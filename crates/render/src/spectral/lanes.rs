@@ -1,4 +1,6 @@
-//! PROTOTYPE (issue 21, branch `lanes-proto`): the colour type made generic, Mitsuba-style.
+//! The colour type made generic, Mitsuba-style (issue 21, steps 1–2 of its plan: the BSDFs are
+//! generic; lights, media and the integrators are still RGB, so spectral mode runs only in
+//! tests yet).
 //!
 //! [`Color`] is what a path carries per lane: `Vec3` (RGB, 3 lanes) or [`SampledSpectrum`]
 //! (4 wavelengths). Code generic over it is monomorphised once per mode, so RGB mode runs the
