@@ -4,23 +4,10 @@
 //! Šidák-corrected over 3 channels, |z| < 3.59). A temperature grid renders finite, positive
 //! black-body light.
 
-use std::path::PathBuf;
-
 use build::{BuildOptions, render_desc};
-use scene::Document;
-
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("penumbra-media-emission-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn render(name: &str, xml: &str) -> render::film::Image {
-    let path = dir().join(format!("{name}.xml"));
-    std::fs::write(&path, xml).unwrap();
-    let Document::Scene(desc) = scene::load(&path, &Default::default()).unwrap() else {
-        panic!("not a scene")
-    };
+    let desc = scene::load_xml_text(name, xml).unwrap();
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let out = render_desc(&desc, &BuildOptions::default()).unwrap();
     assert_eq!(out.film.nonfinite_count(), 0);
@@ -148,11 +135,7 @@ fn emission_sampling_and_collisions_agree() {
         )
     };
     let mean = |sample: bool| {
-        let path = dir().join(format!("plume-{sample}.xml"));
-        std::fs::write(&path, xml(sample)).unwrap();
-        let Document::Scene(desc) = scene::load(&path, &Default::default()).unwrap() else {
-            panic!("not a scene")
-        };
+        let desc = scene::load_xml_text(&format!("plume-{sample}"), &xml(sample)).unwrap();
         let out = render_desc(&desc, &BuildOptions::default()).unwrap();
         assert_eq!(out.film.nonfinite_count(), 0);
         render::compare::image_mean(&out.film.develop(), &out.film.develop_stderr())

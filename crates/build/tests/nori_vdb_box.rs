@@ -10,7 +10,6 @@ use build::{BuildOptions, build};
 use render::geometry::Ray;
 use render::math::Vec3;
 use render::media::MediumKind;
-use scene::Document;
 
 fn medium(dir: &std::path::Path, file: &str) -> render::media::Heterogeneous {
     let xml = format!(
@@ -29,14 +28,7 @@ fn medium(dir: &std::path::Path, file: &str) -> render::media::Heterogeneous {
 </scene>"#,
         dir.join(file).display()
     );
-    let path = std::env::temp_dir().join(format!(
-        "penumbra-nori-box-{}-{file}.xml",
-        std::process::id()
-    ));
-    std::fs::write(&path, xml).unwrap();
-    let Document::Scene(desc) = scene::load(&path, &Default::default()).unwrap() else {
-        panic!("not a scene")
-    };
+    let desc = scene::load_xml_text(&format!("nori-box-{file}"), &xml).unwrap();
     let built = build(&desc, &BuildOptions::default()).unwrap();
     match &built.scene.media[0].kind {
         MediumKind::Heterogeneous(h) => (**h).clone(),

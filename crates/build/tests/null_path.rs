@@ -8,7 +8,6 @@
 
 use base::testing::z_of_mean_difference;
 use build::{BuildOptions, render_desc};
-use scene::Document;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 fn render(name: &str, sphere: &str) -> Vec<[f32; 3]> {
@@ -31,12 +30,7 @@ fn render(name: &str, sphere: &str) -> Vec<[f32; 3]> {
     {sphere}
 </scene>"#
     );
-    let path =
-        std::env::temp_dir().join(format!("penumbra-null-{}-{name}.xml", std::process::id()));
-    std::fs::write(&path, xml).unwrap();
-    let Document::Scene(desc) = scene::load(&path, &Default::default()).unwrap() else {
-        panic!("not a scene")
-    };
+    let desc = scene::load_xml_text(&format!("null-{name}"), &xml).unwrap();
     let out = render_desc(&desc, &BuildOptions::default()).unwrap();
     assert_eq!(out.film.nonfinite_count(), 0);
     out.film

@@ -26,3 +26,19 @@ pub struct LoadOptions {
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
     formats::load(path, opts)
 }
+
+/// A scene given as Mitsuba/Nori XML text, as tests write them: the text is saved as
+/// `<temp>/penumbra-scenes-<pid>/<name>.xml` (relative file references resolve there) and
+/// loaded. Errors (unwritable file, load error, a test file instead of a scene) come back as
+/// messages.
+pub fn load_xml_text(name: &str, xml: &str) -> std::result::Result<Box<SceneDesc>, String> {
+    let dir = std::env::temp_dir().join(format!("penumbra-scenes-{}", std::process::id()));
+    let path = dir.join(format!("{name}.xml"));
+    std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::write(&path, xml))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    match load(&path, &LoadOptions::default()).map_err(|e| e.to_string())? {
+        Document::Scene(desc) => Ok(desc),
+        Document::Test(_) => Err(format!("{}: a test file, not a scene", path.display())),
+    }
+}
