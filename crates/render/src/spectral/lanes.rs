@@ -11,9 +11,13 @@
 //! Every BSDF model is generic; where a model does fixed 3-channel or channel-mean
 //! arithmetic (lobe-selection weights), it is done on the RGB parameters in every mode.
 
-use super::rgb::{RgbAlbedoSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum};
+use super::rgb::{
+    RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum,
+};
 use super::sampled::{N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum};
 use crate::math::Vec3;
+use crate::sampling::Sampler;
+use crate::textures::{ColorRef, Params, TexCoord};
 use std::cell::Cell;
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -130,6 +134,21 @@ pub trait ColorMode {
     fn albedo(&self, rgb: Vec3) -> Self::C;
     /// An unbounded non-negative quantity (conductor η and k, scattering coefficients).
     fn unbounded(&self, rgb: Vec3) -> Self::C;
+    /// An emitted radiance (or intensity, irradiance) given as linear sRGB: in spectral mode
+    /// the unbounded spectrum times D65 of unit luminance, so that the colour comes back
+    /// under the CIE observer (Mitsuba's and pbrt-v4's RGB illuminant spectrum).
+    fn illuminant(&self, rgb: Vec3) -> Self::C;
+    /// A colour parameter read as a reflectance at `at`. Parameters declared as spectra
+    /// (see [`Params`]) are sampled as declared in spectral mode.
+    #[inline(always)]
+    fn albedo_at<P: Params + ?Sized>(&self, p: &P, r: &ColorRef, at: TexCoord) -> Self::C {
+        self.albedo(p.color(r, at))
+    }
+    /// A colour parameter read as an emitted radiance at `at` (see [`Self::illuminant`]).
+    #[inline(always)]
+    fn illuminant_at<P: Params + ?Sized>(&self, p: &P, r: &ColorRef, at: TexCoord) -> Self::C {
+        self.illuminant(p.color(r, at))
+    }
     /// A scalar index of refraction for a *smooth* interface, given as a function of
     /// wavelength (nm) and its RGB-mode value. A dispersive index in spectral mode is taken
     /// at the hero wavelength and terminates the secondary wavelengths (pbrt-v4's scheme);
@@ -149,6 +168,10 @@ impl ColorMode for RgbMode {
     }
     #[inline(always)]
     fn unbounded(&self, rgb: Vec3) -> Vec3 {
+        rgb
+    }
+    #[inline(always)]
+    fn illuminant(&self, rgb: Vec3) -> Vec3 {
         rgb
     }
     #[inline(always)]
@@ -185,6 +208,9 @@ impl ColorMode for SpectralMode<'_> {
     fn unbounded(&self, rgb: Vec3) -> SampledSpectrum {
         RgbUnboundedSpectrum::new(self.table, rgb).sample(&self.wavelengths.get())
     }
+    fn illuminant(&self, rgb: Vec3) -> SampledSpectrum {
+        RgbIlluminantSpectrum::new(self.table, rgb).sample(&self.wavelengths.get())
+    }
     fn smooth_eta(&self, dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> f32 {
         match dispersive {
             None => rgb_value,
@@ -194,6 +220,56 @@ impl ColorMode for SpectralMode<'_> {
                 self.wavelengths.set(wl);
                 ior(wl.lambda(0))
             }
+        }
+    }
+}
+
+/// A [`ColorMode`] an integrator runs a whole path in: it is set up per camera sample (the
+/// spectral mode draws the path's wavelengths from the sampler, after the camera's
+/// dimensions; RGB mode draws nothing, so its sample streams are unchanged) and turns the
+/// path's estimate into linear sRGB for the film.
+pub trait PathMode: ColorMode + Sized {
+    fn start(sampler: &mut Sampler) -> Self;
+    /// The estimate `c` of this path as linear sRGB.
+    fn to_rgb(&self, c: Self::C) -> Vec3;
+    /// The largest lane of a throughput that still counts (Russian roulette): terminated
+    /// secondary wavelengths no longer contribute and must not keep a path alive.
+    fn live_max(&self, c: Self::C) -> f32;
+}
+
+impl PathMode for RgbMode {
+    #[inline(always)]
+    fn start(_sampler: &mut Sampler) -> Self {
+        RgbMode
+    }
+    #[inline(always)]
+    fn to_rgb(&self, c: Vec3) -> Vec3 {
+        c
+    }
+    #[inline(always)]
+    fn live_max(&self, c: Vec3) -> f32 {
+        c.max_element()
+    }
+}
+
+impl PathMode for SpectralMode<'static> {
+    #[inline]
+    fn start(sampler: &mut Sampler) -> Self {
+        SpectralMode::new(
+            SampledWavelengths::sample_visible(sampler.next_1d()),
+            RgbToSpectrumTable::srgb(),
+        )
+    }
+    #[inline]
+    fn to_rgb(&self, c: SampledSpectrum) -> Vec3 {
+        c.to_srgb(&self.wavelengths.get())
+    }
+    #[inline]
+    fn live_max(&self, c: SampledSpectrum) -> f32 {
+        if self.wavelengths.get().secondary_terminated() {
+            c[0]
+        } else {
+            c.max_component()
         }
     }
 }
