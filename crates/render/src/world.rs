@@ -17,6 +17,7 @@ use crate::math::{Frame, Vec3};
 use crate::media::Medium;
 use crate::sampling::sampler::{mix64, u64_to_unit};
 use crate::shapes::{ShapeInfo, SurfaceInteraction, interaction};
+use crate::spectral::lanes::ColorMode;
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, Textures};
 
 /// The lights of one shape.
@@ -33,6 +34,8 @@ pub enum ShapeLights {
 }
 
 pub struct Scene {
+    /// The colour mode the scene was built for and its paths run in.
+    pub mode: base::RenderMode,
     pub accel: Accel,
     pub shapes: Vec<ShapeInfo>,
     pub materials: Vec<RtMaterial>,
@@ -235,6 +238,17 @@ impl Scene {
         Some((kind.bsdf(&self.textures, si.tex()), frame))
     }
 
+    /// [`Scene::bsdf_at`] in the colour mode `m`.
+    #[inline]
+    pub fn bsdf_at_in<M: ColorMode>(
+        &self,
+        si: &SurfaceInteraction,
+        m: &M,
+    ) -> Option<(Bsdf<M::C>, Frame)> {
+        let (kind, frame) = self.material(si)?.resolve(&self.textures, si)?;
+        Some((kind.bsdf_in(&self.textures, si.tex(), m), frame))
+    }
+
     /// Whether the surface at `si` is an index-matched boundary (see [`RtMaterial::is_null`]).
     #[inline]
     pub fn is_null(&self, si: &SurfaceInteraction) -> bool {
@@ -301,13 +315,20 @@ impl LightScene for Scene {
     }
 
     #[inline(always)]
+    fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+}
+
+impl Params for Scene {
+    #[inline(always)]
     fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3 {
         self.textures.color(p, at)
     }
 
     #[inline(always)]
-    fn bounds(&self) -> (Vec3, Vec3) {
-        self.bounds
+    fn float(&self, p: &FloatRef, at: TexCoord) -> f32 {
+        self.textures.float(p, at)
     }
 }
 
