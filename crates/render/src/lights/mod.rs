@@ -205,7 +205,10 @@ impl Light {
     }
 
     /// Sample a direction from `r` towards this light; the radiance in the colour of `m`.
-    #[inline]
+    /// Out of line, as the compiler chose for the RGB-only loop (see [`Scene::bsdf_at_in`]).
+    ///
+    /// [`Scene::bsdf_at_in`]: crate::world::Scene::bsdf_at_in
+    #[inline(never)]
     pub fn sample_li<M: ColorMode>(
         &self,
         scene: &impl LightScene,
