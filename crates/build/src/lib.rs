@@ -71,14 +71,23 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         ),
     })?;
 
-    let (materials, default_material) = materials::materials(&desc.materials)?;
+    // Spectral mode arrives with main's `BuildOptions::mode` (merged next).
+    let mut declared = materials::Declared::new(false, desc.textures.len());
+    let (materials, default_material) = materials::materials(&desc.materials, &mut declared)?;
     let mut media = media::media(desc)?;
     let beer = media::beer_media(&desc.materials, &mut media);
     let shapes::Shapes {
         mut shapes,
         protos,
         warning,
-    } = shapes::shapes(desc, opts, &materials, default_material, &beer)?;
+    } = shapes::shapes(
+        desc,
+        opts,
+        &materials,
+        default_material,
+        &beer,
+        &mut declared,
+    )?;
     let mut warnings: Vec<String> = warning.into_iter().collect();
     let has_motion = shapes
         .iter()
@@ -96,6 +105,8 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         .iter()
         .map(textures::load_texture)
         .collect::<Result<Vec<_>, _>>()?;
+    // Declared spectra's textures sit right after the scene's (`Declared` counts on it).
+    textures.append(&mut declared.textures);
     textures::opacity_from_alpha(desc, &mut shapes, &mut textures)?;
 
     let selection = opts.light_selection.unwrap_or(desc.light_selection);

@@ -91,7 +91,7 @@ pub(crate) fn lights(
                 intensity,
             } => Light::Point(PointLight {
                 position: (*position).into(),
-                intensity: (*intensity).into(),
+                intensity: intensity.rgb().into(),
             }),
             scene::Emitter::Spot {
                 to_world,
@@ -101,7 +101,7 @@ pub(crate) fn lights(
                 falloff,
             } => Light::Spot(SpotLight::new(
                 to_world,
-                (*intensity).into(),
+                intensity.rgb().into(),
                 *cutoff_angle,
                 *beam_width,
                 *falloff,
@@ -111,10 +111,10 @@ pub(crate) fn lights(
                 irradiance,
             } => Light::Directional(DirectionalLight {
                 direction: direction.normalize_or_zero().into(),
-                irradiance: (*irradiance).into(),
+                irradiance: irradiance.rgb().into(),
             }),
             scene::Emitter::Constant { radiance } => Light::Constant(ConstantLight {
-                radiance: (*radiance).into(),
+                radiance: radiance.rgb().into(),
             }),
             scene::Emitter::EnvMap {
                 path,

@@ -20,8 +20,8 @@ pub struct Material {
 
 /// The `(wavelength, value)` literals of one `.spd` file.
 fn read_spd(path: &Path) -> Result<Vec<(String, String)>, String> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let mut out: Vec<(String, String)> = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();
@@ -85,7 +85,9 @@ pub fn read_dir(dir: &Path) -> Result<Vec<Material>, String> {
                 .zip(&k)
                 .all(|(a, b)| a.0.parse::<f64>().unwrap() == b.0.parse::<f64>().unwrap());
         if !same {
-            return Err(format!("{name}: η and k are sampled at different wavelengths"));
+            return Err(format!(
+                "{name}: η and k are sampled at different wavelengths"
+            ));
         }
         out.push(Material {
             name,

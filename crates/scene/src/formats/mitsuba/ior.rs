@@ -140,7 +140,10 @@ mod tests {
             for (got, want) in [(e, eta), (kk, k)] {
                 let want = Vec3::from_array(*want);
                 let rel = ((got - want).abs() / want).max_element();
-                assert!(rel < 2e-7, "{name}: {got} from the spectra, {want} in the table");
+                assert!(
+                    rel < 2e-7,
+                    "{name}: {got} from the spectra, {want} in the table"
+                );
             }
         }
         // Every name Mitsuba ships has both spectra on one wavelength grid.
@@ -152,6 +155,9 @@ mod tests {
         }
         // Names outside the RGB table convert too (tungsten: grey-ish, η > 1).
         let (eta, k) = conductor("W").unwrap();
-        assert!(eta.min_element() > 1.0 && k.min_element() > 1.0, "{eta} {k}");
+        assert!(
+            eta.min_element() > 1.0 && k.min_element() > 1.0,
+            "{eta} {k}"
+        );
     }
 }
