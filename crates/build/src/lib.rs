@@ -52,6 +52,8 @@ pub struct BuildOptions {
     /// Copy shared meshes into world space instead of instancing them (see [`build`]): the
     /// reference the instanced build is tested against.
     pub flatten_instances: bool,
+    /// RGB or spectral rendering: the scene is built for one of them.
+    pub mode: base::RenderMode,
 }
 
 /// What [`build`] makes: the scene and the integrator to render it with.
@@ -71,8 +73,8 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         ),
     })?;
 
-    // Spectral mode arrives with main's `BuildOptions::mode` (merged next).
-    let mut declared = materials::Declared::new(false, desc.textures.len());
+    let spectral = opts.mode == base::RenderMode::Spectral;
+    let mut declared = materials::Declared::new(spectral, desc.textures.len());
     let (materials, default_material) = materials::materials(&desc.materials, &mut declared)?;
     let mut media = media::media(desc)?;
     let beer = media::beer_media(&desc.materials, &mut media);
@@ -111,7 +113,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
 
     let selection = opts.light_selection.unwrap_or(desc.light_selection);
     let split = selection != LightSelection::Uniform;
-    let (lights, shape_lights) = lights::lights(desc, &shapes, split)?;
+    let (lights, shape_lights) = lights::lights(desc, &shapes, split, &declared)?;
     let infinite_lights = (0..lights.len() as u32)
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();
@@ -229,6 +231,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         has_cutouts,
         has_nulls,
         has_motion,
+        mode: opts.mode,
     };
     scene.light_sampler =
         LightSampler::new(selection, &scene.lights, &scene.infinite_lights, &scene);

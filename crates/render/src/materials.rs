@@ -184,7 +184,7 @@ impl RtMaterial {
     /// The scattering model at `si` and the shading frame it lives in (perturbed by normal
     /// and bump maps, flipped on the back side of a two-sided material); `None` when the
     /// surface does not scatter.
-    #[inline]
+    #[inline(always)]
     pub fn resolve(
         &self,
         textures: &Textures,
@@ -285,6 +285,7 @@ impl MaterialKind {
     /// mode, also the unnormalised CENG795 Phong kd/ks), conductor η and k as unbounded
     /// spectra; IORs stay scalar. Lobe-selection weights and other fixed 3-channel or
     /// channel-mean arithmetic are computed from the RGB values in every mode.
+    #[inline(always)]
     pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
             MaterialKind::Diffuse { reflectance } => {
