@@ -102,7 +102,7 @@ fn declared_spectra_have_mitsubas_spectral_values() {
     let area = scene.shapes[0].emission.expect("an emitter");
     close(
         m.illuminant_at(&scene, &area, tex),
-        [72.197_395, 260.267_67, 517.502_07, 750.596_4],
+        [72.197_395, 260.267_67, 517.502, 750.596_4],
         "blackbody",
     );
 

@@ -136,10 +136,13 @@ impl SpectrumDesc {
     }
 }
 
+/// The nodes of a tabulated spectrum: wavelengths (nm) and values.
+pub type SpectrumTable<'a> = (Cow<'a, [f64]>, Cow<'a, [f64]>);
+
 impl SpectrumKind {
     /// The nodes (wavelengths in nm, values) of a tabulated kind: lists and files, D65's 5 nm
     /// table, a measured conductor's η or k; `None` for uniform and black-body spectra.
-    pub fn table(&self) -> Option<(Cow<'_, [f64]>, Cow<'_, [f64]>)> {
+    pub fn table(&self) -> Option<SpectrumTable<'_>> {
         match self {
             SpectrumKind::Tabulated {
                 wavelengths,

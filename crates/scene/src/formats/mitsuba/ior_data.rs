@@ -10,6 +10,9 @@
 //! Wavelengths in nm, increasing; η and k are linear in between and (as Mitsuba's
 //! `irregular` spectrum) zero outside the first and last wavelength.
 
+// Measured data: a 3.14 here is a measurement, not π.
+#![allow(clippy::approx_constant)]
+
 /// One measured conductor.
 #[derive(Clone, Copy, Debug)]
 pub struct MeasuredConductor {
