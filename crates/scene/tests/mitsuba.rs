@@ -522,10 +522,11 @@ fn uniform_spectra() {
     let consts: Vec<Vec3> = s
         .materials
         .iter()
-        .map(|m| match m.material {
+        .map(|m| match &m.material {
+            // Declared spectra keep their RGB value beside the declaration.
             Material::Diffuse {
-                reflectance: ColorParam::Const(c),
-            } => c,
+                reflectance: ColorParam::Spectrum(s),
+            } => s.rgb,
             _ => panic!(),
         })
         .collect();
