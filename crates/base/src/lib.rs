@@ -7,6 +7,7 @@
 
 pub mod cie_data;
 pub mod dispersion;
+pub mod spectrum;
 
 use std::path::Path;
 

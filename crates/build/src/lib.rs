@@ -73,14 +73,23 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         ),
     })?;
 
-    let (materials, default_material) = materials::materials(&desc.materials)?;
+    let spectral = opts.mode == base::RenderMode::Spectral;
+    let mut declared = materials::Declared::new(spectral, desc.textures.len());
+    let (materials, default_material) = materials::materials(&desc.materials, &mut declared)?;
     let mut media = media::media(desc)?;
     let beer = media::beer_media(&desc.materials, &mut media);
     let shapes::Shapes {
         mut shapes,
         protos,
         warning,
-    } = shapes::shapes(desc, opts, &materials, default_material, &beer)?;
+    } = shapes::shapes(
+        desc,
+        opts,
+        &materials,
+        default_material,
+        &beer,
+        &mut declared,
+    )?;
     let mut warnings: Vec<String> = warning.into_iter().collect();
     let has_motion = shapes
         .iter()
@@ -98,11 +107,13 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         .iter()
         .map(textures::load_texture)
         .collect::<Result<Vec<_>, _>>()?;
+    // Declared spectra's textures sit right after the scene's (`Declared` counts on it).
+    textures.append(&mut declared.textures);
     textures::opacity_from_alpha(desc, &mut shapes, &mut textures)?;
 
     let selection = opts.light_selection.unwrap_or(desc.light_selection);
     let split = selection != LightSelection::Uniform;
-    let (lights, shape_lights) = lights::lights(desc, &shapes, split)?;
+    let (lights, shape_lights) = lights::lights(desc, &shapes, split, &declared)?;
     let infinite_lights = (0..lights.len() as u32)
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();

@@ -13,6 +13,7 @@ use render::world::ShapeLights;
 use scene::SceneDesc;
 
 use crate::BuildError;
+use crate::materials::Declared;
 
 /// Every emitter of the scene: area lights (one per emitting shape, or with `split` one per
 /// triangle of an emitting mesh) first, then the others.
@@ -20,7 +21,10 @@ pub(crate) fn lights(
     desc: &SceneDesc,
     shapes: &[ShapeInfo],
     split: bool,
+    declared: &Declared,
 ) -> Result<(Vec<Light>, Vec<ShapeLights>), BuildError> {
+    // In spectral mode, the spectrum a light's constant was declared as.
+    let spectrum = |v: &scene::ColorValue| declared.value(v).map(Arc::new);
     let mut lights = Vec::new();
     let mut shape_light = vec![ShapeLights::None; shapes.len()];
     for (i, (s, d)) in shapes.iter().zip(&desc.shapes).enumerate() {
@@ -91,7 +95,8 @@ pub(crate) fn lights(
                 intensity,
             } => Light::Point(PointLight {
                 position: (*position).into(),
-                intensity: (*intensity).into(),
+                intensity: intensity.rgb().into(),
+                spectrum: spectrum(intensity),
             }),
             scene::Emitter::Spot {
                 to_world,
@@ -99,22 +104,27 @@ pub(crate) fn lights(
                 cutoff_angle,
                 beam_width,
                 falloff,
-            } => Light::Spot(SpotLight::new(
-                to_world,
-                (*intensity).into(),
-                *cutoff_angle,
-                *beam_width,
-                *falloff,
-            )),
+            } => Light::Spot(SpotLight {
+                spectrum: spectrum(intensity),
+                ..SpotLight::new(
+                    to_world,
+                    intensity.rgb().into(),
+                    *cutoff_angle,
+                    *beam_width,
+                    *falloff,
+                )
+            }),
             scene::Emitter::Directional {
                 direction,
                 irradiance,
             } => Light::Directional(DirectionalLight {
                 direction: direction.normalize_or_zero().into(),
-                irradiance: (*irradiance).into(),
+                irradiance: irradiance.rgb().into(),
+                spectrum: spectrum(irradiance),
             }),
             scene::Emitter::Constant { radiance } => Light::Constant(ConstantLight {
-                radiance: (*radiance).into(),
+                radiance: radiance.rgb().into(),
+                spectrum: spectrum(radiance),
             }),
             scene::Emitter::EnvMap {
                 path,

@@ -5,22 +5,29 @@
 use std::sync::Arc;
 
 use render::bsdf::{IdealLobe, Microfacet, MicrofacetType, NoriMicrofacet, RoughPlasticTables};
-use render::materials::{CourseLobe, Layer, MaterialKind, Perturb, RtMaterial, Then, alpha};
+use render::materials::{
+    ConductorSpectra, CourseLobe, Layer, MaterialKind, Perturb, RtMaterial, Then, alpha,
+};
 use render::math::PVec3;
-use render::textures::{ColorRef, FloatRef, TexRef};
+use render::spectral::DeclaredSpectrum;
+use render::textures::{ColorRef, FloatRef, TexRef, Texture};
 use scene::{
-    ColorParam, CourseIdeal, CourseIdealKind, FloatParam, Loc, Material, MaterialDesc, MaterialId,
-    Rgb,
+    ColorParam, ColorValue, CourseIdeal, CourseIdealKind, FloatParam, Loc, Material, MaterialDesc,
+    MaterialId, Rgb, SpectrumDesc, SpectrumKind,
 };
 
 use crate::BuildError;
 
 /// The runtime materials of `materials`, in order, followed by Mitsuba's default diffuse
 /// (for shapes without a material) whose index is returned too.
-pub(crate) fn materials(materials: &[MaterialDesc]) -> Result<(Vec<RtMaterial>, u32), BuildError> {
+pub(crate) fn materials(
+    materials: &[MaterialDesc],
+    declared: &mut Declared,
+) -> Result<(Vec<RtMaterial>, u32), BuildError> {
     let mut resolver = MaterialResolver {
         materials,
         kinds: vec![None; materials.len()],
+        declared,
     };
     let mut list = (0..materials.len() as u32)
         .map(|id| resolver.material(MaterialId(id)))
@@ -67,11 +74,87 @@ pub(crate) fn beer_absorption(
     None
 }
 
-pub(crate) fn color_ref(p: &ColorParam) -> ColorRef {
-    match p {
-        ColorParam::Const(c) => TexRef::Const((*c).into()),
-        ColorParam::Texture(t) => TexRef::Texture(t.0),
+/// Declared spectra on their way to the runtime scene. In RGB mode there are none: a
+/// parameter declared as a spectrum is the constant of its RGB value, exactly as before
+/// spectra were kept. In spectral mode each becomes a [`Texture::Spectrum`], appended after
+/// the scene's own textures, which [`render::spectral::lanes::SpectralMode`] samples as
+/// declared; conductor η/k and light constants carry theirs beside their RGB value.
+pub(crate) struct Declared {
+    spectral: bool,
+    /// Index of the first texture made here (the scene's own texture count).
+    first: u32,
+    pub textures: Vec<Texture>,
+}
+
+impl Declared {
+    pub fn new(spectral: bool, scene_textures: usize) -> Declared {
+        Declared {
+            spectral,
+            first: scene_textures as u32,
+            textures: Vec::new(),
+        }
     }
+
+    /// RGB mode, for callers outside a scene build (Nori's BSDF tests).
+    pub fn rgb() -> Declared {
+        Declared::new(false, 0)
+    }
+
+    /// A colour parameter as a runtime reference.
+    pub fn color_ref(&mut self, p: &ColorParam) -> ColorRef {
+        match p {
+            ColorParam::Const(c) => TexRef::Const((*c).into()),
+            ColorParam::Texture(t) => TexRef::Texture(t.0),
+            ColorParam::Spectrum(s) => match self.spectrum(s) {
+                Some(spectrum) => {
+                    self.textures.push(Texture::Spectrum {
+                        rgb: s.rgb.into(),
+                        spectrum: Arc::new(spectrum),
+                    });
+                    TexRef::Texture(self.first + self.textures.len() as u32 - 1)
+                }
+                None => TexRef::Const(s.rgb.into()),
+            },
+        }
+    }
+
+    /// The runtime spectrum of a constant colour, in spectral mode when it was declared as one.
+    pub fn value(&self, v: &ColorValue) -> Option<DeclaredSpectrum> {
+        self.spectrum(v.spectrum()?)
+    }
+
+    fn spectrum(&self, s: &SpectrumDesc) -> Option<DeclaredSpectrum> {
+        self.spectral.then(|| declared_spectrum(s)).flatten()
+    }
+
+    /// A conductor's declared η and k (spectral mode, when either was declared).
+    fn conductor(&self, eta: &ColorValue, k: &ColorValue) -> Option<Arc<ConductorSpectra>> {
+        let s = ConductorSpectra {
+            eta: self.value(eta),
+            k: self.value(k),
+        };
+        (s.eta.is_some() || s.k.is_some()).then(|| Arc::new(s))
+    }
+}
+
+/// The runtime form of a declared spectrum, in Mitsuba 3's spectral units (see
+/// `render::spectral::declared`): tables (lists, files, D65's 5 nm table, measured η/k) with
+/// the scale applied, constants, black bodies. `None` for a table the model cannot give
+/// (an unknown conductor name: the loader refuses those).
+pub fn declared_spectrum(s: &SpectrumDesc) -> Option<DeclaredSpectrum> {
+    Some(match &s.kind {
+        SpectrumKind::Uniform(v) => DeclaredSpectrum::Constant((v * s.scale) as f32),
+        SpectrumKind::Blackbody { temperature } => DeclaredSpectrum::Blackbody {
+            temperature: *temperature,
+            scale: s.scale,
+        },
+        kind => {
+            let (w, v) = kind.table()?;
+            let w: Vec<f32> = w.iter().map(|&w| w as f32).collect();
+            let v: Vec<f32> = v.iter().map(|&v| (v * s.scale) as f32).collect();
+            DeclaredSpectrum::tabulated(&w, &v)?
+        }
+    })
 }
 
 pub(crate) fn float_ref(p: &FloatParam) -> FloatRef {
@@ -90,6 +173,7 @@ const MAX_SIDE_NESTING: usize = 8;
 struct MaterialResolver<'a> {
     materials: &'a [MaterialDesc],
     kinds: Vec<Option<Option<MaterialKind>>>,
+    declared: &'a mut Declared,
 }
 
 impl MaterialResolver<'_> {
@@ -99,7 +183,7 @@ impl MaterialResolver<'_> {
             surface: self.layer(id, &mut Vec::new(), 0, &m.loc)?,
             ambient: m.ambient.into(),
             unlit: match &m.material {
-                Material::Unlit { color } => Some(color_ref(color)),
+                Material::Unlit { color } => Some(self.declared.color_ref(color)),
                 _ => None,
             },
         })
@@ -180,29 +264,38 @@ impl MaterialResolver<'_> {
     fn kind(&mut self, id: MaterialId) -> Option<MaterialKind> {
         let slot = &mut self.kinds[id.0 as usize];
         if slot.is_none() {
-            *slot = Some(material_kind(&self.materials[id.0 as usize].material));
+            *slot = Some(material_kind_in(
+                &self.materials[id.0 as usize].material,
+                self.declared,
+            ));
         }
         slot.clone().flatten()
     }
 }
 
-/// The runtime model of a leaf material (`None`: it does not scatter).
+/// The runtime model of a leaf material (`None`: it does not scatter), in RGB mode.
 pub fn material_kind(m: &Material) -> Option<MaterialKind> {
+    material_kind_in(m, &mut Declared::rgb())
+}
+
+/// The runtime model of a leaf material, its declared spectra kept by `declared`.
+fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKind> {
     Some(match m {
         Material::Diffuse { reflectance } => MaterialKind::Diffuse {
-            reflectance: color_ref(reflectance),
+            reflectance: declared.color_ref(reflectance),
         },
         Material::Conductor {
             eta,
             k,
             specular_reflectance,
         } => MaterialKind::Conductor {
-            eta: (*eta).into(),
-            k: (*k).into(),
-            specular: color_ref(specular_reflectance),
+            eta: eta.rgb().into(),
+            k: k.rgb().into(),
+            specular: declared.color_ref(specular_reflectance),
+            spectra: declared.conductor(eta, k),
         },
         Material::Mirror { reflectance } => MaterialKind::Mirror {
-            reflectance: color_ref(reflectance),
+            reflectance: declared.color_ref(reflectance),
         },
         Material::RoughConductor {
             distribution,
@@ -215,9 +308,10 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
             distribution: MicrofacetType::from(*distribution),
             alpha_u: float_ref(alpha_u),
             alpha_v: float_ref(alpha_v),
-            eta: (*eta).into(),
-            k: (*k).into(),
-            specular: color_ref(specular_reflectance),
+            eta: eta.rgb().into(),
+            k: k.rgb().into(),
+            specular: declared.color_ref(specular_reflectance),
+            spectra: declared.conductor(eta, k),
         },
         Material::Dielectric {
             int_ior,
@@ -228,8 +322,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
         } => MaterialKind::Dielectric {
             int_ior: *int_ior,
             ext_ior: *ext_ior,
-            reflectance: color_ref(specular_reflectance),
-            transmittance: color_ref(specular_transmittance),
+            reflectance: declared.color_ref(specular_reflectance),
+            transmittance: declared.color_ref(specular_transmittance),
         },
         Material::ThinDielectric {
             int_ior,
@@ -239,8 +333,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
         } => MaterialKind::ThinDielectric {
             int_ior: *int_ior,
             ext_ior: *ext_ior,
-            reflectance: color_ref(specular_reflectance),
-            transmittance: color_ref(specular_transmittance),
+            reflectance: declared.color_ref(specular_reflectance),
+            transmittance: declared.color_ref(specular_transmittance),
         },
         Material::RoughDielectric {
             distribution,
@@ -256,8 +350,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
             alpha_v: float_ref(alpha_v),
             int_ior: *int_ior,
             ext_ior: *ext_ior,
-            reflectance: color_ref(specular_reflectance),
-            transmittance: color_ref(specular_transmittance),
+            reflectance: declared.color_ref(specular_reflectance),
+            transmittance: declared.color_ref(specular_transmittance),
         },
         Material::Plastic {
             diffuse_reflectance,
@@ -266,8 +360,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
             ext_ior,
             nonlinear,
         } => MaterialKind::Plastic {
-            diffuse: color_ref(diffuse_reflectance),
-            specular: color_ref(specular_reflectance),
+            diffuse: declared.color_ref(diffuse_reflectance),
+            specular: declared.color_ref(specular_reflectance),
             int_ior: *int_ior,
             ext_ior: *ext_ior,
             nonlinear: *nonlinear,
@@ -290,8 +384,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
                     Microfacet::isotropic(kind, *a),
                     eta,
                 )),
-                diffuse: color_ref(diffuse_reflectance),
-                specular: color_ref(specular_reflectance),
+                diffuse: declared.color_ref(diffuse_reflectance),
+                specular: declared.color_ref(specular_reflectance),
                 nonlinear: *nonlinear,
             }
         }
@@ -321,8 +415,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
             normalized: *normalized,
             kd_fresnel: *kd_fresnel,
             exponent: *exponent,
-            diffuse: color_ref(diffuse),
-            specular: color_ref(specular),
+            diffuse: declared.color_ref(diffuse),
+            specular: declared.color_ref(specular),
             ior: *ior,
             absorption: *absorption,
             ideal: ideal.map(|i| CourseLobe {
@@ -363,8 +457,8 @@ mod tests {
             distribution: scene::MicrofacetDistribution::Ggx,
             alpha_u: FloatParam::Const(alpha_u),
             alpha_v: FloatParam::Const(alpha_v),
-            eta: PVec3::splat(1.5),
-            k: PVec3::splat(0.0),
+            eta: PVec3::splat(1.5).into(),
+            k: PVec3::splat(0.0).into(),
             specular_reflectance: ColorParam::constant(1.0),
         }
     }
@@ -373,6 +467,7 @@ mod tests {
         MaterialResolver {
             materials: mats,
             kinds: vec![None; mats.len()],
+            declared: &mut Declared::rgb(),
         }
         .material(MaterialId(id))
     }

@@ -10,7 +10,7 @@ use render::shapes::{Ellipsoid, Instance, Reads, ShapeGeom, ShapeInfo};
 
 use scene::{Material, SceneDesc, Shape, TriMesh};
 
-use crate::materials::{color_ref, float_ref};
+use crate::materials::{Declared, float_ref};
 use crate::{BuildError, BuildOptions};
 
 /// The runtime shapes of a scene, the instancing prototypes their accelerator needs, and a
@@ -31,6 +31,7 @@ pub(crate) fn shapes(
     materials: &[RtMaterial],
     default_material: u32,
     beer: &[Option<u32>],
+    declared: &mut Declared,
 ) -> Result<Shapes, BuildError> {
     // Instancing: a mesh shared (same `Arc`) by two or more shapes that do not emit is a
     // prototype, built once in its object space; each of its shapes is an instance. A mesh
@@ -155,7 +156,7 @@ pub(crate) fn shapes(
         shapes.push(ShapeInfo {
             geom,
             material,
-            emission: s.emission.as_ref().map(|e| color_ref(&e.radiance)),
+            emission: s.emission.as_ref().map(|e| declared.color_ref(&e.radiance)),
             flip_normals: s.flip_normals,
             // Emitters stay whole: light sampling picks points on the entire surface.
             opacity: s.material.filter(|_| s.emission.is_none()).and_then(|m| {

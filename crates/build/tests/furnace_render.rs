@@ -47,7 +47,7 @@ fn furnace_with_fov(material: Material, fov: f32) -> (f64, f64) {
     desc.emitters.push(EmitterDesc {
         medium: None,
         emitter: Emitter::Constant {
-            radiance: Vec3::ONE,
+            radiance: Vec3::ONE.into(),
         },
         loc: Default::default(),
     });

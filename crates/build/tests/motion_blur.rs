@@ -70,7 +70,7 @@ fn scene_desc(w: u32, h: u32, spp: u32) -> SceneDesc {
         emitters: vec![EmitterDesc {
             medium: None,
             emitter: Emitter::Constant {
-                radiance: Vec3::ONE,
+                radiance: Vec3::ONE.into(),
             },
             loc: Default::default(),
         }],

@@ -158,6 +158,24 @@ fn mitsuba_cbox_spectral() {
     );
 }
 
+/// Materials whose appearance depends on the spectrum, against Mitsuba's `llvm_ad_spectral`:
+/// a 3000 K black-body area light and a `d65` sky (declared spectra, sampled as declared),
+/// measured Cu and Au conductors, a narrow-band tabulated reflectance, an upsampled RGB
+/// floor and BK7 glass (Mitsuba's constant 1.5046).
+#[test]
+fn spectral_materials() {
+    let Some(shared) = shared() else { return };
+    let scene = shared.join("references/scenes/spectral-materials.xml");
+    check_file(
+        "spectral-materials",
+        &scene,
+        &[],
+        0.216,
+        SPP,
+        RenderMode::Spectral,
+    );
+}
+
 #[test]
 fn cbox_specular() {
     check("cbox-specular", "cbox-specular.xml", &[], 0.0102);

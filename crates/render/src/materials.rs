@@ -19,6 +19,7 @@ use crate::bsdf::{
 };
 use crate::math::{Frame, Vec3};
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::{ColorMode, RgbMode};
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, TexRef, Textures};
 
@@ -66,6 +67,8 @@ pub enum MaterialKind {
         eta: Vec3,
         k: Vec3,
         specular: ColorRef,
+        /// η and k as declared spectra (spectral mode only; `None` in RGB mode).
+        spectra: Option<Arc<ConductorSpectra>>,
     },
     Mirror {
         reflectance: ColorRef,
@@ -77,6 +80,8 @@ pub enum MaterialKind {
         eta: Vec3,
         k: Vec3,
         specular: ColorRef,
+        /// η and k as declared spectra (spectral mode only; `None` in RGB mode).
+        spectra: Option<Arc<ConductorSpectra>>,
     },
     Dielectric {
         int_ior: f32,
@@ -130,6 +135,27 @@ pub enum MaterialKind {
         absorption: f32,
         ideal: Option<CourseLobe>,
     },
+}
+
+/// A conductor's η and k as the scene declared them, for spectral mode: measured spectra of a
+/// named conductor, or lists; `None` for one declared as RGB (upsampled, as any RGB value).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConductorSpectra {
+    pub eta: Option<DeclaredSpectrum>,
+    pub k: Option<DeclaredSpectrum>,
+}
+
+impl ConductorSpectra {
+    /// The declared η and k of `s` (none when `s` is `None`).
+    #[inline(always)]
+    fn get(
+        s: &Option<Arc<ConductorSpectra>>,
+    ) -> (Option<&DeclaredSpectrum>, Option<&DeclaredSpectrum>) {
+        match s {
+            Some(s) => (s.eta.as_ref(), s.k.as_ref()),
+            None => (None, None),
+        }
+    }
 }
 
 /// The ideal lobe of a course material.
@@ -263,15 +289,23 @@ impl MaterialKind {
     pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
             MaterialKind::Diffuse { reflectance } => {
-                Bsdf::Diffuse(Diffuse::new(m.albedo(p.color(reflectance, at))))
+                Bsdf::Diffuse(Diffuse::new(m.albedo_at(p, reflectance, at)))
             }
-            MaterialKind::Conductor { eta, k, specular } => Bsdf::Conductor(Conductor::new(
-                m.unbounded(*eta),
-                m.unbounded(*k),
-                m.albedo(p.color(specular, at)),
-            )),
+            MaterialKind::Conductor {
+                eta,
+                k,
+                specular,
+                spectra,
+            } => {
+                let (eta_s, k_s) = ConductorSpectra::get(spectra);
+                Bsdf::Conductor(Conductor::new(
+                    m.unbounded_declared(*eta, eta_s),
+                    m.unbounded_declared(*k, k_s),
+                    m.albedo_at(p, specular, at),
+                ))
+            }
             MaterialKind::Mirror { reflectance } => {
-                Bsdf::Conductor(Conductor::mirror(m.albedo(p.color(reflectance, at))))
+                Bsdf::Conductor(Conductor::mirror(m.albedo_at(p, reflectance, at)))
             }
             MaterialKind::RoughConductor {
                 distribution,
@@ -280,14 +314,18 @@ impl MaterialKind {
                 eta,
                 k,
                 specular,
-            } => Bsdf::RoughConductor(RoughConductor::new(
-                *distribution,
-                alpha(p.float(alpha_u, at)),
-                alpha(p.float(alpha_v, at)),
-                m.unbounded(*eta),
-                m.unbounded(*k),
-                m.albedo(p.color(specular, at)),
-            )),
+                spectra,
+            } => {
+                let (eta_s, k_s) = ConductorSpectra::get(spectra);
+                Bsdf::RoughConductor(RoughConductor::new(
+                    *distribution,
+                    alpha(p.float(alpha_u, at)),
+                    alpha(p.float(alpha_v, at)),
+                    m.unbounded_declared(*eta, eta_s),
+                    m.unbounded_declared(*k, k_s),
+                    m.albedo_at(p, specular, at),
+                ))
+            }
             MaterialKind::Dielectric {
                 int_ior,
                 ext_ior,
@@ -295,8 +333,8 @@ impl MaterialKind {
                 transmittance,
             } => {
                 let mut d = Dielectric::with_lanes(*int_ior, *ext_ior);
-                d.specular_reflectance = m.albedo(p.color(reflectance, at));
-                d.specular_transmittance = m.albedo(p.color(transmittance, at));
+                d.specular_reflectance = m.albedo_at(p, reflectance, at);
+                d.specular_transmittance = m.albedo_at(p, transmittance, at);
                 Bsdf::Dielectric(d)
             }
             MaterialKind::ThinDielectric {
@@ -306,8 +344,8 @@ impl MaterialKind {
                 transmittance,
             } => {
                 let mut d = ThinDielectric::with_lanes(*int_ior, *ext_ior);
-                d.specular_reflectance = m.albedo(p.color(reflectance, at));
-                d.specular_transmittance = m.albedo(p.color(transmittance, at));
+                d.specular_reflectance = m.albedo_at(p, reflectance, at);
+                d.specular_transmittance = m.albedo_at(p, transmittance, at);
                 Bsdf::ThinDielectric(d)
             }
             MaterialKind::RoughDielectric {
@@ -326,8 +364,8 @@ impl MaterialKind {
                     *int_ior,
                     *ext_ior,
                 );
-                d.specular_reflectance = m.albedo(p.color(reflectance, at));
-                d.specular_transmittance = m.albedo(p.color(transmittance, at));
+                d.specular_reflectance = m.albedo_at(p, reflectance, at);
+                d.specular_transmittance = m.albedo_at(p, transmittance, at);
                 Bsdf::RoughDielectric(d)
             }
             MaterialKind::Plastic {
@@ -339,8 +377,8 @@ impl MaterialKind {
             } => {
                 let (d, s) = (p.color(diffuse, at), p.color(specular, at));
                 Bsdf::Plastic(Plastic::with_weight(
-                    m.albedo(d),
-                    m.albedo(s),
+                    m.albedo_read(p, diffuse, d),
+                    m.albedo_read(p, specular, s),
                     *int_ior,
                     *ext_ior,
                     *nonlinear,
@@ -360,8 +398,8 @@ impl MaterialKind {
                     *microfacet,
                     *eta,
                     tables.clone(),
-                    m.albedo(d),
-                    m.albedo(s),
+                    m.albedo_read(p, diffuse, d),
+                    m.albedo_read(p, specular, s),
                     *nonlinear,
                     rgb_sampling_weight(d, s),
                 ))

@@ -12,6 +12,7 @@
 
 use std::sync::Arc;
 
+use base::spectrum::DeclaredSpectrum;
 use base::{NoiseConversion, TextureFilter, WrapMode};
 
 use crate::film::Image;
@@ -47,6 +48,12 @@ pub type FloatRef = TexRef<f32>;
 pub trait Params {
     fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3;
     fn float(&self, p: &FloatRef, at: TexCoord) -> f32;
+    /// The spectrum `p` was declared as, if it was one ([`Texture::Spectrum`]): what spectral
+    /// mode samples instead of upsampling [`Self::color`]. RGB mode never asks.
+    #[inline(always)]
+    fn spectrum(&self, _p: &ColorRef) -> Option<&DeclaredSpectrum> {
+        None
+    }
 }
 
 /// The scene's textures, indexed by [`TexRef::Texture`].
@@ -86,6 +93,17 @@ impl Params for Textures {
         match p {
             TexRef::Const(c) => *c,
             TexRef::Texture(t) => self.eval(*t, at).x,
+        }
+    }
+
+    #[inline]
+    fn spectrum(&self, p: &ColorRef) -> Option<&DeclaredSpectrum> {
+        match p {
+            TexRef::Texture(t) => match &self.0[*t as usize] {
+                Texture::Spectrum { spectrum, .. } => Some(spectrum),
+                _ => None,
+            },
+            TexRef::Const(_) => None,
         }
     }
 }
@@ -137,6 +155,13 @@ pub enum Texture {
         texture: Box<Texture>,
         scale: f32,
         offset: Vec3,
+    },
+    /// A constant the scene declared as a spectrum (made by `build` in spectral mode only):
+    /// `rgb` wherever an RGB value is read (lobe-selection weights, light power), the
+    /// spectrum where spectral mode converts the parameter ([`Params::spectrum`]).
+    Spectrum {
+        rgb: Vec3,
+        spectrum: Arc<DeclaredSpectrum>,
     },
 }
 
@@ -287,6 +312,7 @@ impl Texture {
                 scale,
                 offset,
             } => texture.eval(at) * *scale + *offset,
+            Texture::Spectrum { rgb, .. } => *rgb,
         }
     }
 
@@ -364,6 +390,7 @@ impl Texture {
                 scale,
                 offset,
             } => texture.mean() * *scale + *offset,
+            Texture::Spectrum { rgb, .. } => *rgb,
         }
     }
 }

@@ -4,6 +4,7 @@
 //! integrators, lights and materials read it and never the builder.
 
 use base::SamplerDesc;
+use base::spectrum::DeclaredSpectrum;
 
 use crate::accel::{Accel, Hit};
 use crate::bsdf::Bsdf;
@@ -330,6 +331,11 @@ impl Params for Scene {
     #[inline(always)]
     fn float(&self, p: &FloatRef, at: TexCoord) -> f32 {
         self.textures.float(p, at)
+    }
+
+    #[inline(always)]
+    fn spectrum(&self, p: &ColorRef) -> Option<&DeclaredSpectrum> {
+        self.textures.spectrum(p)
     }
 }
 

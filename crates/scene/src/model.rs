@@ -7,6 +7,7 @@
 //! - shapes keep their object-space geometry plus a `to_world` matrix;
 //! - every element keeps the source location it came from (`Loc`) for warnings and errors.
 
+use std::borrow::Cow;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -31,17 +32,158 @@ pub struct MediumId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct TextureId(pub u32);
 
-/// A colour-valued parameter: a constant or a texture.
+/// A colour-valued parameter: a constant, a texture, or a spectrum the scene declared.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ColorParam {
     Const(Rgb),
     Texture(TextureId),
+    /// A constant declared as a spectrum (Mitsuba's `<spectrum>`): RGB mode renders its `rgb`,
+    /// exactly as [`ColorParam::Const`] of it; spectral mode samples the declaration.
+    Spectrum(Arc<SpectrumDesc>),
 }
 
 impl ColorParam {
     pub fn constant(v: f32) -> Self {
         ColorParam::Const(Rgb::splat(v))
     }
+
+    /// The constant RGB value (also of a declared spectrum); `None` for a texture.
+    pub fn const_rgb(&self) -> Option<Rgb> {
+        match self {
+            ColorParam::Const(c) => Some(*c),
+            ColorParam::Spectrum(s) => Some(s.rgb),
+            ColorParam::Texture(_) => None,
+        }
+    }
+}
+
+impl From<ColorValue> for ColorParam {
+    fn from(v: ColorValue) -> Self {
+        match v {
+            ColorValue::Rgb(c) => ColorParam::Const(c),
+            ColorValue::Spectrum(s) => ColorParam::Spectrum(s),
+        }
+    }
+}
+
+/// A constant colour (no texture) that a format may have declared as a spectrum: emitter
+/// radiance, intensity and irradiance, conductor η and k.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColorValue {
+    Rgb(Rgb),
+    /// RGB mode renders its `rgb`; spectral mode samples the declaration.
+    Spectrum(Arc<SpectrumDesc>),
+}
+
+impl ColorValue {
+    /// The value RGB mode renders with.
+    pub fn rgb(&self) -> Rgb {
+        match self {
+            ColorValue::Rgb(c) => *c,
+            ColorValue::Spectrum(s) => s.rgb,
+        }
+    }
+
+    /// The declared spectrum, if there is one.
+    pub fn spectrum(&self) -> Option<&SpectrumDesc> {
+        match self {
+            ColorValue::Rgb(_) => None,
+            ColorValue::Spectrum(s) => Some(s),
+        }
+    }
+
+    /// The value divided by `d` (a spectrum's RGB and its `scale` both).
+    pub fn divided(&self, d: f32) -> ColorValue {
+        match self {
+            ColorValue::Rgb(c) => ColorValue::Rgb(*c / d),
+            ColorValue::Spectrum(s) => ColorValue::Spectrum(Arc::new(SpectrumDesc {
+                rgb: s.rgb / d,
+                kind: s.kind.clone(),
+                scale: s.scale / d as f64,
+            })),
+        }
+    }
+}
+
+impl From<Rgb> for ColorValue {
+    fn from(c: Rgb) -> Self {
+        ColorValue::Rgb(c)
+    }
+}
+
+/// A spectrum as a scene declared it, with the linear sRGB value the loader converted it to
+/// for RGB mode (for Mitsuba: as Mitsuba 3's RGB variants convert it, `crate::spectra`).
+/// Its value at λ is `scale`·`kind`(λ), in the units Mitsuba 3's spectral variants use.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectrumDesc {
+    pub rgb: Rgb,
+    pub kind: SpectrumKind,
+    pub scale: f64,
+}
+
+impl SpectrumDesc {
+    /// The value at `lambda` nm (`scale`·`kind`(λ)).
+    pub fn eval(&self, lambda: f64) -> f64 {
+        let v = match &self.kind {
+            SpectrumKind::Uniform(v) => *v,
+            SpectrumKind::Blackbody { temperature } => crate::spectra::planck(lambda, *temperature),
+            kind => {
+                let (w, v) = kind.table().expect("tabulated");
+                crate::spectra::interpolate(&w, &v, lambda)
+            }
+        };
+        self.scale * v
+    }
+}
+
+/// The nodes of a tabulated spectrum: wavelengths (nm) and values.
+pub type SpectrumTable<'a> = (Cow<'a, [f64]>, Cow<'a, [f64]>);
+
+impl SpectrumKind {
+    /// The nodes (wavelengths in nm, values) of a tabulated kind: lists and files, D65's 5 nm
+    /// table, a measured conductor's η or k; `None` for uniform and black-body spectra.
+    pub fn table(&self) -> Option<SpectrumTable<'_>> {
+        match self {
+            SpectrumKind::Tabulated {
+                wavelengths,
+                values,
+            } => Some((Cow::Borrowed(wavelengths), Cow::Borrowed(values))),
+            SpectrumKind::D65 => {
+                let (w, v) = crate::spectra::d65_nodes();
+                Some((Cow::Owned(w), Cow::Owned(v)))
+            }
+            SpectrumKind::Conductor { material, eta } => {
+                let m = crate::formats::mitsuba::ior::measured(material)?;
+                Some((
+                    Cow::Borrowed(m.wavelengths),
+                    Cow::Borrowed(if *eta { m.eta } else { m.k }),
+                ))
+            }
+            SpectrumKind::Uniform(_) | SpectrumKind::Blackbody { .. } => None,
+        }
+    }
+}
+
+/// What a declared spectrum is, as written (values before `SpectrumDesc::scale`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpectrumKind {
+    /// `wavelength:value` pairs (nm, strictly increasing), given inline or in a spectrum file:
+    /// linear in between, zero outside the first and last wavelength (Mitsuba's `irregular`).
+    Tabulated {
+        wavelengths: Vec<f64>,
+        values: Vec<f64>,
+    },
+    /// The same value at every wavelength (Mitsuba's `uniform`).
+    Uniform(f64),
+    /// Planck's law at `temperature` K in W·m⁻²·sr⁻¹·nm⁻¹, unnormalised (Mitsuba's
+    /// `blackbody`; `crate::spectra::planck`).
+    Blackbody { temperature: f64 },
+    /// CIE D65 normalised to unit luminance (Mitsuba's `d65`: its 5 nm table, linear in
+    /// between, times 1/98.997…; `crate::spectra::cie_d65`).
+    D65,
+    /// The measured η (`eta: true`) or k of a conductor Mitsuba names (`material="Cu"`), from
+    /// its `data/ior` files (`formats::mitsuba::ior::measured`).
+    Conductor { material: String, eta: bool },
 }
 
 /// A scalar parameter: a constant or a texture (whose first channel / luminance is used).
@@ -390,8 +532,8 @@ pub enum Material {
     Diffuse { reflectance: ColorParam },
     /// Smooth conductor with complex index of refraction `eta + i k` (relative to the outside).
     Conductor {
-        eta: Rgb,
-        k: Rgb,
+        eta: ColorValue,
+        k: ColorValue,
         specular_reflectance: ColorParam,
     },
     /// Microfacet conductor (anisotropic when `alpha_u != alpha_v`).
@@ -399,8 +541,8 @@ pub enum Material {
         distribution: MicrofacetDistribution,
         alpha_u: FloatParam,
         alpha_v: FloatParam,
-        eta: Rgb,
-        k: Rgb,
+        eta: ColorValue,
+        k: ColorValue,
         specular_reflectance: ColorParam,
     },
     /// Smooth dielectric interface; `absorption` is a Beer–Lambert coefficient per unit length
@@ -625,11 +767,14 @@ pub struct EmitterDesc {
 #[derive(Clone, Debug)]
 pub enum Emitter {
     /// Isotropic point light with radiant `intensity` (W/sr).
-    Point { position: Vec3, intensity: Rgb },
+    Point {
+        position: Vec3,
+        intensity: ColorValue,
+    },
     /// Mitsuba spot light at the origin of `to_world`, shining along its +z.
     Spot {
         to_world: Mat4,
-        intensity: Rgb,
+        intensity: ColorValue,
         /// Degrees.
         cutoff_angle: f32,
         /// Degrees.
@@ -638,9 +783,12 @@ pub enum Emitter {
         falloff: SpotFalloff,
     },
     /// Light arriving from `-direction`... i.e. travelling along `direction` (world).
-    Directional { direction: Vec3, irradiance: Rgb },
+    Directional {
+        direction: Vec3,
+        irradiance: ColorValue,
+    },
     /// Uniform environment radiance.
-    Constant { radiance: Rgb },
+    Constant { radiance: ColorValue },
     /// The course ray tracers' ambient term: adds `ambient reflectance × radiance` at every
     /// hit of the Whitted integrator (CENG795 `AmbientLight`). Not a physical emitter: the
     /// path tracers ignore it (with a warning at build time).

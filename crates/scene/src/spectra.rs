@@ -109,6 +109,32 @@ pub fn cie_d65(lambda: f64) -> f64 {
     lookup(&D65, lambda) * D65_NORMALIZATION
 }
 
+/// The nodes of the CIE D65 table (360, 365, ..., 830 nm) and its values normalised to unit
+/// luminance: Mitsuba 3's `d65` spectrum, linear in between.
+pub fn d65_nodes() -> (Vec<f64>, Vec<f64>) {
+    let w: Vec<f64> = (0..CIE_SAMPLES).map(|i| CIE_MIN + 5.0 * i as f64).collect();
+    let v = D65
+        .iter()
+        .map(|&d| f64::from(d) * D65_NORMALIZATION)
+        .collect();
+    (w, v)
+}
+
+/// A piecewise-linear spectrum through (`wavelengths`, `values`) at `lambda`: zero outside
+/// the first and last wavelength (Mitsuba's `irregular` spectrum). `wavelengths` increase.
+pub fn interpolate(wavelengths: &[f64], values: &[f64], lambda: f64) -> f64 {
+    let n = wavelengths.len();
+    if n < 2 || !(wavelengths[0]..=wavelengths[n - 1]).contains(&lambda) {
+        return 0.0;
+    }
+    let i = wavelengths
+        .partition_point(|&x| x <= lambda)
+        .saturating_sub(1)
+        .min(n - 2);
+    let t = (lambda - wavelengths[i]) / (wavelengths[i + 1] - wavelengths[i]);
+    values[i] + (values[i + 1] - values[i]) * t
+}
+
 /// Planck's law: the spectral radiance of a black body at `kelvin`, in W/(m²·sr·nm) at
 /// `lambda` nm (Mitsuba's `blackbody` units).
 pub fn planck(lambda: f64, kelvin: f64) -> f64 {

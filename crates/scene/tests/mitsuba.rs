@@ -274,7 +274,7 @@ fn nori_defaults() {
     else {
         panic!()
     };
-    assert!((*intensity - Vec3::ONE).abs().max_element() < 1e-5);
+    assert!((intensity.rgb() - Vec3::ONE).abs().max_element() < 1e-5);
     assert_eq!(*position, Vec3::Y);
     let Material::Dielectric {
         int_ior, ext_ior, ..
@@ -324,7 +324,13 @@ fn materials_and_named_iors() {
     assert_eq!(*distribution, MicrofacetDistribution::Beckmann);
     assert_eq!(*alpha_u, FloatParam::Const(0.1));
     let (e, kk) = scene::formats::mitsuba::ior::conductor("Au").unwrap();
-    assert_eq!((*eta, *k), (e, kk));
+    assert_eq!((eta.rgb(), k.rgb()), (e, kk));
+    // The measured spectra are kept for spectral mode: η of gold at 600 nm is small.
+    let eta = eta.spectrum().expect("declared");
+    assert!(
+        matches!(&eta.kind, SpectrumKind::Conductor { material, eta: true } if material == "Au")
+    );
+    assert!((0.1..0.5).contains(&eta.eval(600.0)), "{}", eta.eval(600.0));
     assert!(matches!(by_name("water"), Material::Dielectric { int_ior, .. } if *int_ior == 1.333));
     // pbrt-v4's dispersive glasses by name: the d-line index (SCHOTT SF11, n_d 1.78472).
     assert!(
@@ -516,10 +522,11 @@ fn uniform_spectra() {
     let consts: Vec<Vec3> = s
         .materials
         .iter()
-        .map(|m| match m.material {
+        .map(|m| match &m.material {
+            // Declared spectra keep their RGB value beside the declaration.
             Material::Diffuse {
-                reflectance: ColorParam::Const(c),
-            } => c,
+                reflectance: ColorParam::Spectrum(s),
+            } => s.rgb,
             _ => panic!(),
         })
         .collect();
@@ -579,9 +586,12 @@ fn emitter_spectra_skip_d65() {
     let s = scene_of(
         r#"<scene version="3.0.0"><emitter type="constant"><spectrum name="radiance" value="2"/></emitter></scene>"#,
     );
-    let Emitter::Constant { radiance } = s.emitters[0].emitter else {
+    let Emitter::Constant { radiance } = &s.emitters[0].emitter else {
         panic!()
     };
+    let spectrum = radiance.spectrum().expect("declared");
+    assert_eq!(spectrum.kind, SpectrumKind::Uniform(2.0));
+    let radiance = radiance.rgb();
     let expected = 2.0 * Vec3::new(1.204_794, 0.948_291, 0.908_916);
     assert!(
         (radiance - expected).abs().max_element() < 1e-4,
@@ -598,14 +608,17 @@ fn spectrum_plugins_d65_and_blackbody() {
         let s = scene_of(&format!(
             r#"<scene version="3.0.0"><emitter type="constant">{spectrum}</emitter></scene>"#
         ));
-        let Emitter::Constant { radiance } = s.emitters[0].emitter else {
+        let Emitter::Constant { radiance } = &s.emitters[0].emitter else {
             panic!()
         };
-        radiance
+        radiance.clone()
     };
     let d65 = emitter(
         r#"<spectrum name="radiance" type="d65"><float name="scale" value="0.3"/></spectrum>"#,
     );
+    let declared = d65.spectrum().expect("declared");
+    assert_eq!((&declared.kind, declared.scale), (&SpectrumKind::D65, 0.3));
+    let d65 = d65.rgb();
     assert!(
         (d65 - Vec3::splat(0.3)).abs().max_element() < 0.3 * 0.01,
         "{d65}"
@@ -616,6 +629,13 @@ fn spectrum_plugins_d65_and_blackbody() {
         ))
     };
     let (warm, hot) = (bb(3000.0), bb(6500.0));
+    assert_eq!(
+        warm.spectrum().unwrap().kind,
+        SpectrumKind::Blackbody {
+            temperature: 3000.0
+        }
+    );
+    let (warm, hot) = (warm.rgb(), hot.rgb());
     assert!(warm.x / warm.z > 3.0 * hot.x / hot.z, "{warm} {hot}");
     // Luminance against the Planck curve integrated with the CIE ȳ directly (1 nm steps).
     let (mut y, mut ybar) = (0.0, 0.0);

@@ -3,9 +3,13 @@
 //! - `rgb2spec` — the RGB → spectrum coefficient table of Jakob & Hanika 2019 for linear sRGB
 //!   (`rgb2spec.rs`), checked by the upsampling round trip (`roundtrip.rs`) and written to
 //!   `crates/render/src/spectral/srgb_to_spectrum.bin`.
+//! - `ior-spectra` — Mitsuba 3's measured conductor spectra (`data/ior/*.eta.spd`, `*.k.spd`)
+//!   as a Rust table (`ior_spectra.rs`), written to
+//!   `crates/scene/src/formats/mitsuba/ior_data.rs`.
 //!
 //! The CIE tables themselves come from `crates/base/src/gen_cie.py`.
 
+mod ior_spectra;
 mod rgb2spec;
 mod roundtrip;
 
@@ -40,11 +44,43 @@ enum Command {
         #[arg(long)]
         dry_run: bool,
     },
+    /// Read Mitsuba 3's measured conductor spectra (`data/ior/<name>.eta.spd`, `.k.spd`) and
+    /// write them as a checked-in Rust table.
+    IorSpectra {
+        /// Mitsuba 3's `data/ior` directory (in a pip install: `site-packages/mitsuba/data/ior`).
+        #[arg(long)]
+        dir: PathBuf,
+        /// Where to write the table.
+        #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../scene/src/formats/mitsuba/ior_data.rs"))]
+        out: PathBuf,
+    },
 }
 
 fn main() {
     let cli = Cli::parse();
     match cli.command {
+        Command::IorSpectra { dir, out } => {
+            let materials = match ior_spectra::read_dir(&dir) {
+                Ok(m) => m,
+                Err(e) => {
+                    eprintln!("{e}");
+                    std::process::exit(2);
+                }
+            };
+            let command = "cargo run -p penumbra-tools --release -- ior-spectra --dir \
+                           <site-packages>/mitsuba/data/ior";
+            let text = ior_spectra::rust_table(&materials, &dir.display().to_string(), command);
+            if let Err(e) = std::fs::write(&out, &text) {
+                eprintln!("cannot write {}: {e}", out.display());
+                std::process::exit(3);
+            }
+            println!(
+                "wrote {} ({} materials, {} bytes)",
+                out.display(),
+                materials.len(),
+                text.len()
+            );
+        }
         Command::Rgb2spec {
             res,
             threads,

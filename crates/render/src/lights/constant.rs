@@ -7,11 +7,15 @@ use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct ConstantLight {
     pub radiance: Vec3,
+    /// The spectrum it was declared as (spectral mode only; RGB mode renders the RGB value).
+    pub spectrum: Option<Arc<DeclaredSpectrum>>,
 }
 
 impl LightModel for ConstantLight {
@@ -24,7 +28,7 @@ impl LightModel for ConstantLight {
     }
 
     fn environment<M: ColorMode>(&self, _d: Vec3, m: &M) -> M::C {
-        m.illuminant(self.radiance)
+        m.illuminant_declared(self.radiance, self.spectrum.as_deref())
     }
 
     fn sample_li<M: ColorMode>(
@@ -36,7 +40,7 @@ impl LightModel for ConstantLight {
     ) -> Option<LightSample<M::C>> {
         Some(LightSample {
             wi: warp::square_to_uniform_sphere(u),
-            li: m.illuminant(self.radiance),
+            li: m.illuminant_declared(self.radiance, self.spectrum.as_deref()),
             pdf: warp::uniform_sphere_pdf(),
             delta: false,
             target: ShadowTarget::Infinite,

@@ -5,13 +5,17 @@ use super::LightScene;
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
+use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct DirectionalLight {
     /// Direction the light travels in (unit).
     pub direction: Vec3,
     pub irradiance: Vec3,
+    /// The spectrum it was declared as (spectral mode only; RGB mode renders the RGB value).
+    pub spectrum: Option<Arc<DeclaredSpectrum>>,
 }
 
 impl LightModel for DirectionalLight {
@@ -32,7 +36,7 @@ impl LightModel for DirectionalLight {
     ) -> Option<LightSample<M::C>> {
         Some(LightSample {
             wi: -self.direction,
-            li: m.illuminant(self.irradiance),
+            li: m.illuminant_declared(self.irradiance, self.spectrum.as_deref()),
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Infinite,

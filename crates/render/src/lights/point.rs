@@ -5,12 +5,16 @@ use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
+use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct PointLight {
     pub position: Vec3,
     pub intensity: Vec3,
+    /// The spectrum it was declared as (spectral mode only; RGB mode renders the RGB value).
+    pub spectrum: Option<Arc<DeclaredSpectrum>>,
 }
 
 impl LightModel for PointLight {
@@ -33,7 +37,7 @@ impl LightModel for PointLight {
         let d2 = d.length_squared();
         (d2 > 0.0).then(|| LightSample {
             wi: d / d2.sqrt(),
-            li: m.illuminant(self.intensity) / d2,
+            li: m.illuminant_declared(self.intensity, self.spectrum.as_deref()) / d2,
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Point(self.position),

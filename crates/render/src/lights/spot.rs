@@ -7,13 +7,17 @@ use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{Mat3, Mat4, PI, Vec2, Vec3};
+use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct SpotLight {
     pub position: Vec3,
     pub to_local: Mat3,
     pub intensity: Vec3,
+    /// The spectrum it was declared as (spectral mode only; RGB mode renders the RGB value).
+    pub spectrum: Option<Arc<DeclaredSpectrum>>,
     pub cos_cutoff: f32,
     pub cos_beam: f32,
     pub cutoff: f32,
@@ -34,6 +38,7 @@ impl SpotLight {
         let beam = beam_deg.to_radians().min(cutoff);
         let rot = Mat3::from_mat4(*to_world);
         SpotLight {
+            spectrum: None,
             position: to_world.w_axis.truncate().into(),
             to_local: rot.inverse(),
             intensity,
@@ -88,7 +93,7 @@ impl LightModel for SpotLight {
         let f = self.falloff(local.z);
         (f > 0.0).then(|| LightSample {
             wi,
-            li: m.illuminant(self.intensity) * f / d2,
+            li: m.illuminant_declared(self.intensity, self.spectrum.as_deref()) * f / d2,
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Point(self.position),

@@ -11,6 +11,7 @@
 //! Every BSDF model is generic; where a model does fixed 3-channel or channel-mean
 //! arithmetic (lobe-selection weights), it is done on the RGB parameters in every mode.
 
+use super::declared::DeclaredSpectrum;
 use super::rgb::{RgbAlbedoSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum};
 use super::sampled::{N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum};
 use crate::math::Vec3;
@@ -161,6 +162,25 @@ pub trait ColorMode {
     fn illuminant_at<P: Params + ?Sized>(&self, p: &P, r: &ColorRef, at: TexCoord) -> Self::C {
         self.illuminant(p.color(r, at))
     }
+    /// [`Self::albedo_at`] when the caller has read the parameter's RGB value already
+    /// (`rgb = p.color(r, at)`, needed in RGB for lobe-selection weights): RGB mode reads
+    /// nothing twice.
+    #[inline(always)]
+    fn albedo_read<P: Params + ?Sized>(&self, _p: &P, _r: &ColorRef, rgb: Vec3) -> Self::C {
+        self.albedo(rgb)
+    }
+    /// An unbounded constant (conductor η and k) with the spectrum it was declared as, if
+    /// any: RGB mode uses `rgb`, spectral mode samples `declared` when there is one.
+    #[inline(always)]
+    fn unbounded_declared(&self, rgb: Vec3, _declared: Option<&DeclaredSpectrum>) -> Self::C {
+        self.unbounded(rgb)
+    }
+    /// An emitted constant (a light's radiance, intensity or irradiance) with the spectrum
+    /// it was declared as, if any (see [`Self::unbounded_declared`]).
+    #[inline(always)]
+    fn illuminant_declared(&self, rgb: Vec3, _declared: Option<&DeclaredSpectrum>) -> Self::C {
+        self.illuminant(rgb)
+    }
     /// A scalar index of refraction for a *smooth* interface, given as a function of
     /// wavelength (nm) and its RGB-mode value. A dispersive index in spectral mode is taken
     /// at the hero wavelength and terminates the secondary wavelengths (pbrt-v4's scheme);
@@ -231,6 +251,56 @@ impl ColorMode for SpectralMode<'_> {
     fn illuminant(&self, rgb: Vec3) -> SampledSpectrum {
         // = RgbIlluminantSpectrum::new(self.table, rgb).sample(..), D65 looked up once.
         RgbUnboundedSpectrum::new(self.table, rgb).sample(&self.wavelengths.get()) * self.d65
+    }
+    // Declared spectra are sampled as declared (not clamped, no D65 factor: Mitsuba's
+    // spectral variants' semantics, `super::declared`).
+    #[inline]
+    fn albedo_at<P: Params + ?Sized>(&self, p: &P, r: &ColorRef, at: TexCoord) -> SampledSpectrum {
+        match p.spectrum(r) {
+            Some(s) => s.sample(&self.wavelengths.get()),
+            None => self.albedo(p.color(r, at)),
+        }
+    }
+    #[inline]
+    fn illuminant_at<P: Params + ?Sized>(
+        &self,
+        p: &P,
+        r: &ColorRef,
+        at: TexCoord,
+    ) -> SampledSpectrum {
+        match p.spectrum(r) {
+            Some(s) => s.sample(&self.wavelengths.get()),
+            None => self.illuminant(p.color(r, at)),
+        }
+    }
+    #[inline]
+    fn albedo_read<P: Params + ?Sized>(&self, p: &P, r: &ColorRef, rgb: Vec3) -> SampledSpectrum {
+        match p.spectrum(r) {
+            Some(s) => s.sample(&self.wavelengths.get()),
+            None => self.albedo(rgb),
+        }
+    }
+    #[inline]
+    fn unbounded_declared(
+        &self,
+        rgb: Vec3,
+        declared: Option<&DeclaredSpectrum>,
+    ) -> SampledSpectrum {
+        match declared {
+            Some(s) => s.sample(&self.wavelengths.get()),
+            None => self.unbounded(rgb),
+        }
+    }
+    #[inline]
+    fn illuminant_declared(
+        &self,
+        rgb: Vec3,
+        declared: Option<&DeclaredSpectrum>,
+    ) -> SampledSpectrum {
+        match declared {
+            Some(s) => s.sample(&self.wavelengths.get()),
+            None => self.illuminant(rgb),
+        }
     }
     fn spectrum(&self, f: impl Fn(f32) -> f32, _rgb: Vec3) -> SampledSpectrum {
         let wl = self.wavelengths.get();

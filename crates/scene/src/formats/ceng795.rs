@@ -1078,7 +1078,7 @@ impl Builder {
                     position = m.transform_point3(position);
                     Emitter::Point {
                         position,
-                        intensity: self.ctx.vec3(self.ctx.req(n, "Intensity")?)?,
+                        intensity: self.ctx.vec3(self.ctx.req(n, "Intensity")?)?.into(),
                     }
                 }
                 "DirectionalLight" => Emitter::Directional {
@@ -1086,7 +1086,7 @@ impl Builder {
                         .ctx
                         .vec3(self.ctx.req(n, "Direction")?)?
                         .normalize_or_zero(),
-                    irradiance: self.ctx.vec3(self.ctx.req(n, "Radiance")?)?,
+                    irradiance: self.ctx.vec3(self.ctx.req(n, "Radiance")?)?.into(),
                 },
                 "SpotLight" => {
                     let pos = self.ctx.vec3(self.ctx.req(n, "Position")?)?;
@@ -1098,7 +1098,7 @@ impl Builder {
                     // The course's angles are full cone angles; Mitsuba's are half angles.
                     Emitter::Spot {
                         to_world,
-                        intensity: self.ctx.vec3(self.ctx.req(n, "Intensity")?)?,
+                        intensity: self.ctx.vec3(self.ctx.req(n, "Intensity")?)?.into(),
                         cutoff_angle: coverage * 0.5,
                         beam_width: falloff * 0.5,
                         falloff: SpotFalloff::Cosine4,

@@ -904,8 +904,8 @@ impl<'a, 'input> Ctx<'a, 'input> {
                                 distribution: MicrofacetDistribution::Beckmann,
                                 alpha_u: FloatParam::Const(alpha),
                                 alpha_v: FloatParam::Const(alpha),
-                                eta: self.cgl_rgb(k, "eta", Rgb::ONE)?,
-                                k: self.cgl_rgb(k, "k", Rgb::ZERO)?,
+                                eta: self.cgl_rgb(k, "eta", Rgb::ONE)?.into(),
+                                k: self.cgl_rgb(k, "k", Rgb::ZERO)?.into(),
                                 specular_reflectance: ColorParam::constant(1.0),
                             },
                             None,
@@ -971,7 +971,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let emitter = match block.tag_name().name() {
             "point" => Emitter::Point {
                 position: origin,
-                intensity: color,
+                intensity: color.into(),
             },
             "directional" => {
                 let d = m.transform_vector3(-Vec3::Z).normalize_or_zero();
@@ -980,7 +980,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 }
                 Emitter::Directional {
                     direction: d,
-                    irradiance: color,
+                    irradiance: color.into(),
                 }
             }
             "spot" => {
@@ -991,13 +991,15 @@ impl<'a, 'input> Ctx<'a, 'input> {
                 let cutoff = (falloff * 0.5).clamp(0.01, 90.0);
                 Emitter::Spot {
                     to_world: m * Mat4::from_scale(Vec3::new(1.0, -1.0, -1.0)),
-                    intensity: color,
+                    intensity: color.into(),
                     cutoff_angle: cutoff,
                     beam_width: cutoff * 0.75,
                     falloff: SpotFalloff::Mitsuba,
                 }
             }
-            "ambient" => Emitter::Constant { radiance: color },
+            "ambient" => Emitter::Constant {
+                radiance: color.into(),
+            },
             "area" => {
                 // Unit square facing local -Z: rotate Rectangle ([-1,1]², +z) by 180° about x
                 // and halve it.
@@ -1384,8 +1386,8 @@ mod tests {
                 ..
             } => {
                 assert_eq!(*a, 0.2);
-                assert_eq!(*eta, Vec3::new(0.1, 0.2, 0.3));
-                assert_eq!(*k, Vec3::new(4.0, 3.0, 2.0));
+                assert_eq!(eta.rgb(), Vec3::new(0.1, 0.2, 0.3));
+                assert_eq!(k.rgb(), Vec3::new(4.0, 3.0, 2.0));
             }
             m => panic!("{m:?}"),
         }

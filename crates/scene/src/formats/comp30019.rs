@@ -546,8 +546,8 @@ impl Parser<'_> {
                 distribution: MicrofacetDistribution::Ggx,
                 alpha_u: FloatParam::Const(GLOSSY_ALPHA),
                 alpha_v: FloatParam::Const(GLOSSY_ALPHA),
-                eta: Vec3::ZERO,
-                k: Vec3::ZERO,
+                eta: Vec3::ZERO.into(),
+                k: Vec3::ZERO.into(),
                 specular_reflectance: ColorParam::Const(unused_is_white(color)),
             },
             _ => {
@@ -607,8 +607,8 @@ impl Parser<'_> {
                 distribution: MicrofacetDistribution::Ggx,
                 alpha_u: FloatParam::Const(alpha),
                 alpha_v: FloatParam::Const(alpha),
-                eta: Vec3::ZERO,
-                k: Vec3::ZERO,
+                eta: Vec3::ZERO.into(),
+                k: Vec3::ZERO.into(),
                 specular_reflectance: ColorParam::Const(unused_is_white(color)),
             },
             "Reflective" => Material::Mirror {
@@ -681,7 +681,7 @@ impl Parser<'_> {
             medium: None,
             emitter: crate::Emitter::Point {
                 position,
-                intensity: color * std::f32::consts::PI,
+                intensity: (color * std::f32::consts::PI).into(),
             },
             loc: l.loc(l.toks[0].col),
         });
@@ -999,8 +999,8 @@ mod tests {
         };
         assert_eq!(albedo(&plain), 0.5);
         assert!((albedo(&lin) - 0.5f32.powf(2.2)).abs() < 1e-6);
-        let intensity = |d: &SceneDesc| match d.emitters[0].emitter {
-            crate::Emitter::Point { intensity, .. } => intensity.x,
+        let intensity = |d: &SceneDesc| match &d.emitters[0].emitter {
+            crate::Emitter::Point { intensity, .. } => intensity.rgb().x,
             _ => panic!(),
         };
         assert!((intensity(&lin) / intensity(&plain) - 0.5f32.powf(1.2)).abs() < 1e-6);

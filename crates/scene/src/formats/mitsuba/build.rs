@@ -167,7 +167,40 @@ fn spec_to_rgb(spec: &ColorSpec, usage: SpectrumUse, loc: &Loc) -> Result<Rgb> {
         ColorSpec::Sampled(w, v) => {
             spectra::sampled_to_rgb(w, v, usage).map_err(|e| err(loc, e.to_string()))
         }
+        ColorSpec::Blackbody { .. } | ColorSpec::D65 { .. } => {
+            let (w, v) = spec.sampled().expect("a plugin spectrum tabulates");
+            spectra::sampled_to_rgb(&w, &v, usage).map_err(|e| err(loc, e.to_string()))
+        }
     }
+}
+
+/// A colour value as declared: RGB as given, a spectrum with the RGB `spec_to_rgb` makes of
+/// it for RGB mode beside its declaration for spectral mode.
+fn spec_to_value(spec: &ColorSpec, usage: SpectrumUse, loc: &Loc) -> Result<ColorValue> {
+    let rgb = spec_to_rgb(spec, usage, loc)?;
+    let (kind, scale) = match spec {
+        ColorSpec::Rgb(_) => return Ok(ColorValue::Rgb(rgb)),
+        ColorSpec::Uniform(v) => (SpectrumKind::Uniform(*v), 1.0),
+        ColorSpec::Sampled(w, v) => (
+            SpectrumKind::Tabulated {
+                wavelengths: w.clone(),
+                values: v.clone(),
+            },
+            1.0,
+        ),
+        ColorSpec::Blackbody { temperature, scale } => (
+            SpectrumKind::Blackbody {
+                temperature: *temperature,
+            },
+            *scale,
+        ),
+        ColorSpec::D65 { scale } => (SpectrumKind::D65, *scale),
+    };
+    Ok(ColorValue::Spectrum(Arc::new(SpectrumDesc {
+        rgb,
+        kind,
+        scale,
+    })))
 }
 
 fn usage_for(name: &str, emitter: bool) -> SpectrumUse {
@@ -279,10 +312,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             return Ok(None);
         };
         let usage = usage_for(name, emitter);
-        let rgb = match &p.value {
-            Value::Color(spec) => spec_to_rgb(spec, usage, &p.loc)?,
-            Value::Float(v) => Vec3::splat(*v as f32),
-            Value::Int(v) => Vec3::splat(*v as f32),
+        let value = match &p.value {
+            Value::Color(spec) => spec_to_value(spec, usage, &p.loc)?,
+            Value::Float(v) => ColorValue::Rgb(Vec3::splat(*v as f32)),
+            Value::Int(v) => ColorValue::Rgb(Vec3::splat(*v as f32)),
             other => {
                 return Err(err(
                     &p.loc,
@@ -293,14 +326,26 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 ));
             }
         };
-        Ok(Some(ColorParam::Const(rgb)))
+        Ok(Some(value.into()))
     }
 
-    /// A constant colour (no textures allowed).
+    /// A constant colour (no textures allowed) as RGB, declared spectra converted.
     fn rgb(&mut self, pl: &Plugin<'s>, name: &str, default: Rgb, emitter: bool) -> Result<Rgb> {
+        Ok(self.color_value(pl, name, default, emitter)?.rgb())
+    }
+
+    /// A constant colour (no textures allowed), declared spectra kept.
+    fn color_value(
+        &mut self,
+        pl: &Plugin<'s>,
+        name: &str,
+        default: Rgb,
+        emitter: bool,
+    ) -> Result<ColorValue> {
         match self.color_opt(pl, name, emitter)? {
-            None => Ok(default),
-            Some(ColorParam::Const(v)) => Ok(v),
+            None => Ok(ColorValue::Rgb(default)),
+            Some(ColorParam::Const(v)) => Ok(ColorValue::Rgb(v)),
+            Some(ColorParam::Spectrum(s)) => Ok(ColorValue::Spectrum(s)),
             Some(ColorParam::Texture(_)) => Err(err(
                 pl.named_child(name).map_or(pl.loc(), |c| &c.loc),
                 format!(
@@ -775,7 +820,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     }
                 } else {
                     let (alpha_u, alpha_v) = self.alphas(pl)?;
-                    let (eta, k) = eta.map_or((Vec3::ZERO, Vec3::ONE), |e| (e, k));
+                    let (eta, k) = eta.map_or((Vec3::ZERO.into(), Vec3::ONE.into()), |e| (e, k));
                     Material::RoughConductor {
                         distribution: self.distribution(pl)?,
                         alpha_u,
@@ -908,7 +953,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     }
 
     /// (η, k) of a conductor; `None` η means Mitsuba's default "none" (a perfect mirror).
-    fn conductor_ior(&mut self, pl: &Plugin<'s>) -> Result<(Option<Rgb>, Rgb)> {
+    /// A named material keeps its measured spectra beside their RGB values.
+    fn conductor_ior(&mut self, pl: &Plugin<'s>) -> Result<(Option<ColorValue>, ColorValue)> {
         let material = pl
             .props
             .string_opt("material")?
@@ -929,14 +975,24 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     )
                 })?;
                 let ext = self.ior(pl, "ext_eta", 1.0)?;
-                Ok((Some(eta / ext), k / ext))
+                let measured = |rgb: Rgb, eta: bool| {
+                    ColorValue::Spectrum(Arc::new(SpectrumDesc {
+                        rgb: rgb / ext,
+                        kind: SpectrumKind::Conductor {
+                            material: m.clone(),
+                            eta,
+                        },
+                        scale: 1.0 / ext as f64,
+                    }))
+                };
+                Ok((Some(measured(eta, true)), measured(k, false)))
             }
             _ if has_eta => {
-                let eta = self.rgb(pl, "eta", Vec3::ZERO, false)?;
-                let k = self.rgb(pl, "k", Vec3::ONE, false)?;
+                let eta = self.color_value(pl, "eta", Vec3::ZERO, false)?;
+                let k = self.color_value(pl, "k", Vec3::ONE, false)?;
                 Ok((Some(eta), k))
             }
-            _ => Ok((None, Vec3::ONE)),
+            _ => Ok((None, Vec3::ONE.into())),
         }
     }
 
@@ -987,9 +1043,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 };
                 let intensity = if pl.props.has("power") {
                     // Nori: isotropic point light of total power Φ → I = Φ / 4π.
-                    self.rgb(pl, "power", Vec3::ONE, true)? / (4.0 * std::f32::consts::PI)
+                    self.color_value(pl, "power", Vec3::ONE, true)?
+                        .divided(4.0 * std::f32::consts::PI)
                 } else {
-                    self.rgb(pl, "intensity", Vec3::ONE, true)?
+                    self.color_value(pl, "intensity", Vec3::ONE, true)?
                 };
                 Emitter::Point {
                     position,
@@ -1004,7 +1061,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
                 Emitter::Spot {
                     to_world: to_world.unwrap_or(Mat4::IDENTITY),
-                    intensity: self.rgb(pl, "intensity", Vec3::ONE, true)?,
+                    intensity: self.color_value(pl, "intensity", Vec3::ONE, true)?,
                     cutoff_angle,
                     beam_width: beam_width.min(cutoff_angle),
                     falloff: SpotFalloff::Mitsuba,
@@ -1021,11 +1078,11 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
                 Emitter::Directional {
                     direction,
-                    irradiance: self.rgb(pl, "irradiance", Vec3::ONE, true)?,
+                    irradiance: self.color_value(pl, "irradiance", Vec3::ONE, true)?,
                 }
             }
             "constant" => Emitter::Constant {
-                radiance: self.rgb(pl, "radiance", Vec3::ONE, true)?,
+                radiance: self.color_value(pl, "radiance", Vec3::ONE, true)?,
             },
             "envmap" => {
                 let path = self.ctx.file_param(pl, "envmap")?;

@@ -12,9 +12,14 @@
 //! below holds the result of running our own implementation of that conversion
 //! ([`crate::spectra::sampled_to_rgb`] with [`crate::spectra::SpectrumUse::IorData`]) on
 //! those files; silver agrees with an independent implementation of the same method to 1e-7.
-//! Materials of Mitsuba's list that are missing here are reported as errors naming the ones
-//! we have.
+//!
+//! The measured spectra themselves are in [`super::ior_data`] (generated from Mitsuba's files
+//! by `penumbra-tools ior-spectra`); a test checks that they reproduce the RGB table, and the
+//! RGB of every other material Mitsuba ships is computed from them by the same conversion.
+//! Spectral renders sample the spectra ([`measured`]).
 
+use super::ior_data::{CONDUCTORS as MEASURED, MeasuredConductor};
+use crate::spectra::{SpectrumUse, sampled_to_rgb};
 use glam::Vec3;
 
 /// Mitsuba's named dielectric IORs (lower-case names).
@@ -79,17 +84,32 @@ const CONDUCTORS: &[(&str, [f32; 3], [f32; 3])] = &[
     ("Cu", [0.201_005_5, 0.923_749_5, 1.102_215_4], [3.913_262_1, 2.453_045_1, 2.142_089_8]),
 ];
 
-/// RGB (η, k) of a named conductor (case-sensitive, as in Mitsuba: `Au`, `Cu`, ...).
+/// RGB (η, k) of a named conductor (case-sensitive, as in Mitsuba: `Au`, `Cu`, ...): the
+/// table above, else the measured spectra converted as Mitsuba's RGB variants convert them.
 pub fn conductor(name: &str) -> Option<(Vec3, Vec3)> {
-    CONDUCTORS
-        .iter()
-        .find(|(n, _, _)| *n == name)
-        .map(|(_, e, k)| (Vec3::from_array(*e), Vec3::from_array(*k)))
+    if let Some((_, e, k)) = CONDUCTORS.iter().find(|(n, _, _)| *n == name) {
+        return Some((Vec3::from_array(*e), Vec3::from_array(*k)));
+    }
+    measured(name).map(measured_rgb)
+}
+
+/// The measured η and k spectra of a named conductor (case-sensitive).
+pub fn measured(name: &str) -> Option<&'static MeasuredConductor> {
+    MEASURED.iter().find(|m| m.name == name)
+}
+
+/// RGB (η, k) of measured spectra, as Mitsuba 3's RGB variants compute them.
+fn measured_rgb(m: &MeasuredConductor) -> (Vec3, Vec3) {
+    let rgb = |v: &[f64]| {
+        sampled_to_rgb(m.wavelengths, v, SpectrumUse::IorData)
+            .expect("the generated table is well formed")
+    };
+    (rgb(m.eta), rgb(m.k))
 }
 
 /// Names accepted by [`conductor`], for error messages.
 pub fn conductor_names() -> String {
-    let mut v: Vec<&str> = CONDUCTORS.iter().map(|(n, _, _)| *n).collect();
+    let mut v: Vec<&str> = MEASURED.iter().map(|m| m.name).collect();
     v.push("none");
     v.join(", ")
 }
@@ -107,5 +127,37 @@ mod tests {
         // Gold reflects red more than blue: small η and large k in red.
         assert!(eta.x < eta.z && k.x > k.z);
         assert!(conductor("au").is_none());
+    }
+
+    /// The RGB table is what Mitsuba's RGB variants make of the measured spectra (the
+    /// conversion of `crate::spectra`): bit for bit, except silver's η, one f32 ulp away in
+    /// its red channel (that row came from another implementation of the same method).
+    #[test]
+    fn rgb_table_is_reproduced_by_the_measured_spectra() {
+        for (name, eta, k) in CONDUCTORS {
+            let m = measured(name).unwrap_or_else(|| panic!("{name} has measured spectra"));
+            let (e, kk) = measured_rgb(m);
+            for (got, want) in [(e, eta), (kk, k)] {
+                let want = Vec3::from_array(*want);
+                let rel = ((got - want).abs() / want).max_element();
+                assert!(
+                    rel < 2e-7,
+                    "{name}: {got} from the spectra, {want} in the table"
+                );
+            }
+        }
+        // Every name Mitsuba ships has both spectra on one wavelength grid.
+        assert_eq!(MEASURED.len(), 71);
+        for m in MEASURED {
+            assert!(m.wavelengths.len() >= 2 && m.eta.len() == m.wavelengths.len());
+            assert_eq!(m.k.len(), m.wavelengths.len());
+            assert!(m.wavelengths.windows(2).all(|w| w[0] < w[1]), "{}", m.name);
+        }
+        // Names outside the RGB table convert too (tungsten: grey-ish, η > 1).
+        let (eta, k) = conductor("W").unwrap();
+        assert!(
+            eta.min_element() > 1.0 && k.min_element() > 1.0,
+            "{eta} {k}"
+        );
     }
 }

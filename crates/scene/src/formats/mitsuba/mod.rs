@@ -34,6 +34,7 @@
 
 mod build;
 pub mod ior;
+pub mod ior_data;
 mod plugin;
 mod props;
 mod tree;

@@ -17,6 +17,39 @@ pub enum ColorSpec {
     Uniform(f64),
     /// `wavelength:value` pairs (nm), strictly increasing wavelengths.
     Sampled(Vec<f64>, Vec<f64>),
+    /// `<spectrum type="blackbody">`: Planck's law (W·m⁻²·sr⁻¹·nm⁻¹) times `scale`.
+    Blackbody {
+        temperature: f64,
+        scale: f64,
+    },
+    /// `<spectrum type="d65">`: D65 of unit luminance times `scale`.
+    D65 {
+        scale: f64,
+    },
+}
+
+impl ColorSpec {
+    /// The spectrum as sampled values at 1 nm over the visible range, for the plugins
+    /// (`blackbody`, `d65`); lists as given; `None` for RGB and uniform values.
+    pub fn sampled(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let visible = || (360..=830).map(f64::from);
+        match self {
+            ColorSpec::Rgb(_) | ColorSpec::Uniform(_) => None,
+            ColorSpec::Sampled(w, v) => Some((w.clone(), v.clone())),
+            ColorSpec::Blackbody { temperature, scale } => Some((
+                visible().collect(),
+                visible()
+                    .map(|w| crate::spectra::planck(w, *temperature) * scale)
+                    .collect(),
+            )),
+            ColorSpec::D65 { scale } => Some((
+                visible().collect(),
+                visible()
+                    .map(|w| crate::spectra::cie_d65(w) * scale)
+                    .collect(),
+            )),
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -330,9 +363,9 @@ pub fn parse_property(e: &Elem, warnings: &mut Vec<crate::Warning>) -> Result<Op
 }
 
 /// Mitsuba 3's spectrum plugins `<spectrum type="d65|blackbody|uniform">` with their `<float>`
-/// parameters, tabulated at 1 nm over the visible range (Mitsuba's units: `blackbody` is
-/// Planck's spectral radiance in W/(m²·sr·nm), `d65` has unit luminance), so the RGB
-/// conversion treats them as any sampled spectrum.
+/// parameters (Mitsuba's units: `blackbody` is Planck's spectral radiance in W/(m²·sr·nm),
+/// `d65` has unit luminance). The RGB conversion tabulates them at 1 nm over the visible
+/// range ([`ColorSpec::sampled`]) and treats them as any sampled spectrum.
 fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
     let mut params: Vec<(&str, f64, &Loc)> = Vec::new();
     for c in &e.children {
@@ -366,15 +399,9 @@ fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
     }
     let get = |n: &str| params.iter().find(|p| p.0 == n).map(|p| p.1);
     let scale = get("scale").unwrap_or(1.0);
-    let visible = || (360..=830).map(f64::from);
     match ty.value.as_str() {
         "uniform" => Ok(ColorSpec::Uniform(get("value").unwrap_or(1.0))),
-        "d65" => Ok(ColorSpec::Sampled(
-            visible().collect(),
-            visible()
-                .map(|w| crate::spectra::cie_d65(w) * scale)
-                .collect(),
-        )),
+        "d65" => Ok(ColorSpec::D65 { scale }),
         _ => {
             let t = get("temperature")
                 .ok_or_else(|| err(&e.loc, "a blackbody spectrum needs a 'temperature'"))?;
@@ -384,12 +411,10 @@ fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
                     "blackbody temperature must be positive (kelvin)",
                 ));
             }
-            Ok(ColorSpec::Sampled(
-                visible().collect(),
-                visible()
-                    .map(|w| crate::spectra::planck(w, t) * scale)
-                    .collect(),
-            ))
+            Ok(ColorSpec::Blackbody {
+                temperature: t,
+                scale,
+            })
         }
     }
 }
