@@ -222,23 +222,27 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
         Material::Dielectric {
             int_ior,
             ext_ior,
+            dispersion,
             specular_reflectance,
             specular_transmittance,
             ..
         } => MaterialKind::Dielectric {
             int_ior: *int_ior,
             ext_ior: *ext_ior,
+            dispersion: *dispersion,
             reflectance: color_ref(specular_reflectance),
             transmittance: color_ref(specular_transmittance),
         },
         Material::ThinDielectric {
             int_ior,
             ext_ior,
+            dispersion,
             specular_reflectance,
             specular_transmittance,
         } => MaterialKind::ThinDielectric {
             int_ior: *int_ior,
             ext_ior: *ext_ior,
+            dispersion: *dispersion,
             reflectance: color_ref(specular_reflectance),
             transmittance: color_ref(specular_transmittance),
         },
@@ -248,6 +252,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
             alpha_v,
             int_ior,
             ext_ior,
+            dispersion,
+            dispersion_sampling,
             specular_reflectance,
             specular_transmittance,
         } => MaterialKind::RoughDielectric {
@@ -256,6 +262,8 @@ pub fn material_kind(m: &Material) -> Option<MaterialKind> {
             alpha_v: float_ref(alpha_v),
             int_ior: *int_ior,
             ext_ior: *ext_ior,
+            dispersion: *dispersion,
+            dispersion_sampling: *dispersion_sampling,
             reflectance: color_ref(specular_reflectance),
             transmittance: color_ref(specular_transmittance),
         },

@@ -137,6 +137,7 @@ fn smooth_dielectric() {
         Material::Dielectric {
             int_ior: 1.5,
             ext_ior: 1.0,
+            dispersion: None,
             specular_reflectance: ColorParam::constant(1.0),
             specular_transmittance: ColorParam::constant(1.0),
             absorption: None,
@@ -151,6 +152,7 @@ fn thin_dielectric() {
         Material::ThinDielectric {
             int_ior: 1.5,
             ext_ior: 1.0,
+            dispersion: None,
             specular_reflectance: ColorParam::constant(1.0),
             specular_transmittance: ColorParam::constant(1.0),
         },
@@ -167,6 +169,7 @@ fn beer_lambert_absorption_in_a_dielectric() {
         Material::Dielectric {
             int_ior: 1.0,
             ext_ior: 1.0,
+            dispersion: None,
             specular_reflectance: ColorParam::constant(1.0),
             specular_transmittance: ColorParam::constant(1.0),
             absorption: Some(Vec3::splat(sigma)),
