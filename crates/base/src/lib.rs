@@ -25,6 +25,30 @@ pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
 }
 
 /// The profile of a spot light between its full-intensity cone and its cutoff.
+/// What a path carries: three RGB channels, or four sampled wavelengths (pbrt-v4's
+/// `SampledWavelengths`) whose estimate becomes RGB at the film. Chosen at run time
+/// (`render --mode`, Mitsuba variant names such as `scalar_spectral`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RenderMode {
+    #[default]
+    Rgb,
+    Spectral,
+}
+
+impl RenderMode {
+    /// The mode of a Mitsuba 3 variant name (`scalar_rgb`, `llvm_ad_spectral`, ...): its
+    /// colour part; `None` for a name that is not a colour variant we render (monochrome,
+    /// polarized).
+    pub fn from_mitsuba_variant(v: &str) -> Option<RenderMode> {
+        let colour = v.rsplit('_').next()?;
+        match colour {
+            "rgb" => Some(RenderMode::Rgb),
+            "spectral" => Some(RenderMode::Spectral),
+            _ => None,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SpotFalloff {
     /// Mitsuba 3: linear in the angle from the beam width to the cutoff.

@@ -52,6 +52,8 @@ pub struct BuildOptions {
     /// Copy shared meshes into world space instead of instancing them (see [`build`]): the
     /// reference the instanced build is tested against.
     pub flatten_instances: bool,
+    /// RGB or spectral rendering: the scene is built for one of them.
+    pub mode: base::RenderMode,
 }
 
 /// What [`build`] makes: the scene and the integrator to render it with.
@@ -176,6 +178,14 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         loc: Loc::file(&desc.source),
         message: e.to_string(),
     })?;
+    if opts.mode == base::RenderMode::Spectral && matches!(integrator, Integrator::VolPath(_)) {
+        return Err(BuildError {
+            loc: Loc::file(&desc.source),
+            message:
+                "the volpath integrator does not run in spectral mode yet; render with --mode rgb"
+                    .into(),
+        });
+    }
     // Mitsuba's `path` ignores media, and so does ours for a scene that declares any. When
     // every medium comes from Beer absorption (purely absorbing, homogeneous), the path
     // tracer applies them, as the courses' tracers apply absorption inside their glass.
@@ -218,6 +228,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         has_cutouts,
         has_nulls,
         has_motion,
+        mode: opts.mode,
     };
     scene.light_sampler =
         LightSampler::new(selection, &scene.lights, &scene.infinite_lights, &scene);

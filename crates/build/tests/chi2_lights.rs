@@ -81,7 +81,11 @@ fn test_light(scene: &Scene, p: Vec3, level: f64, seed: u64) -> (bool, String) {
         seed,
     };
     let result = chi2_test(
-        |u2, _u1| light.sample_li(scene, &r, u2).map(|s| s.wi),
+        |u2, _u1| {
+            light
+                .sample_li(scene, &r, u2, &render::spectral::lanes::RgbMode)
+                .map(|s| s.wi)
+        },
         |wi| {
             if light.is_infinite() {
                 return light.pdf_li(scene, &r, wi, None);

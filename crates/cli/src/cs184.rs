@@ -130,6 +130,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
             integrator: None,
             light_selection: None,
             flatten_instances: false,
+            mode: scene::RenderMode::Rgb,
         },
         time: None,
         threads: args.threads,

@@ -126,6 +126,11 @@ struct RenderArgs {
     /// How next-event estimation picks a light: uniform, power or bvh (default: the scene's).
     #[arg(long, value_name = "uniform|power|bvh", value_parser = parse_light_sampler)]
     light_sampler: Option<scene::LightSelection>,
+    /// Colour mode: rgb (three channels, the default) or spectral (four wavelengths per
+    /// path, converted to RGB at the film). Mitsuba 3 variant names (scalar_rgb,
+    /// llvm_ad_spectral, ...) select their colour part, as `mitsuba -m` does.
+    #[arg(short = 'm', long, value_name = "rgb|spectral|VARIANT", value_parser = parse_mode)]
+    mode: Option<scene::RenderMode>,
     /// Render only the camera with this name (CENG795 camera `id`).
     #[arg(long, value_name = "NAME")]
     camera: Option<String>,
@@ -430,6 +435,19 @@ pub(crate) fn parse_define(s: &str) -> Result<(String, String), String> {
     Ok((k.to_string(), v.to_string()))
 }
 
+fn parse_mode(s: &str) -> Result<scene::RenderMode, String> {
+    match s {
+        "rgb" => Ok(scene::RenderMode::Rgb),
+        "spectral" => Ok(scene::RenderMode::Spectral),
+        v => scene::RenderMode::from_mitsuba_variant(v).ok_or_else(|| {
+            format!(
+                "expected rgb, spectral or a Mitsuba variant ending in _rgb or _spectral \
+                 (scalar_rgb, llvm_ad_spectral, ...), found '{v}'"
+            )
+        }),
+    }
+}
+
 fn parse_light_sampler(s: &str) -> Result<scene::LightSelection, String> {
     match s {
         "uniform" => Ok(scene::LightSelection::Uniform),
@@ -691,6 +709,7 @@ fn render_job(args: &RenderArgs, outputs: Vec<PathBuf>, sensor: usize) -> Render
             integrator: args.integrator.clone(),
             light_selection: args.light_sampler,
             flatten_instances: false,
+            mode: args.mode.unwrap_or_default(),
         },
         time: args.time,
         threads: args.threads,

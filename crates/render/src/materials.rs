@@ -169,7 +169,7 @@ impl RtMaterial {
     /// The scattering model at `si` and the shading frame it lives in (perturbed by normal
     /// and bump maps, flipped on the back side of a two-sided material); `None` when the
     /// surface does not scatter.
-    #[inline]
+    #[inline(always)]
     pub fn resolve(
         &self,
         textures: &Textures,
@@ -271,6 +271,7 @@ impl MaterialKind {
     /// spectra; IORs stay scalar but for dispersive dielectrics (see [`MaterialKind::Dielectric`]
     /// and [`ColorMode::smooth_eta`], [`ColorMode::lane_ior`]). Lobe-selection weights and other fixed 3-channel or
     /// channel-mean arithmetic are computed from the RGB values in every mode.
+    #[inline(always)]
     pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
             MaterialKind::Diffuse { reflectance } => {

@@ -7,6 +7,7 @@ use crate::camera::CameraRay;
 use crate::lights::Receiver;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
 fn power(a: f32, b: f32) -> f32 {
@@ -21,18 +22,43 @@ pub fn li(
     emitter_samples: u32,
     bsdf_samples: u32,
 ) -> Vec3 {
+    li_in::<RgbMode>(scene, cray, sampler, emitter_samples, bsdf_samples)
+}
+
+/// [`li`] in the colour mode `M` (set up for this camera sample from `sampler`), as linear
+/// sRGB.
+pub fn li_in<M: PathMode>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    emitter_samples: u32,
+    bsdf_samples: u32,
+) -> Vec3 {
+    let m = M::start(sampler);
+    let l = estimate(scene, cray, sampler, &m, emitter_samples, bsdf_samples);
+    m.to_rgb(l)
+}
+
+fn estimate<M: PathMode>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    m: &M,
+    emitter_samples: u32,
+    bsdf_samples: u32,
+) -> M::C {
     let Some(si) = scene.intersect(&cray.ray, cray.t_max) else {
-        let mut r = Vec3::ZERO;
+        let mut r = M::C::ZERO;
         for &i in &scene.infinite_lights {
-            r += scene.lights[i as usize].environment(cray.ray.d);
+            r += scene.lights[i as usize].environment(cray.ray.d, m);
         }
         return r;
     };
-    let mut result = Vec3::ZERO;
+    let mut result = M::C::ZERO;
     if let Some(l) = scene.shape_light(&si) {
-        result += scene.lights[l as usize].le(scene, &si);
+        result += scene.lights[l as usize].le(scene, &si, m);
     }
-    let Some((bsdf, frame)) = scene.bsdf_at(&si) else {
+    let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
         return result;
     };
     let wo = frame.to_local(si.wo);
@@ -47,15 +73,15 @@ pub fn li(
             let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
                 continue;
             };
-            let Some(ls) = light.sample_li(scene, &receiver, sampler.next_2d()) else {
+            let Some(ls) = light.sample_li(scene, &receiver, sampler.next_2d(), m) else {
                 continue;
             };
-            if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
+            if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
                 continue;
             }
             let wi = frame.to_local(ls.wi);
             let f = bsdf.eval(wo, wi, TransportMode::Radiance);
-            if f == Vec3::ZERO {
+            if f.is_black() {
                 continue;
             }
             let (ray, t_max) = ls.target.ray_from(&si, ls.wi);
@@ -84,24 +110,24 @@ pub fn li(
             Some(hit) => match scene.shape_light(&hit) {
                 Some(l) => {
                     let light = &scene.lights[l as usize];
-                    let le = light.le(scene, &hit);
+                    let le = light.le(scene, &hit, m);
                     let pmf = scene.light_pmf(&receiver, l);
                     (le, pmf * light.pdf_li(scene, &receiver, wi, Some(&hit)))
                 }
                 None => continue,
             },
             None => {
-                let mut le = Vec3::ZERO;
+                let mut le = M::C::ZERO;
                 let mut pdf = 0.0;
                 for &i in &scene.infinite_lights {
                     let l = &scene.lights[i as usize];
-                    le += l.environment(wi);
+                    le += l.environment(wi, m);
                     pdf += scene.light_pmf(&receiver, i) * l.pdf_li(scene, &receiver, wi, None);
                 }
                 (le, pdf)
             }
         };
-        if le == Vec3::ZERO {
+        if le.is_black() {
             continue;
         }
         let w = if bs.delta || emitter_samples == 0 {

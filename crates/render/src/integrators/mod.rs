@@ -13,6 +13,11 @@ use self::path::PathConfig;
 
 use crate::camera::CameraRay;
 use crate::math::Vec3;
+use crate::spectral::lanes::{RgbMode, SpectralMode};
+use base::RenderMode;
+
+/// Spectral mode with the built-in sRGB upsampling table.
+type Spectral = SpectralMode<'static>;
 use crate::sampling::Sampler;
 use crate::world::Scene;
 
@@ -65,12 +70,21 @@ impl Integrator {
             Integrator::AmbientOcclusion { samples, length } => {
                 aov::ambient_occlusion(scene, cray, sampler, *samples, *length)
             }
-            Integrator::Path(cfg) => path::li(scene, cray, sampler, cfg),
+            Integrator::Path(cfg) => match scene.mode {
+                RenderMode::Rgb => path::li(scene, cray, sampler, cfg),
+                RenderMode::Spectral => path::li_in::<Spectral>(scene, cray, sampler, cfg),
+            },
             Integrator::VolPath(cfg) => volpath::li(scene, cray, sampler, cfg),
             Integrator::Direct {
                 emitter_samples,
                 bsdf_samples,
-            } => direct::li(scene, cray, sampler, *emitter_samples, *bsdf_samples),
+            } => {
+                let (e, b) = (*emitter_samples, *bsdf_samples);
+                match scene.mode {
+                    RenderMode::Rgb => direct::li(scene, cray, sampler, e, b),
+                    RenderMode::Spectral => direct::li_in::<Spectral>(scene, cray, sampler, e, b),
+                }
+            }
         }
     }
 
@@ -91,9 +105,21 @@ impl Integrator {
             // A separate instantiation for clamping: the default loop is untouched.
             if let Some(max) = cfg.clamp {
                 let clamped = |tag, l| done(tag, path::clamp_sample(l, max));
-                return path::li_batched(scene, cfg, template, next, clamped);
+                return match scene.mode {
+                    RenderMode::Rgb => {
+                        path::li_batched::<_, RgbMode>(scene, cfg, template, next, clamped)
+                    }
+                    RenderMode::Spectral => {
+                        path::li_batched::<_, Spectral>(scene, cfg, template, next, clamped)
+                    }
+                };
             }
-            return path::li_batched(scene, cfg, template, next, done);
+            return match scene.mode {
+                RenderMode::Rgb => path::li_batched::<_, RgbMode>(scene, cfg, template, next, done),
+                RenderMode::Spectral => {
+                    path::li_batched::<_, Spectral>(scene, cfg, template, next, done)
+                }
+            };
         }
         let mut sampler = template.clone();
         while let Some((tag, cray)) = next(&mut sampler) {

@@ -34,6 +34,7 @@ use crate::math::Vec3;
 use crate::media::Flight;
 use crate::sampling::{Equiangular, Sampler};
 use crate::shapes::{SHADOW_EPSILON, SurfaceInteraction, offset_ray_origin};
+use crate::spectral::lanes::RgbMode;
 use crate::world::Scene;
 
 /// `volpath`'s parameters.
@@ -282,7 +283,7 @@ pub fn li_recorded<R: PathRecorder>(
             if !(depth == 0 && cfg.hide_emitters) {
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
-                    let le = light.environment(ray.d);
+                    let le = light.environment(ray.d, &RgbMode);
                     if le == Vec3::ZERO {
                         continue;
                     }
@@ -310,7 +311,7 @@ pub fn li_recorded<R: PathRecorder>(
             && !(depth == 0 && cfg.hide_emitters)
         {
             let light = &scene.lights[i as usize];
-            let le = light.le(scene, &si);
+            let le = light.le(scene, &si, &RgbMode);
             if le != Vec3::ZERO {
                 let w = match &last {
                     Some(r) if !specular_chain => {
@@ -447,7 +448,7 @@ fn sample_light(
     let picked = scene.sample_light(sampler.next_1d(), r);
     let u = sampler.next_2d();
     let (i, light, pmf) = picked?;
-    let ls = light.sample_li(scene, r, u)?;
+    let ls = light.sample_li(scene, r, u, &RgbMode)?;
     (ls.pdf > 0.0 && ls.li != Vec3::ZERO && pmf > 0.0).then_some((i, ls, pmf))
 }
 
@@ -520,7 +521,7 @@ impl Segment {
         }
         let x = self.o + self.d * t;
         let rx = Receiver::at(x);
-        let Some(ls) = light.sample_li(scene, &rx, u2) else {
+        let Some(ls) = light.sample_li(scene, &rx, u2, &RgbMode) else {
             return Vec3::ZERO;
         };
         if ls.li == Vec3::ZERO || ls.pdf <= 0.0 {

@@ -16,6 +16,7 @@ use crate::sampling::warp;
 use crate::shapes::{
     MeshSampling, ShapeGeom, SurfaceInteraction, disk_uv, ellipsoid, gamma, sphere, sphere_uv,
 };
+use crate::spectral::lanes::{Color, ColorMode};
 use crate::textures::{ColorRef, TexCoord, TexRef};
 
 #[derive(Clone, Debug)]
@@ -37,7 +38,13 @@ impl LightModel for AreaLight {
         false
     }
 
-    fn sample_li(&self, scene: &impl LightScene, r: &Receiver, u: Vec2) -> Option<LightSample> {
+    fn sample_li<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        r: &Receiver,
+        u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
         let info = scene.shape(self.shape);
         let flip = if info.flip_normals { -1.0 } else { 1.0 };
         // The sampled point's uv only feeds a radiance texture.
@@ -53,6 +60,7 @@ impl LightModel for AreaLight {
                     &self.radiance,
                     r,
                     u,
+                    m,
                 );
             }
             ShapeGeom::Mesh {
@@ -119,7 +127,7 @@ impl LightModel for AreaLight {
                 let uv = if textured { sphere_uv(dir) } else { Vec2::ZERO };
                 return Some(LightSample {
                     wi,
-                    li: scene.color(&self.radiance, TexCoord { uv, p }),
+                    li: m.illuminant_at(scene, &self.radiance, TexCoord { uv, p }),
                     pdf: pdf_solid,
                     delta: false,
                     target: ShadowTarget::Surface { p, p_error, n },
@@ -140,7 +148,7 @@ impl LightModel for AreaLight {
         }
         Some(LightSample {
             wi,
-            li: scene.color(&self.radiance, TexCoord { uv, p }),
+            li: m.illuminant_at(scene, &self.radiance, TexCoord { uv, p }),
             pdf: pdf * d2 / cos_l.abs(),
             delta: false,
             target: ShadowTarget::Surface { p, p_error, n },
@@ -174,11 +182,11 @@ impl LightModel for AreaLight {
         }
     }
 
-    fn le(&self, scene: &impl LightScene, si: &SurfaceInteraction) -> Vec3 {
+    fn le<M: ColorMode>(&self, scene: &impl LightScene, si: &SurfaceInteraction, m: &M) -> M::C {
         if self.two_sided || si.shading.n.dot(si.wo) > 0.0 {
-            scene.color(&self.radiance, si.tex())
+            m.illuminant_at(scene, &self.radiance, si.tex())
         } else {
-            Vec3::ZERO
+            M::C::ZERO
         }
     }
 
@@ -258,7 +266,7 @@ impl LightModel for AreaLight {
 
 /// A sphere light's sample ([`sphere::sample`]) with its radiance and orientation.
 #[allow(clippy::too_many_arguments)]
-fn sample_sphere(
+fn sample_sphere<M: ColorMode>(
     scene: &impl LightScene,
     center: Vec3,
     radius: f32,
@@ -267,7 +275,8 @@ fn sample_sphere(
     radiance: &ColorRef,
     r: &Receiver,
     u: Vec2,
-) -> Option<LightSample> {
+    m: &M,
+) -> Option<LightSample<M::C>> {
     let (p, pdf_solid) = sphere::sample(center, radius, r.p, u)?;
     let n_out = (p - center).normalize_or_zero();
     let p = center + n_out * radius;
@@ -289,7 +298,7 @@ fn sample_sphere(
     };
     Some(LightSample {
         wi,
-        li: scene.color(radiance, TexCoord { uv, p }),
+        li: m.illuminant_at(scene, radiance, TexCoord { uv, p }),
         pdf: pdf_solid,
         delta: false,
         target: ShadowTarget::Surface {

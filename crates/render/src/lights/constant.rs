@@ -7,6 +7,7 @@ use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::ColorMode;
 
 #[derive(Clone, Debug)]
 pub struct ConstantLight {
@@ -22,14 +23,20 @@ impl LightModel for ConstantLight {
         true
     }
 
-    fn environment(&self, _d: Vec3) -> Vec3 {
-        self.radiance
+    fn environment<M: ColorMode>(&self, _d: Vec3, m: &M) -> M::C {
+        m.illuminant(self.radiance)
     }
 
-    fn sample_li(&self, _scene: &impl LightScene, _r: &Receiver, u: Vec2) -> Option<LightSample> {
+    fn sample_li<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        _r: &Receiver,
+        u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
         Some(LightSample {
             wi: warp::square_to_uniform_sphere(u),
-            li: self.radiance,
+            li: m.illuminant(self.radiance),
             pdf: warp::uniform_sphere_pdf(),
             delta: false,
             target: ShadowTarget::Infinite,

@@ -5,6 +5,7 @@ use super::LightScene;
 use super::select::{mean, scene_radius};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
+use crate::spectral::lanes::ColorMode;
 
 #[derive(Clone, Debug)]
 pub struct DirectionalLight {
@@ -22,10 +23,16 @@ impl LightModel for DirectionalLight {
         true
     }
 
-    fn sample_li(&self, _scene: &impl LightScene, _r: &Receiver, _u: Vec2) -> Option<LightSample> {
+    fn sample_li<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        _r: &Receiver,
+        _u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
         Some(LightSample {
             wi: -self.direction,
-            li: self.irradiance,
+            li: m.illuminant(self.irradiance),
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Infinite,

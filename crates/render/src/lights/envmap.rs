@@ -13,6 +13,7 @@ use crate::math::{INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
 use crate::sampling::distrib::Distribution2D;
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::ColorMode;
 
 #[derive(Debug)]
 pub struct EnvMap {
@@ -158,15 +159,21 @@ impl LightModel for EnvMap {
         true
     }
 
-    fn environment(&self, d: Vec3) -> Vec3 {
-        self.eval(d)
+    fn environment<M: ColorMode>(&self, d: Vec3, m: &M) -> M::C {
+        m.illuminant(self.eval(d))
     }
 
-    fn sample_li(&self, _scene: &impl LightScene, _r: &Receiver, u: Vec2) -> Option<LightSample> {
+    fn sample_li<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        _r: &Receiver,
+        u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
         let (wi, li, pdf) = self.sample(u)?;
         Some(LightSample {
             wi,
-            li,
+            li: m.illuminant(li),
             pdf,
             delta: false,
             target: ShadowTarget::Infinite,

@@ -28,24 +28,25 @@ pub use spot::SpotLight;
 use crate::geometry::Ray;
 use crate::math::{Vec2, Vec3};
 use crate::shapes::{ShapeInfo, SurfaceInteraction};
-use crate::textures::{ColorRef, TexCoord};
+use crate::spectral::lanes::{Color, ColorMode};
+use crate::textures::Params;
 
-/// A point on an emitter with what it sends towards the receiver.
-/// What lights read of the scene they light: the emitting shapes, parameter values and the
-/// bounds of the geometry. The runtime scene (`world::Scene`) holds the lights and
-/// implements this; lights depend on it, not on the scene.
-pub trait LightScene {
+/// What lights read of the scene they light: the emitting shapes, parameter values
+/// ([`Params`]) and the bounds of the geometry. The runtime scene (`world::Scene`) holds the
+/// lights and implements this; lights depend on it, not on the scene.
+pub trait LightScene: Params {
     fn shape(&self, i: u32) -> &ShapeInfo;
-    fn color(&self, p: &ColorRef, at: TexCoord) -> Vec3;
     fn bounds(&self) -> (Vec3, Vec3);
 }
 
+/// A point on an emitter with what it sends towards the receiver, in the colour type `C` of
+/// the mode the light was sampled in.
 #[derive(Clone, Copy, Debug)]
-pub struct LightSample {
+pub struct LightSample<C = Vec3> {
     /// Unit direction from the receiver towards the light.
     pub wi: Vec3,
     /// Emitted radiance arriving along `-wi` (for delta lights: intensity / d² or irradiance).
-    pub li: Vec3,
+    pub li: C,
     /// Solid-angle density of choosing `wi` (1 for delta lights), not including light selection.
     pub pdf: f32,
     pub delta: bool,
@@ -117,12 +118,18 @@ pub(crate) trait LightModel {
     }
 
     /// Radiance of an environment light seen along `d` (escaping ray direction).
-    fn environment(&self, _d: Vec3) -> Vec3 {
-        Vec3::ZERO
+    fn environment<M: ColorMode>(&self, _d: Vec3, _m: &M) -> M::C {
+        M::C::ZERO
     }
 
-    /// Sample a direction from `r` towards this light.
-    fn sample_li(&self, scene: &impl LightScene, r: &Receiver, u: Vec2) -> Option<LightSample>;
+    /// Sample a direction from `r` towards this light; the radiance in the colour of `m`.
+    fn sample_li<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        r: &Receiver,
+        u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>>;
 
     /// Solid-angle density with which `sample_li` from `r` produces the direction towards
     /// `si`, a point on this (area) light — or, for environment lights, the direction `wi`.
@@ -138,8 +145,8 @@ pub(crate) trait LightModel {
     }
 
     /// Radiance leaving an area light at `si` towards `si.wo`.
-    fn le(&self, _scene: &impl LightScene, _si: &SurfaceInteraction) -> Vec3 {
-        Vec3::ZERO
+    fn le<M: ColorMode>(&self, _scene: &impl LightScene, _si: &SurfaceInteraction, _m: &M) -> M::C {
+        M::C::ZERO
     }
 
     /// Emitted power, up to a common factor ([`select`] has the definitions).
@@ -187,8 +194,8 @@ impl Light {
 
     /// Radiance of an environment light seen along `d` (escaping ray direction).
     #[inline]
-    pub fn environment(&self, d: Vec3) -> Vec3 {
-        dispatch!(self, l => l.environment(d))
+    pub fn environment<M: ColorMode>(&self, d: Vec3, m: &M) -> M::C {
+        dispatch!(self, l => l.environment(d, m))
     }
 
     /// The point a point or spot light emits from (`None` for other lights).
@@ -197,10 +204,19 @@ impl Light {
         dispatch!(self, l => l.position())
     }
 
-    /// Sample a direction from `r` towards this light.
-    #[inline]
-    pub fn sample_li(&self, scene: &impl LightScene, r: &Receiver, u: Vec2) -> Option<LightSample> {
-        dispatch!(self, l => l.sample_li(scene, r, u))
+    /// Sample a direction from `r` towards this light; the radiance in the colour of `m`.
+    /// Out of line, as the compiler chose for the RGB-only loop (see [`Scene::bsdf_at_in`]).
+    ///
+    /// [`Scene::bsdf_at_in`]: crate::world::Scene::bsdf_at_in
+    #[inline(never)]
+    pub fn sample_li<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        r: &Receiver,
+        u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
+        dispatch!(self, l => l.sample_li(scene, r, u, m))
     }
 
     /// Solid-angle density with which `sample_li` from `r` produces the direction towards
@@ -218,8 +234,13 @@ impl Light {
 
     /// Radiance leaving an area light at `si` towards `si.wo`.
     #[inline]
-    pub fn le(&self, scene: &impl LightScene, si: &SurfaceInteraction) -> Vec3 {
-        dispatch!(self, l => l.le(scene, si))
+    pub fn le<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        si: &SurfaceInteraction,
+        m: &M,
+    ) -> M::C {
+        dispatch!(self, l => l.le(scene, si, m))
     }
 
     /// Emitted power (see [`select`]); 0 for a light that emits nothing.

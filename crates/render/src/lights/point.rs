@@ -5,6 +5,7 @@ use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{PI, Vec2, Vec3};
+use crate::spectral::lanes::ColorMode;
 
 #[derive(Clone, Debug)]
 pub struct PointLight {
@@ -21,12 +22,18 @@ impl LightModel for PointLight {
         Some(self.position)
     }
 
-    fn sample_li(&self, _scene: &impl LightScene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
+    fn sample_li<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        r: &Receiver,
+        _u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
         let d = self.position - r.p;
         let d2 = d.length_squared();
         (d2 > 0.0).then(|| LightSample {
             wi: d / d2.sqrt(),
-            li: self.intensity / d2,
+            li: m.illuminant(self.intensity) / d2,
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Point(self.position),

@@ -7,6 +7,7 @@ use super::bvh::LightBounds;
 use super::select::{mean, omni};
 use super::{LightModel, LightSample, Receiver, ShadowTarget};
 use crate::math::{Mat3, Mat4, PI, Vec2, Vec3};
+use crate::spectral::lanes::ColorMode;
 
 #[derive(Clone, Debug)]
 pub struct SpotLight {
@@ -70,7 +71,13 @@ impl LightModel for SpotLight {
         Some(self.position)
     }
 
-    fn sample_li(&self, _scene: &impl LightScene, r: &Receiver, _u: Vec2) -> Option<LightSample> {
+    fn sample_li<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        r: &Receiver,
+        _u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
         let d = self.position - r.p;
         let d2 = d.length_squared();
         if d2 <= 0.0 {
@@ -81,7 +88,7 @@ impl LightModel for SpotLight {
         let f = self.falloff(local.z);
         (f > 0.0).then(|| LightSample {
             wi,
-            li: self.intensity * f / d2,
+            li: m.illuminant(self.intensity) * f / d2,
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Point(self.position),

@@ -24,6 +24,7 @@ use crate::geometry::Ray;
 use crate::math::{Mat4, Vec2, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::distrib::AliasTable;
+use crate::spectral::lanes::{Color, ColorMode};
 
 #[derive(Clone, Debug)]
 pub enum MediumKind {
@@ -203,6 +204,16 @@ impl Medium {
     pub fn analytic_transmittance(&self, d: f32) -> Option<Vec3> {
         match &self.kind {
             MediumKind::Homogeneous(h) => Some(h.transmittance(d)),
+            MediumKind::Heterogeneous(_) => None,
+        }
+    }
+
+    /// [`Self::analytic_transmittance`] in the colour of `m` (σt converted as an unbounded
+    /// spectrum), over a finite distance `d`: in RGB mode the same float expression.
+    #[inline]
+    pub fn analytic_transmittance_in<M: ColorMode>(&self, d: f32, m: &M) -> Option<M::C> {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => Some((-m.unbounded(h.sigma_t) * d).exp()),
             MediumKind::Heterogeneous(_) => None,
         }
     }

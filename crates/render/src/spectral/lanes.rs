@@ -61,6 +61,8 @@ pub trait Color:
     /// selection weights) keep working as heuristics but change their noise, not their mean.
     fn mean(self) -> f32;
     fn is_black(self) -> bool;
+    /// e^x per lane.
+    fn exp(self) -> Self;
 }
 
 impl Color for Vec3 {
@@ -92,6 +94,10 @@ impl Color for Vec3 {
     fn is_black(self) -> bool {
         self == Vec3::ZERO
     }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        Vec3::exp(self)
+    }
 }
 
 impl Color for SampledSpectrum {
@@ -122,6 +128,10 @@ impl Color for SampledSpectrum {
     #[inline(always)]
     fn is_black(self) -> bool {
         SampledSpectrum::is_black(self)
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        SampledSpectrum::exp(self)
     }
 }
 

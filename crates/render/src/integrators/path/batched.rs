@@ -46,37 +46,38 @@ use crate::camera::CameraRay;
 use crate::geometry::Ray;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 
 /// A candidate contribution `l` of next-event estimation and its shadow segment.
-pub(super) struct ShadowQuery {
+pub(super) struct ShadowQuery<C> {
     pub(super) ray: Ray,
     pub(super) t_max: f32,
-    pub(super) l: Vec3,
+    pub(super) l: C,
 }
 
 /// Where next-event estimation's candidate contributions go: each counts only if its shadow
 /// segment is unblocked.
-pub(super) enum Shadows<'a> {
+pub(super) enum Shadows<'a, C> {
     /// Test each shadow ray when it is made (the single-path loop).
     Immediate,
     /// Queue it with the slot of its path, to be tested with the rest of the batch after
     /// every path of the batch has been shaded.
     Deferred {
-        queue: &'a mut Vec<(ShadowQuery, u32)>,
+        queue: &'a mut Vec<(ShadowQuery<C>, u32)>,
         slot: u32,
     },
 }
 
-impl<R: PathRecorder> Tracer<'_, R> {
+impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
     /// Add `q.l` to the estimate (and tell the recorder) unless `q.ray` is blocked within
     /// `(0, q.t_max)`, or queue it for the batch to do so.
     #[inline]
-    pub(super) fn shadow(&mut self, q: ShadowQuery, c: Contribution) {
+    pub(super) fn shadow(&mut self, q: ShadowQuery<M::C>, c: Contribution) {
         match &mut self.shadows {
             // A zero value (an MIS weight of 0) is neither traced nor recorded.
             Shadows::Immediate => {
-                if q.l != Vec3::ZERO && !self.scene.occluded(&q.ray, q.t_max) {
+                if !q.l.is_black() && !self.scene.occluded(&q.ray, q.t_max) {
                     self.add(q.l, c);
                 }
             }
@@ -89,27 +90,29 @@ impl<R: PathRecorder> Tracer<'_, R> {
 const BATCH: usize = 32;
 
 /// A path in flight.
-struct Slot<T> {
+struct Slot<T, M: PathMode> {
     sampler: Sampler,
-    st: PathState,
-    result: Vec3,
+    mode: M,
+    st: PathState<M::C>,
+    result: M::C,
     tag: T,
 }
 
 /// [`li`](super::li) for a stream of camera rays, `BATCH` (32) paths at a time (see the module
 /// docs: the estimates are the same). `next` sets the sampler up for the next camera sample
 /// and returns its tag and ray (`None`: no more); `done` receives each path's estimate with
-/// its tag, in the order the paths end.
-pub fn li_batched<T>(
+/// its tag, in the order the paths end, as linear sRGB: each path runs in the colour mode
+/// `M` (set up per camera sample by [`PathMode::start`]).
+pub fn li_batched<T, M: PathMode>(
     scene: &Scene,
     cfg: &PathConfig,
     template: &Sampler,
     mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
     mut done: impl FnMut(T, Vec3),
 ) {
-    let mut slots: Vec<Slot<T>> = Vec::with_capacity(BATCH);
+    let mut slots: Vec<Slot<T, M>> = Vec::with_capacity(BATCH);
     let mut hits: Vec<Option<Hit>> = Vec::with_capacity(BATCH);
-    let mut queue: Vec<(ShadowQuery, u32)> = Vec::with_capacity(BATCH);
+    let mut queue: Vec<(ShadowQuery<M::C>, u32)> = Vec::with_capacity(BATCH);
     let mut alive = [false; BATCH];
     let mut sampler = template.clone();
     if cfg.max_depth == 0 {
@@ -122,12 +125,17 @@ pub fn li_batched<T>(
     while more && slots.len() < BATCH {
         match next(&mut sampler) {
             None => more = false,
-            Some((tag, cray)) => slots.push(Slot {
-                sampler: sampler.clone(),
-                st: PathState::start(scene, cfg, &cray),
-                result: Vec3::ZERO,
-                tag,
-            }),
+            Some((tag, cray)) => {
+                let mut sampler = sampler.clone();
+                let mode = M::start(&mut sampler);
+                slots.push(Slot {
+                    sampler,
+                    mode,
+                    st: PathState::start(scene, cfg, &cray),
+                    result: M::C::ZERO,
+                    tag,
+                })
+            }
         }
     }
     while !slots.is_empty() {
@@ -138,6 +146,7 @@ pub fn li_batched<T>(
                 cfg,
                 sampler: &mut s.sampler,
                 rec: &mut NoRecorder,
+                mode: &s.mode,
                 result: &mut s.result,
                 shadows: Shadows::Deferred {
                     queue: &mut queue,
@@ -164,14 +173,16 @@ pub fn li_batched<T>(
             let s = &mut slots[k];
             match if more { next(&mut s.sampler) } else { None } {
                 Some((tag, cray)) => {
+                    let mode = M::start(&mut s.sampler);
+                    let old = std::mem::replace(&mut s.mode, mode);
                     s.st = PathState::start(scene, cfg, &cray);
-                    let result = std::mem::replace(&mut s.result, Vec3::ZERO);
-                    done(std::mem::replace(&mut s.tag, tag), result);
+                    let result = std::mem::replace(&mut s.result, M::C::ZERO);
+                    done(std::mem::replace(&mut s.tag, tag), old.to_rgb(result));
                 }
                 None => {
                     more = false;
                     let s = slots.swap_remove(k);
-                    done(s.tag, s.result);
+                    done(s.tag, s.mode.to_rgb(s.result));
                 }
             }
         }

@@ -50,6 +50,7 @@ use self::vertex::{PathState, Tracer};
 use crate::camera::CameraRay;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
 /// How emission found by BSDF-sampled rays is weighted against emitter sampling.
@@ -137,15 +138,34 @@ pub fn clamp_sample(l: Vec3, max: f32) -> Vec3 {
 }
 
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConfig) -> Vec3 {
+    li_in::<RgbMode>(scene, cray, sampler, cfg)
+}
+
+/// [`li`] in the colour mode `M` (set up for this camera sample from `sampler`), as linear
+/// sRGB.
+pub fn li_in<M: PathMode>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    cfg: &PathConfig,
+) -> Vec3 {
+    let mode = M::start(sampler);
     if let Some(depth) = cfg.only_depth {
         let mut rec = DepthFilter {
             depth,
-            sum: Vec3::ZERO,
+            sum: M::C::ZERO,
         };
-        li_recorded(scene, cray, sampler, cfg, &mut rec);
-        return rec.sum;
+        li_recorded_in(scene, cray, sampler, cfg, &mode, &mut rec);
+        return mode.to_rgb(rec.sum);
     }
-    li_recorded(scene, cray, sampler, cfg, &mut NoRecorder)
+    mode.to_rgb(li_recorded_in(
+        scene,
+        cray,
+        sampler,
+        cfg,
+        &mode,
+        &mut NoRecorder,
+    ))
 }
 
 /// [`li`], telling `rec` everything that happens along the path.
@@ -156,7 +176,19 @@ pub fn li_recorded(
     cfg: &PathConfig,
     rec: &mut impl PathRecorder,
 ) -> Vec3 {
-    let mut result = Vec3::ZERO;
+    li_recorded_in(scene, cray, sampler, cfg, &RgbMode, rec)
+}
+
+/// [`li_recorded`] in the colour mode `mode`: the estimate in its colour type.
+pub fn li_recorded_in<M: PathMode>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    cfg: &PathConfig,
+    mode: &M,
+    rec: &mut impl PathRecorder<M::C>,
+) -> M::C {
+    let mut result = M::C::ZERO;
     if cfg.max_depth == 0 {
         return result;
     }
@@ -167,6 +199,7 @@ pub fn li_recorded(
         cfg,
         sampler,
         rec,
+        mode,
         result: &mut result,
         shadows: Shadows::Immediate,
     }

@@ -19,7 +19,7 @@ use super::vertex::{Previous, Shading, Tracer};
 use super::{Combine, PathConfig};
 use crate::bsdf::TransportMode;
 use crate::lights::{Light, Receiver};
-use crate::math::Vec3;
+use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 
 /// The MIS weight of a strategy with density `a` against one with density `b`.
@@ -81,22 +81,25 @@ fn nee_density(cfg: &PathConfig, selection: f32, pdf_li: f32) -> f32 {
 }
 
 /// A non-delta vertex, as next-event estimation sees it.
-pub(super) struct NeeContext<'a> {
-    pub(super) at: Shading<'a>,
+pub(super) struct NeeContext<'a, C: Color> {
+    pub(super) at: Shading<'a, C>,
     pub(super) receiver: Receiver,
     /// Throughput of the path up to the vertex.
-    pub(super) throughput: Vec3,
+    pub(super) throughput: C,
     /// What the contributions of this vertex's emitter samples are recorded as.
     pub(super) contribution: Contribution,
 }
 
-impl NeeContext<'_> {
+impl<C: Color> NeeContext<'_, C> {
     /// Emitter sampling at the vertex, by the strategy `t.cfg` asks for (see the module docs).
     /// Without a smooth lobe or with BSDF sampling only, nothing is sampled, but the
     /// one-emitter strategy still draws its sample dimensions, so that the stream stays aligned
     /// whatever the material.
     #[inline]
-    pub(super) fn estimate<R: PathRecorder>(&self, t: &mut Tracer<'_, R>) {
+    pub(super) fn estimate<R: PathRecorder<C>, M: PathMode<C = C>>(
+        &self,
+        t: &mut Tracer<'_, R, M>,
+    ) {
         let (scene, cfg) = (t.scene, t.cfg);
         let nee = self.at.bsdf.has_smooth() && cfg.combine != Combine::BsdfOnly;
         if cfg.all_lights {
@@ -132,7 +135,12 @@ impl NeeContext<'_> {
     /// chosen (1 when all lights are sampled): the MIS density needs it, and recomputing it
     /// would walk the light BVH a second time.
     #[inline]
-    fn sample<R: PathRecorder>(&self, t: &mut Tracer<'_, R>, i: u32, selection: f32) {
+    fn sample<R: PathRecorder<C>, M: PathMode<C = C>>(
+        &self,
+        t: &mut Tracer<'_, R, M>,
+        i: u32,
+        selection: f32,
+    ) {
         let (scene, cfg) = (t.scene, t.cfg);
         let light = &scene.lights[i as usize];
         let n = if cfg.all_lights && light.is_delta() {
@@ -156,9 +164,9 @@ impl NeeContext<'_> {
 
     /// One emitter sample towards `light`, of `per_light` for this light.
     #[inline(always)]
-    fn one<R: PathRecorder>(
+    fn one<R: PathRecorder<C>, M: PathMode<C = C>>(
         &self,
-        t: &mut Tracer<'_, R>,
+        t: &mut Tracer<'_, R, M>,
         light: &Light,
         selection: f32,
         per_light: f32,
@@ -172,11 +180,11 @@ impl NeeContext<'_> {
         } = self.at;
         let u = t.sampler.next_2d();
         // Borrowed, not moved out of the `Option`: a light sample is 112 bytes.
-        let ls = light.sample_li(scene, &self.receiver, u);
+        let ls = light.sample_li(scene, &self.receiver, u, t.mode);
         let Some(ls) = &ls else {
             return;
         };
-        if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
+        if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
             return;
         }
         let wi = frame.to_local(ls.wi);
@@ -191,7 +199,7 @@ impl NeeContext<'_> {
             let f = bsdf.eval(wo, wi, mode);
             (f, direction_pdf(cfg, bsdf, wo, wi))
         };
-        if f == Vec3::ZERO {
+        if f.is_black() {
             return;
         }
         // Density of this strategy for MIS: all samples of all lights considered.

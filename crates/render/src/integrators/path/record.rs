@@ -6,6 +6,7 @@
 
 use crate::geometry::Ray;
 use crate::math::Vec3;
+use crate::spectral::lanes::Color;
 
 /// How a path left a vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,29 +49,29 @@ pub enum VertexKind {
     Null,
 }
 
-/// A vertex as recorded.
+/// A vertex as recorded (throughput in the colour type `C` of the path's mode).
 #[derive(Clone, Copy, Debug)]
-pub struct RecordedVertex {
+pub struct RecordedVertex<C = Vec3> {
     pub p: Vec3,
     /// Shading normal (zero at a medium vertex).
     pub n: Vec3,
     /// Segments traced before reaching this vertex (1 for the first hit).
     pub depth: u32,
     /// Throughput of the path up to this vertex.
-    pub throughput: Vec3,
+    pub throughput: C,
     pub kind: VertexKind,
 }
 
 /// A direction sampled at the last recorded vertex.
 #[derive(Clone, Copy, Debug)]
-pub struct RecordedScatter {
+pub struct RecordedScatter<C = Vec3> {
     pub scatter: Scatter,
     /// The sampled direction (world space, unit length).
     pub wi: Vec3,
     /// Solid-angle density (or discrete probability for delta lobes).
     pub pdf: f32,
     /// Throughput after the bounce (and after Russian roulette reweighting).
-    pub throughput: Vec3,
+    pub throughput: C,
 }
 
 /// Why a path stopped.
@@ -87,28 +88,29 @@ pub enum PathEnd {
     Absorbed,
 }
 
-/// Observes the events of the paths traced by [`li_recorded`](super::li_recorded).
-pub trait PathRecorder {
+/// Observes the events of the paths traced by [`li_recorded`](super::li_recorded), whose
+/// colours are of type `C` (RGB unless the path runs in spectral mode).
+pub trait PathRecorder<C = Vec3> {
     fn camera_ray(&mut self, _ray: &Ray) {}
-    fn vertex(&mut self, _v: &RecordedVertex) {}
-    fn scatter(&mut self, _s: &RecordedScatter) {}
+    fn vertex(&mut self, _v: &RecordedVertex<C>) {}
+    fn scatter(&mut self, _s: &RecordedScatter<C>) {}
     fn end(&mut self, _why: PathEnd) {}
     /// Radiance `l` was added to the estimate.
-    fn contribution(&mut self, _l: Vec3, _c: Contribution) {}
+    fn contribution(&mut self, _l: C, _c: Contribution) {}
 }
 
 /// Records nothing.
 pub struct NoRecorder;
-impl PathRecorder for NoRecorder {}
+impl<C> PathRecorder<C> for NoRecorder {}
 
 /// Sums the contributions of paths with exactly `depth` segments (one bounce only).
-pub struct DepthFilter {
+pub struct DepthFilter<C = Vec3> {
     pub depth: u32,
-    pub sum: Vec3,
+    pub sum: C,
 }
 
-impl PathRecorder for DepthFilter {
-    fn contribution(&mut self, l: Vec3, c: Contribution) {
+impl<C: Color> PathRecorder<C> for DepthFilter<C> {
+    fn contribution(&mut self, l: C, c: Contribution) {
         if c.depth == self.depth {
             self.sum += l;
         }

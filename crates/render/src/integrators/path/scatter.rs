@@ -12,13 +12,14 @@ use crate::lights::Receiver;
 use crate::math::{Vec2, Vec3};
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::{Color, PathMode};
 
-impl<R: PathRecorder> Tracer<'_, R> {
+impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
     /// Draw the next direction at `v`, advance the state `next` to the next segment
     /// (throughput, Russian roulette) and tell the recorder; `false` when the path ends here
     /// (`next` is then left partly updated and must not be used). In place: the state is
     /// large, and returning a new one cost two copies per bounce.
-    pub(super) fn scatter(&mut self, v: &Shading, next: &mut PathState) -> bool {
+    pub(super) fn scatter(&mut self, v: &Shading<M::C>, next: &mut PathState<M::C>) -> bool {
         let cfg = self.cfg;
         let (si, bsdf, wo) = (v.si, v.bsdf, v.wo);
         let u1 = self.sampler.next_1d();
@@ -27,7 +28,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
         {
             let (wi, pdf) = uniform_direction(bsdf, wo, Some(u2));
             let f = bsdf.eval(wo, wi, TransportMode::Radiance);
-            (f != Vec3::ZERO).then(|| BsdfSample {
+            (!f.is_black()).then(|| BsdfSample {
                 wi,
                 weight: f / pdf,
                 pdf,
@@ -56,10 +57,14 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// (depth, Russian roulette), has no emitter sampling (the surface is not smooth), and
     /// an emitter found next counts without MIS.
     #[cold]
-    pub(super) fn cross_null(&mut self, si: &SurfaceInteraction, next: &mut PathState) -> bool {
+    pub(super) fn cross_null(
+        &mut self,
+        si: &SurfaceInteraction,
+        next: &mut PathState<M::C>,
+    ) -> bool {
         let bs = BsdfSample {
             wi: -si.wo,
-            weight: Vec3::ONE,
+            weight: M::C::ONE,
             pdf: 1.0,
             delta: true,
             transmission: true,
@@ -77,9 +82,9 @@ impl<R: PathRecorder> Tracer<'_, R> {
         &mut self,
         si: &SurfaceInteraction,
         wi: Vec3,
-        bs: &BsdfSample,
+        bs: &BsdfSample<M::C>,
         front: bool,
-        next: &mut PathState,
+        next: &mut PathState<M::C>,
     ) -> bool {
         let (scene, cfg) = (self.scene, self.cfg);
         next.throughput *= bs.weight;
@@ -103,7 +108,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
             next.first = Some(scatter);
         }
         next.depth += 1;
-        let t_max_component = next.throughput.max_element();
+        let t_max_component = self.mode.live_max(next.throughput);
         if t_max_component.is_nan() || t_max_component <= 0.0 {
             self.rec.end(PathEnd::Absorbed);
             return false;
@@ -130,7 +135,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
 /// Probability that the path `next`, whose largest throughput component is
 /// `t_max_component`, continues (1: no roulette at this depth).
 #[inline]
-fn roulette(cfg: &PathConfig, next: &PathState, t_max_component: f32) -> f32 {
+fn roulette<C>(cfg: &PathConfig, next: &PathState<C>, t_max_component: f32) -> f32 {
     match cfg.rr {
         RussianRoulette::Off => 1.0,
         RussianRoulette::Throughput { from_depth } if next.depth >= from_depth => {
@@ -143,7 +148,7 @@ fn roulette(cfg: &PathConfig, next: &PathState, t_max_component: f32) -> f32 {
 
 /// Density of the direction strategy at a non-delta vertex.
 #[inline]
-pub(super) fn direction_pdf(cfg: &PathConfig, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+pub(super) fn direction_pdf<C: Color>(cfg: &PathConfig, bsdf: &Bsdf<C>, wo: Vec3, wi: Vec3) -> f32 {
     match cfg.directions {
         DirectionSampling::Bsdf => bsdf.pdf(wo, wi),
         DirectionSampling::UniformHemisphere => uniform_direction(bsdf, wo, None).1,
@@ -153,7 +158,7 @@ pub(super) fn direction_pdf(cfg: &PathConfig, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -
 /// Uniform directions: over the hemisphere of `wo` for opaque BSDFs, over the sphere for
 /// those that transmit. Returns the direction (when `u` is given) and its density.
 #[inline]
-fn uniform_direction(bsdf: &Bsdf, wo: Vec3, u: Option<Vec2>) -> (Vec3, f32) {
+fn uniform_direction<C: Color>(bsdf: &Bsdf<C>, wo: Vec3, u: Option<Vec2>) -> (Vec3, f32) {
     if bsdf.has_transmission() {
         let w = u.map_or(Vec3::Z, warp::square_to_uniform_sphere);
         (w, warp::uniform_sphere_pdf())

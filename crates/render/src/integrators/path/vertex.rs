@@ -22,6 +22,7 @@ use crate::lights::Receiver;
 use crate::math::{Frame, Vec3};
 use crate::sampling::Sampler;
 use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::{Color, PathMode};
 use crate::textures::TexCoord;
 use crate::world::Scene;
 
@@ -35,12 +36,12 @@ pub(super) struct Previous {
     pub(super) delta: bool,
 }
 
-/// The state of a path between two segments.
+/// The state of a path between two segments (throughput in the colour type `C` of its mode).
 #[derive(Clone, Copy)]
-pub(super) struct PathState {
+pub(super) struct PathState<C> {
     pub(super) ray: Ray,
     pub(super) t_max: f32,
-    pub(super) throughput: Vec3,
+    pub(super) throughput: C,
     pub(super) eta: f32,
     /// Segments traced so far.
     pub(super) depth: u32,
@@ -55,12 +56,12 @@ pub(super) struct PathState {
     pub(super) diffuse_seen: bool,
 }
 
-impl PathState {
-    pub(super) fn start(scene: &Scene, cfg: &PathConfig, cray: &CameraRay) -> PathState {
+impl<C: Color> PathState<C> {
+    pub(super) fn start(scene: &Scene, cfg: &PathConfig, cray: &CameraRay) -> PathState<C> {
         PathState {
             ray: cray.ray,
             t_max: cray.t_max,
-            throughput: Vec3::ONE,
+            throughput: C::ONE,
             eta: 1.0,
             depth: 0,
             prev: None,
@@ -91,28 +92,31 @@ impl PathState {
 /// A vertex that scatters: its interaction, its BSDF in its shading frame, and the direction
 /// back along the path in that frame.
 #[derive(Clone, Copy)]
-pub(super) struct Shading<'a> {
+pub(super) struct Shading<'a, C: Color> {
     pub(super) si: &'a SurfaceInteraction,
-    pub(super) bsdf: &'a Bsdf,
+    pub(super) bsdf: &'a Bsdf<C>,
     pub(super) frame: &'a Frame,
     pub(super) wo: Vec3,
 }
 
-/// What a path's vertex step works with besides the path's state.
-pub(super) struct Tracer<'a, R> {
+/// What a path's vertex step works with besides the path's state: among others its colour
+/// mode `M` (RGB, or spectral with the path's wavelengths), which every colour the path
+/// meets goes through.
+pub(super) struct Tracer<'a, R, M: PathMode> {
     pub(super) scene: &'a Scene,
     pub(super) cfg: &'a PathConfig,
     pub(super) sampler: &'a mut Sampler,
     pub(super) rec: &'a mut R,
+    pub(super) mode: &'a M,
     /// The path's estimate so far.
-    pub(super) result: &'a mut Vec3,
+    pub(super) result: &'a mut M::C,
     /// Where next-event estimation's candidate contributions go.
-    pub(super) shadows: Shadows<'a>,
+    pub(super) shadows: Shadows<'a, M::C>,
 }
 
-impl<R: PathRecorder> Tracer<'_, R> {
+impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
     /// Trace the path `st` to its end, one segment at a time.
-    pub(super) fn trace(&mut self, mut st: PathState) {
+    pub(super) fn trace(&mut self, mut st: PathState<M::C>) {
         let scene = self.scene;
         loop {
             let (ray, t_max) = (st.ray, st.t_max);
@@ -126,7 +130,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
 
     /// Add `l` to the estimate and tell the recorder where it came from.
     #[inline]
-    pub(super) fn add(&mut self, l: Vec3, c: Contribution) {
+    pub(super) fn add(&mut self, l: M::C, c: Contribution) {
         *self.result += l;
         self.rec.contribution(l, c);
     }
@@ -134,7 +138,11 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// One segment of a path: the emission found by `st.ray` (whose closest hit is `si`),
     /// emitter sampling at the vertex, and the next direction (`st` advanced in place).
     /// `false` when the path ends here.
-    pub(super) fn vertex(&mut self, st: &mut PathState, si: Option<&SurfaceInteraction>) -> bool {
+    pub(super) fn vertex(
+        &mut self,
+        st: &mut PathState<M::C>,
+        si: Option<&SurfaceInteraction>,
+    ) -> bool {
         let Some(si) = si else {
             self.escaped(st);
             return false;
@@ -142,8 +150,8 @@ impl<R: PathRecorder> Tracer<'_, R> {
         st.t_max = f32::INFINITY;
         // Beer–Lambert over the segment (the ray's direction need not be a unit vector).
         if let Some(m) = st.medium
-            && let Some(tr) =
-                self.scene.media[m as usize].analytic_transmittance(si.t * st.ray.d.length())
+            && let Some(tr) = self.scene.media[m as usize]
+                .analytic_transmittance_in(si.t * st.ray.d.length(), self.mode)
         {
             st.throughput *= tr;
         }
@@ -153,7 +161,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
         }
 
         let (scene, cfg) = (self.scene, self.cfg);
-        let bsdf = scene.bsdf_at(si);
+        let bsdf = scene.bsdf_at_in(si, self.mode);
         self.rec.vertex(&RecordedVertex {
             p: si.p,
             n: si.shading.n,
@@ -195,14 +203,14 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// `st.ray` left the scene: the environment's emission along it (and the background, for
     /// camera rays).
     #[inline]
-    fn escaped(&mut self, st: &PathState) {
-        let (scene, cfg) = (self.scene, self.cfg);
+    fn escaped(&mut self, st: &PathState<M::C>) {
+        let (scene, cfg, m) = (self.scene, self.cfg, self.mode);
         if !(st.depth == 0 && cfg.hide_emitters) {
-            let mut l = Vec3::ZERO;
+            let mut l = M::C::ZERO;
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i as usize];
-                let le = light.environment(st.ray.d);
-                if le == Vec3::ZERO {
+                let le = light.environment(st.ray.d, m);
+                if le.is_black() {
                     continue;
                 }
                 let w = emission_weight(cfg, st.prev.as_ref(), |r| {
@@ -212,14 +220,14 @@ impl<R: PathRecorder> Tracer<'_, R> {
             }
             if st.depth == 0 {
                 if let Some(bg) = scene.background {
-                    l += bg;
+                    l += m.illuminant(bg);
                 }
                 if let Some(t) = scene.background_texture {
                     let uv = scene.camera.film_uv(st.ray.o, st.ray.d);
-                    l += scene.textures.get(t).eval(TexCoord::uv(uv));
+                    l += m.illuminant(scene.textures.get(t).eval(TexCoord::uv(uv)));
                 }
             }
-            if l != Vec3::ZERO {
+            if !l.is_black() {
                 self.add(l, st.contribution(Via::Emission, st.depth + 1));
             }
         }
@@ -230,15 +238,15 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// shows it: not to camera rays with `hide_emitters`, not through caustic paths without
     /// `caustics`).
     #[inline]
-    fn emission(&mut self, st: &PathState, si: &SurfaceInteraction) {
+    fn emission(&mut self, st: &PathState<M::C>, si: &SurfaceInteraction) {
         let (scene, cfg) = (self.scene, self.cfg);
         if let Some(li) = scene.shape_light(si)
             && !(st.depth == 0 && cfg.hide_emitters)
             && (cfg.caustics || !st.caustic())
         {
             let light = &scene.lights[li as usize];
-            let le = light.le(scene, si);
-            if le != Vec3::ZERO {
+            let le = light.le(scene, si, self.mode);
+            if !le.is_black() {
                 let w = emission_weight(cfg, st.prev.as_ref(), |r| {
                     let pdf = light.pdf_li(scene, r, st.ray.d.normalize(), Some(si));
                     nee_pdf(scene, cfg, r, li, pdf)
@@ -252,13 +260,13 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// A surface without shading shows its colour to whoever reaches it, and ends the path
     /// (`true`).
     #[inline]
-    fn unlit(&mut self, st: &PathState, si: &SurfaceInteraction) -> bool {
+    fn unlit(&mut self, st: &PathState<M::C>, si: &SurfaceInteraction) -> bool {
         let scene = self.scene;
         if scene.has_unlit
             && let Some(c) = scene.unlit_color(si)
         {
-            let l = st.throughput * c;
-            if l != Vec3::ZERO {
+            let l = st.throughput * self.mode.illuminant(c);
+            if !l.is_black() {
                 self.add(l, st.contribution(Via::Emission, st.depth + 1));
             }
             self.rec.end(PathEnd::Absorbed);
@@ -270,14 +278,14 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// The scene's ambient term at a vertex of a Whitted tracer (one that does not continue
     /// after non-delta vertices).
     #[inline]
-    fn ambient(&mut self, st: &PathState, si: &SurfaceInteraction) {
-        let scene = self.scene;
+    fn ambient(&mut self, st: &PathState<M::C>, si: &SurfaceInteraction) {
+        let (scene, m) = (self.scene, self.mode);
         if !self.cfg.continue_diffuse
             && scene.ambient != Vec3::ZERO
             && let Some(ka) = scene.ambient_reflectance(si)
         {
-            let l = st.throughput * ka * scene.ambient;
-            if l != Vec3::ZERO {
+            let l = st.throughput * m.albedo(ka) * m.illuminant(scene.ambient);
+            if !l.is_black() {
                 self.add(l, st.contribution(Via::Ambient, st.depth + 1));
             }
         }
@@ -287,7 +295,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
     /// the last of them; the other N − 1 are traced to their ends here, with their shadow
     /// rays tested at once (in the batched loop too).
     #[inline]
-    fn split(&mut self, st: &mut PathState, at: &Shading) {
+    fn split(&mut self, st: &mut PathState<M::C>, at: &Shading<M::C>) {
         st.split = false;
         let n = self.cfg.splitting;
         st.throughput /= n as f32;
@@ -299,6 +307,7 @@ impl<R: PathRecorder> Tracer<'_, R> {
                     cfg: self.cfg,
                     sampler: &mut *self.sampler,
                     rec: &mut *self.rec,
+                    mode: self.mode,
                     result: &mut *self.result,
                     shadows: Shadows::Immediate,
                 }
