@@ -178,14 +178,6 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         loc: Loc::file(&desc.source),
         message: e.to_string(),
     })?;
-    if opts.mode == base::RenderMode::Spectral && matches!(integrator, Integrator::VolPath(_)) {
-        return Err(BuildError {
-            loc: Loc::file(&desc.source),
-            message:
-                "the volpath integrator does not run in spectral mode yet; render with --mode rgb"
-                    .into(),
-        });
-    }
     // Mitsuba's `path` ignores media, and so does ours for a scene that declares any. When
     // every medium comes from Beer absorption (purely absorbing, homogeneous), the path
     // tracer applies them, as the courses' tracers apply absorption inside their glass.

@@ -158,7 +158,11 @@ fn blackbody(scale: f32) -> Blackbody {
                 * scale
         })
         .collect();
-    Blackbody { table, step: STEP }
+    Blackbody {
+        table,
+        step: STEP,
+        scale,
+    }
 }
 
 fn max_abs(m: &Mat4) -> f32 {

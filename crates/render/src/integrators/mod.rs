@@ -74,7 +74,10 @@ impl Integrator {
                 RenderMode::Rgb => path::li(scene, cray, sampler, cfg),
                 RenderMode::Spectral => path::li_in::<Spectral>(scene, cray, sampler, cfg),
             },
-            Integrator::VolPath(cfg) => volpath::li(scene, cray, sampler, cfg),
+            Integrator::VolPath(cfg) => match scene.mode {
+                RenderMode::Rgb => volpath::li(scene, cray, sampler, cfg),
+                RenderMode::Spectral => volpath::li_in::<Spectral>(scene, cray, sampler, cfg),
+            },
             Integrator::Direct {
                 emitter_samples,
                 bsdf_samples,

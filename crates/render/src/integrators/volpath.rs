@@ -34,7 +34,7 @@ use crate::math::Vec3;
 use crate::media::Flight;
 use crate::sampling::{Equiangular, Sampler};
 use crate::shapes::{SHADOW_EPSILON, SurfaceInteraction, offset_ray_origin};
-use crate::spectral::lanes::RgbMode;
+use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
 /// `volpath`'s parameters.
@@ -82,12 +82,26 @@ enum From<'a> {
 /// The radiance arriving along one camera ray.
 #[inline]
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathConfig) -> Vec3 {
-    li_recorded(scene, cray, sampler, cfg, &mut NoRecorder)
+    li_in::<RgbMode>(scene, cray, sampler, cfg)
+}
+
+/// [`li`] in the colour mode `M` (set up for this camera sample from `sampler`), as linear
+/// sRGB.
+#[inline]
+pub fn li_in<M: PathMode>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    cfg: &VolPathConfig,
+) -> Vec3 {
+    let mode = M::start(sampler);
+    let l = li_recorded_in(scene, cray, sampler, cfg, &mode, &mut NoRecorder);
+    mode.to_rgb(l)
 }
 
 /// Adds `l` to the estimate and tells the recorder where it came from.
 #[inline(always)]
-fn add<R: PathRecorder>(result: &mut Vec3, rec: &mut R, l: Vec3, c: Contribution) {
+fn add<C: Color, R: PathRecorder<C>>(result: &mut C, rec: &mut R, l: C, c: Contribution) {
     *result += l;
     rec.contribution(l, c);
 }
@@ -102,13 +116,25 @@ pub fn li_recorded<R: PathRecorder>(
     cfg: &VolPathConfig,
     rec: &mut R,
 ) -> Vec3 {
+    li_recorded_in(scene, cray, sampler, cfg, &RgbMode, rec)
+}
+
+/// [`li_recorded`] in the colour mode `mode`: the estimate in its colour type.
+pub fn li_recorded_in<M: PathMode, R: PathRecorder<M::C>>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    cfg: &VolPathConfig,
+    mode: &M,
+    rec: &mut R,
+) -> M::C {
     rec.camera_ray(&cray.ray);
     let len = cray.ray.d.length();
     let mut ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
     let mut t_far = cray.t_max * len;
     let mut medium = scene.camera_medium;
-    let mut throughput = Vec3::ONE;
-    let mut result = Vec3::ZERO;
+    let mut throughput = M::C::ONE;
+    let mut result = M::C::ZERO;
     let mut eta = 1.0f32;
     let mut depth = 0u32;
     // How the path left its first scattering vertex (for the recorder's contributions).
@@ -120,21 +146,21 @@ pub fn li_recorded<R: PathRecorder>(
     let mut last_pdf = 1.0f32;
     // The hero channel and the path's density ratios p_c/p_hero (their mean divides every
     // contribution: spectral MIS over the hero).
-    let hero = ((sampler.next_1d() * 3.0) as usize).min(2);
-    let mut ratio = Vec3::ONE;
-    let mis_hero = |ratio: Vec3| 3.0 / ratio.element_sum();
+    let hero = mode.hero(sampler.next_1d());
+    let mut ratio = M::C::ONE;
+    let mis_hero = |ratio: M::C| mode.hero_weight(ratio);
     // Emission grids were sampled from the vertex the current segment started at: their
     // emission met by collisions on it is already counted.
     let mut emission_sampled = false;
     // Bounded: null crossings do not count as depth.
     for _ in 0..(1 << 16) {
-        if throughput == Vec3::ZERO {
+        if throughput.is_black() {
             rec.end(PathEnd::Absorbed);
             break;
         }
         if depth > cfg.rr_depth {
             // The path's effective weight is throughput / mean ratio.
-            let q = ((throughput * mis_hero(ratio)).max_element() * eta * eta).min(0.95);
+            let q = (mode.live_max(throughput * mis_hero(ratio)) * eta * eta).min(0.95);
             if sampler.next_1d() >= q {
                 rec.end(PathEnd::Roulette);
                 break;
@@ -172,11 +198,11 @@ pub fn li_recorded<R: PathRecorder>(
                 });
             if let Some(seg) = &mut segment {
                 let l = throughput
-                    * seg.equiangular(scene, m, medium, ray.time, sampler)
+                    * seg.equiangular(scene, m, medium, ray.time, sampler, mode)
                     * mis_hero(ratio);
                 add(&mut result, rec, l, found(Via::EmitterSample));
             }
-            match m.sample(&ray, d_surface, hero, sampler) {
+            match m.sample_in(&ray, d_surface, hero, sampler, mode) {
                 Flight::Scatter {
                     d,
                     weight,
@@ -189,7 +215,7 @@ pub fn li_recorded<R: PathRecorder>(
                         && !(depth == 0 && cfg.hide_emitters)
                         && !(emission_sampled && m.emission_sampler.is_some())
                     {
-                        let le = e.radiance(ray.at(d));
+                        let le = e.radiance_in(ray.at(d), mode);
                         let l = throughput * emit * le * mis_hero(ratio);
                         add(&mut result, rec, l, found(Via::Emission));
                     }
@@ -215,7 +241,7 @@ pub fn li_recorded<R: PathRecorder>(
                         first: first.or(Some(PHASE)),
                         via,
                     };
-                    if let Some((i, ls, pmf)) = sample_light(scene, &r, sampler) {
+                    if let Some((i, ls, pmf)) = sample_light(scene, &r, sampler, mode) {
                         let ph = m.phase.eval(wo, ls.wi);
                         let tr = transmittance(
                             scene,
@@ -224,8 +250,9 @@ pub fn li_recorded<R: PathRecorder>(
                             medium,
                             cfg.transmittance,
                             sampler,
+                            mode,
                         );
-                        if tr != Vec3::ZERO {
+                        if !tr.is_black() {
                             let w = match (&mut segment, scene.lights[i as usize].position()) {
                                 // A point light also reachable by strategy B.
                                 (Some(seg), Some(q)) => {
@@ -251,7 +278,8 @@ pub fn li_recorded<R: PathRecorder>(
                                 medium,
                                 cfg,
                                 sampler,
-                                |wi| Vec3::splat(m.phase.eval(wo, wi)),
+                                mode,
+                                |wi| M::C::splat(m.phase.eval(wo, wi)),
                             )
                             * mis_hero(ratio);
                         add(&mut result, rec, l, here(Via::EmitterSample));
@@ -283,8 +311,8 @@ pub fn li_recorded<R: PathRecorder>(
             if !(depth == 0 && cfg.hide_emitters) {
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
-                    let le = light.environment(ray.d, &RgbMode);
-                    if le == Vec3::ZERO {
+                    let le = light.environment(ray.d, mode);
+                    if le.is_black() {
                         continue;
                     }
                     let w = match &last {
@@ -300,7 +328,7 @@ pub fn li_recorded<R: PathRecorder>(
                 if depth == 0
                     && let Some(bg) = scene.background
                 {
-                    add(&mut result, rec, bg, found(Via::Emission));
+                    add(&mut result, rec, mode.illuminant(bg), found(Via::Emission));
                 }
             }
             rec.end(PathEnd::Escaped);
@@ -311,8 +339,8 @@ pub fn li_recorded<R: PathRecorder>(
             && !(depth == 0 && cfg.hide_emitters)
         {
             let light = &scene.lights[i as usize];
-            let le = light.le(scene, &si, &RgbMode);
-            if le != Vec3::ZERO {
+            let le = light.le(scene, &si, mode);
+            if !le.is_black() {
                 let w = match &last {
                     Some(r) if !specular_chain => {
                         let pdf = scene.light_pmf(r, i) * light.pdf_li(scene, r, ray.d, Some(&si));
@@ -353,7 +381,7 @@ pub fn li_recorded<R: PathRecorder>(
             t_far = f32::INFINITY;
             continue;
         }
-        let Some((bsdf, frame)) = scene.bsdf_at(&si) else {
+        let Some((bsdf, frame)) = scene.bsdf_at_in(&si, mode) else {
             rec.end(PathEnd::Absorbed);
             break;
         };
@@ -368,18 +396,24 @@ pub fn li_recorded<R: PathRecorder>(
         emission_sampled = false;
         if bsdf.has_smooth() && cfg.sample_emission && depth + 1 < cfg.max_depth {
             let l = throughput
-                * sample_emission(scene, From::Surface(&si), medium, cfg, sampler, |wi| {
-                    bsdf.eval(wo, frame.to_local(wi), TransportMode::Radiance)
-                })
+                * sample_emission(
+                    scene,
+                    From::Surface(&si),
+                    medium,
+                    cfg,
+                    sampler,
+                    mode,
+                    |wi| bsdf.eval(wo, frame.to_local(wi), TransportMode::Radiance),
+                )
                 * mis_hero(ratio);
             add(&mut result, rec, l, here(Via::EmitterSample));
             emission_sampled = true;
         }
         if bsdf.has_smooth() && depth + 1 < cfg.max_depth {
             let r = Receiver::from(&si);
-            if let Some((_, ls, pmf)) = sample_light(scene, &r, sampler) {
+            if let Some((_, ls, pmf)) = sample_light(scene, &r, sampler, mode) {
                 let (f, pdf) = bsdf.eval_pdf(wo, frame.to_local(ls.wi), TransportMode::Radiance);
-                if f != Vec3::ZERO {
+                if !f.is_black() {
                     let start = scene.medium_after(&si, ls.wi, medium);
                     let tr = transmittance(
                         scene,
@@ -388,8 +422,9 @@ pub fn li_recorded<R: PathRecorder>(
                         start,
                         cfg.transmittance,
                         sampler,
+                        mode,
                     );
-                    if tr != Vec3::ZERO {
+                    if !tr.is_black() {
                         let w = if ls.delta {
                             1.0
                         } else {
@@ -440,16 +475,17 @@ pub fn li_recorded<R: PathRecorder>(
 /// One emitter sample for next-event estimation at `r`: the emitter, the sample and the
 /// probability of the emitter's choice. Draws one 1D and one 2D number whatever happens.
 #[inline]
-fn sample_light(
+fn sample_light<M: PathMode>(
     scene: &Scene,
     r: &Receiver,
     sampler: &mut Sampler,
-) -> Option<(u32, LightSample, f32)> {
+    mode: &M,
+) -> Option<(u32, LightSample<M::C>, f32)> {
     let picked = scene.sample_light(sampler.next_1d(), r);
     let u = sampler.next_2d();
     let (i, light, pmf) = picked?;
-    let ls = light.sample_li(scene, r, u, &RgbMode)?;
-    (ls.pdf > 0.0 && ls.li != Vec3::ZERO && pmf > 0.0).then_some((i, ls, pmf))
+    let ls = light.sample_li(scene, r, u, mode)?;
+    (ls.pdf > 0.0 && !ls.li.is_black() && pmf > 0.0).then_some((i, ls, pmf))
 }
 
 /// A segment `o + t·d`, t ∈ [0, end), through a grey homogeneous medium, for equiangular
@@ -493,39 +529,40 @@ impl Segment {
     /// Strategy B's estimate: a light chosen from the segment's start; if it is a point
     /// light, a distance by equiangular sampling and single scattering there towards the
     /// light, MIS-weighted against the free-flight collision's next-event estimation.
-    fn equiangular(
+    fn equiangular<M: PathMode>(
         &mut self,
         scene: &Scene,
         m: &crate::media::Medium,
         medium: Option<u32>,
         time: f32,
         sampler: &mut Sampler,
-    ) -> Vec3 {
+        mode: &M,
+    ) -> M::C {
         let r0 = self.origin();
         let u_light = sampler.next_1d();
         let u = sampler.next_1d();
         let u2 = sampler.next_2d();
         let Some((i, light, pmf_b)) = scene.sample_light(u_light, &r0) else {
-            return Vec3::ZERO;
+            return M::C::ZERO;
         };
         let Some(q) = light.position() else {
-            return Vec3::ZERO;
+            return M::C::ZERO;
         };
         let Some(e) = self.towards(q) else {
-            return Vec3::ZERO;
+            return M::C::ZERO;
         };
         let t = e.sample(u);
         let p_b = e.pdf(t) * pmf_b;
         if p_b == 0.0 {
-            return Vec3::ZERO;
+            return M::C::ZERO;
         }
         let x = self.o + self.d * t;
         let rx = Receiver::at(x);
-        let Some(ls) = light.sample_li(scene, &rx, u2, &RgbMode) else {
-            return Vec3::ZERO;
+        let Some(ls) = light.sample_li(scene, &rx, u2, mode) else {
+            return M::C::ZERO;
         };
-        if ls.li == Vec3::ZERO || ls.pdf <= 0.0 {
-            return Vec3::ZERO;
+        if ls.li.is_black() || ls.pdf <= 0.0 {
+            return M::C::ZERO;
         }
         let tr = transmittance(
             scene,
@@ -534,9 +571,10 @@ impl Segment {
             medium,
             self.estimator,
             sampler,
+            mode,
         );
-        if tr == Vec3::ZERO {
-            return Vec3::ZERO;
+        if tr.is_black() {
+            return M::C::ZERO;
         }
         let p_a = self.sigma_t * (-self.sigma_t * t).exp() * scene.light_pmf(&rx, i);
         let ph = m.phase.eval(-self.d, ls.wi);
@@ -549,15 +587,16 @@ impl Segment {
 /// chosen by the grid's emission, its σa·Le attenuated by the transmittance to it and
 /// divided by its density in solid angle and distance (pdf_V·|x − p|²); `f` is the phase
 /// function or BSDF (with its cosine) towards the point.
-fn sample_emission(
+fn sample_emission<M: PathMode>(
     scene: &Scene,
     from: From<'_>,
     medium: Option<u32>,
     cfg: &VolPathConfig,
     sampler: &mut Sampler,
-    f: impl Fn(Vec3) -> Vec3,
-) -> Vec3 {
-    let mut sum = Vec3::ZERO;
+    mode: &M,
+    f: impl Fn(Vec3) -> M::C,
+) -> M::C {
+    let mut sum = M::C::ZERO;
     for m in &scene.media {
         let (Some(es), Some(e)) = (&m.emission_sampler, &m.emission) else {
             continue;
@@ -576,9 +615,9 @@ fn sample_emission(
             continue;
         }
         let wi = to / d2.sqrt();
-        let source = m.sigma_a(x) * e.radiance(x);
+        let source = m.sigma_a_in(x, mode) * e.radiance_in(x, mode);
         let fv = f(wi);
-        if source == Vec3::ZERO || fv == Vec3::ZERO {
+        if source.is_black() || fv.is_black() {
             continue;
         }
         let start = match (start, &from) {
@@ -588,12 +627,20 @@ fn sample_emission(
         };
         let target = LightSample {
             wi,
-            li: Vec3::ZERO,
+            li: M::C::ZERO,
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Point(x),
         };
-        let tr = transmittance(scene, from, &target, start, cfg.transmittance, sampler);
+        let tr = transmittance(
+            scene,
+            from,
+            &target,
+            start,
+            cfg.transmittance,
+            sampler,
+            mode,
+        );
         sum += fv * tr * source / (pdf_v * d2);
     }
     sum
@@ -601,7 +648,7 @@ fn sample_emission(
 
 /// The ray from `from` towards the light sample's target and its parameter range.
 #[inline]
-fn shadow_ray(from: &From<'_>, ls: &LightSample) -> (Ray, f32) {
+fn shadow_ray<C>(from: &From<'_>, ls: &LightSample<C>) -> (Ray, f32) {
     match *from {
         From::Surface(si) => ls.target.ray_from(si, ls.wi),
         From::Medium(p, time) => match ls.target {
@@ -618,39 +665,47 @@ fn shadow_ray(from: &From<'_>, ls: &LightSample) -> (Ray, f32) {
 /// Transmittance from `from` to the light sample's target, starting in `medium`: the media
 /// crossed attenuate it, `null` surfaces let it through (switching media), any other surface
 /// blocks it.
-fn transmittance(
+#[allow(clippy::too_many_arguments)]
+fn transmittance<M: PathMode>(
     scene: &Scene,
     from: From<'_>,
-    ls: &LightSample,
+    ls: &LightSample<M::C>,
     mut medium: Option<u32>,
     estimator: TransmittanceEstimator,
     sampler: &mut Sampler,
-) -> Vec3 {
+    mode: &M,
+) -> M::C {
     let (mut ray, mut t_max) = shadow_ray(&from, ls);
     if !scene.has_nulls {
         // Any surface blocks: one occlusion query, then the medium over the whole segment.
         if scene.occluded(&ray, t_max) {
-            return Vec3::ZERO;
+            return M::C::ZERO;
         }
-        return medium.map_or(Vec3::ONE, |m| {
+        return medium.map_or(M::C::ONE, |m| {
             let len = ray.d.length();
             let unit = Ray::at_time(ray.o, ray.d / len, ray.time);
-            scene.media[m as usize].transmittance(&unit, t_max * len, estimator, sampler)
+            scene.media[m as usize].transmittance_in(&unit, t_max * len, estimator, sampler, mode)
         });
     }
-    let mut tr = Vec3::ONE;
+    let mut tr = M::C::ONE;
     for _ in 0..256 {
         let closest = scene.closest(&ray, t_max);
         // A blocking surface ends the query before any medium is estimated.
         if closest.shape().is_some_and(|s| !scene.shape_is_null(s)) {
-            return Vec3::ZERO;
+            return M::C::ZERO;
         }
         if let Some(m) = medium {
             let len = ray.d.length();
             let unit = Ray::at_time(ray.o, ray.d / len, ray.time);
             let end = closest.t(&ray, t_max);
-            tr *= scene.media[m as usize].transmittance(&unit, end * len, estimator, sampler);
-            if tr == Vec3::ZERO {
+            tr *= scene.media[m as usize].transmittance_in(
+                &unit,
+                end * len,
+                estimator,
+                sampler,
+                mode,
+            );
+            if tr.is_black() {
                 return tr;
             }
         }
@@ -660,5 +715,5 @@ fn transmittance(
         medium = scene.medium_after(&si, ray.d, medium);
         (ray, t_max) = shadow_ray(&From::Surface(&si), ls);
     }
-    Vec3::ZERO
+    M::C::ZERO
 }

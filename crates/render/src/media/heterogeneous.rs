@@ -17,6 +17,7 @@ use super::majorant::MajorantGrid;
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3};
 use crate::sampling::Sampler;
+use crate::spectral::lanes::{Color, ColorMode, RgbMode};
 
 #[derive(Clone, Debug)]
 pub enum Albedo {
@@ -80,6 +81,18 @@ impl Heterogeneous {
 
     /// [`Heterogeneous::sample`] with the uniform numbers from `u`.
     pub fn sample_with(&self, ray: &Ray, d_max: f32, u: &mut impl FnMut() -> f32) -> Flight {
+        self.sample_with_in(ray, d_max, u, &RgbMode)
+    }
+
+    /// [`Heterogeneous::sample_with`] in the colour of `m`: the extinction is grey, so only
+    /// the albedo at a collision depends on the mode (upsampled as a reflectance).
+    pub fn sample_with_in<M: ColorMode>(
+        &self,
+        ray: &Ray,
+        d_max: f32,
+        u: &mut impl FnMut() -> f32,
+        m: &M,
+    ) -> Flight<M::C> {
         let Some((t0, t1, o, d)) = self.clip(ray, d_max) else {
             return Flight::THROUGH;
         };
@@ -96,15 +109,15 @@ impl Heterogeneous {
                 }
                 let p = o + d * t;
                 if u() * hi < self.sigma_t(p) {
-                    let albedo = match &self.albedo {
+                    let albedo = m.albedo(match &self.albedo {
                         Albedo::Const(a) => *a,
                         Albedo::Grid(g) => g.rgb(p),
-                    };
+                    });
                     flight = Flight::Scatter {
                         d: t,
                         weight: albedo,
-                        ratio: Vec3::ONE,
-                        emit: Vec3::ONE - albedo,
+                        ratio: M::C::ONE,
+                        emit: M::C::ONE - albedo,
                     };
                     return false;
                 }
@@ -115,15 +128,20 @@ impl Heterogeneous {
 
     /// σa = σt·(1 − albedo) at the world point `p` (0 outside the grid's box).
     pub fn sigma_a(&self, p: Vec3) -> Vec3 {
+        self.sigma_a_in(p, &RgbMode)
+    }
+
+    /// [`Self::sigma_a`] in the colour of `m`.
+    pub fn sigma_a_in<M: ColorMode>(&self, p: Vec3, m: &M) -> M::C {
         let q = self.to_grid.transform_point3a(p);
         if !grid::inside(q) {
-            return Vec3::ZERO;
+            return M::C::ZERO;
         }
-        let albedo = match &self.albedo {
+        let albedo = m.albedo(match &self.albedo {
             Albedo::Const(a) => *a,
             Albedo::Grid(g) => g.rgb(q),
-        };
-        self.sigma_t(q) * (Vec3::ONE - albedo)
+        });
+        (M::C::ONE - albedo) * self.sigma_t(q)
     }
 
     /// σt at distance `t` along the (unit-direction) ray, for tests and quadrature.

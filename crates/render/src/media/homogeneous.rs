@@ -10,6 +10,7 @@
 //! through, ratios 1). Transmittance is analytic.
 
 use crate::math::Vec3;
+use crate::spectral::lanes::{Color, ColorMode, RgbMode};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Homogeneous {
@@ -17,36 +18,39 @@ pub struct Homogeneous {
     pub sigma_t: Vec3,
     /// Scattering coefficient σs = albedo·σt.
     pub sigma_s: Vec3,
+    /// The single-scattering albedo σs/σt as declared (spectral mode upsamples it as a
+    /// reflectance and σt as an unbounded spectrum, as Mitsuba does).
+    pub albedo: Vec3,
 }
 
 /// The outcome of sampling a free flight over a segment of length `d_max` with a hero
 /// channel: the path's throughput is multiplied by `weight` (f/p_hero) and its channel
 /// density ratios by `ratio` (p_c/p_hero).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Flight {
+pub enum Flight<C = Vec3> {
     /// A real collision at distance `d` (weight T(d)·σs/p_h(d)), after which the phase
     /// function scatters the path. `emit` (T(d)·σa/p_h(d)) weighs the medium's emitted
     /// radiance there: the collision estimator of emission.
     Scatter {
         d: f32,
-        weight: Vec3,
-        ratio: Vec3,
-        emit: Vec3,
+        weight: C,
+        ratio: C,
+        emit: C,
     },
     /// No collision before `d_max` (weight T/P_h(pass)).
-    Pass { weight: Vec3, ratio: Vec3 },
+    Pass { weight: C, ratio: C },
 }
 
-impl Flight {
+impl<C: Color> Flight<C> {
     /// No collision, throughput unchanged.
-    pub const THROUGH: Flight = Flight::Pass {
-        weight: Vec3::ONE,
-        ratio: Vec3::ONE,
+    pub const THROUGH: Flight<C> = Flight::Pass {
+        weight: C::ONE,
+        ratio: C::ONE,
     };
     /// No estimate at all (a zero-density sample): the path ends.
-    pub const ABSORBED: Flight = Flight::Pass {
-        weight: Vec3::ZERO,
-        ratio: Vec3::ONE,
+    pub const ABSORBED: Flight<C> = Flight::Pass {
+        weight: C::ZERO,
+        ratio: C::ONE,
     };
 }
 
@@ -55,7 +59,23 @@ impl Homogeneous {
         Homogeneous {
             sigma_t,
             sigma_s: sigma_t * albedo,
+            albedo,
         }
+    }
+
+    /// σt and σs in the colour of `m`: in RGB mode the fields themselves (σs = σt·albedo
+    /// is the same product), in spectral mode σt upsampled as an unbounded spectrum times
+    /// the albedo upsampled as a reflectance.
+    #[inline]
+    pub fn coefficients<M: ColorMode>(&self, m: &M) -> (M::C, M::C) {
+        let sigma_t = m.unbounded(self.sigma_t);
+        (sigma_t, sigma_t * m.albedo(self.albedo))
+    }
+
+    /// [`Self::transmittance`] in the colour of `m`.
+    #[inline]
+    pub fn transmittance_in<M: ColorMode>(&self, d: f32, m: &M) -> M::C {
+        transmittance(m.unbounded(self.sigma_t), d)
     }
 
     /// Transmittance over a distance `d`: `(-sigma_t * d).exp()` for finite `d` (the path
@@ -63,38 +83,42 @@ impl Homogeneous {
     /// over an infinite one.
     #[inline]
     pub fn transmittance(&self, d: f32) -> Vec3 {
-        if d.is_infinite() {
-            return Vec3::select(self.sigma_t.cmpgt(Vec3::ZERO), Vec3::ZERO, Vec3::ONE);
-        }
-        (-self.sigma_t * d).exp()
+        transmittance(self.sigma_t, d)
     }
 
     /// Sample a free flight over `[0, d_max)` with hero channel `hero` from one uniform
     /// number `u`.
     #[inline]
     pub fn sample(&self, d_max: f32, u: f32, hero: usize) -> Flight {
-        let s = self.sigma_t[hero];
+        self.sample_in(d_max, u, hero, &RgbMode)
+    }
+
+    /// [`Self::sample`] in the colour of `m` (`hero` a lane of it).
+    #[inline]
+    pub fn sample_in<M: ColorMode>(&self, d_max: f32, u: f32, hero: usize, m: &M) -> Flight<M::C> {
+        let (sigma_t, sigma_s) = self.coefficients(m);
+        let s = sigma_t.lane(hero);
         let d = if s > 0.0 {
             -(1.0 - u).ln() / s
         } else {
             f32::INFINITY
         };
         if d < d_max {
-            let tr = self.transmittance(d);
-            let pdf = self.sigma_t * tr;
-            let p_h = pdf[hero];
+            let tr = transmittance(sigma_t, d);
+            let pdf = sigma_t * tr;
+            let p_h = pdf.lane(hero);
             if p_h.is_nan() || p_h <= 0.0 {
                 return Flight::ABSORBED;
             }
             Flight::Scatter {
                 d,
-                weight: tr * self.sigma_s / p_h,
+                weight: tr * sigma_s / p_h,
                 ratio: pdf / p_h,
-                emit: tr * (self.sigma_t - self.sigma_s) / p_h,
+                emit: tr * (sigma_t - sigma_s) / p_h,
             }
         } else {
-            let tr = self.transmittance(d_max);
-            let p_h = tr[hero];
+            let tr = transmittance(sigma_t, d_max);
+            let p_h = tr.lane(hero);
             if p_h.is_nan() || p_h <= 0.0 {
                 return Flight::ABSORBED;
             }
@@ -104,6 +128,16 @@ impl Homogeneous {
             }
         }
     }
+}
+
+/// e^{−σt·d} per lane: the float expression `(-sigma_t * d).exp()` for finite `d`; 0 or 1
+/// per lane over an infinite one.
+#[inline]
+fn transmittance<C: Color>(sigma_t: C, d: f32) -> C {
+    if d.is_infinite() {
+        return C::from_fn(|i| if sigma_t.lane(i) > 0.0 { 0.0 } else { 1.0 });
+    }
+    (-sigma_t * d).exp()
 }
 
 #[cfg(test)]

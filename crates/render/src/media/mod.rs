@@ -24,7 +24,7 @@ use crate::geometry::Ray;
 use crate::math::{Mat4, Vec2, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::distrib::AliasTable;
-use crate::spectral::lanes::{Color, ColorMode};
+use crate::spectral::lanes::{Color, ColorMode, RgbMode};
 
 #[derive(Clone, Debug)]
 pub enum MediumKind {
@@ -136,12 +136,15 @@ pub enum Emission {
     },
 }
 
-/// Black-body RGB radiance tabulated over temperature (kelvin), times a scale.
+/// Black-body radiance at a temperature (kelvin), times a scale: exact (Planck's law per
+/// nanometre) in spectral mode, tabulated as RGB for RGB mode.
 #[derive(Clone, Debug)]
 pub struct Blackbody {
     /// RGB at 0, `step`, 2·`step`, … kelvin (already scaled).
     pub table: Vec<Vec3>,
     pub step: f32,
+    /// The scale applied to Planck's law (W·m⁻²·sr⁻¹·nm⁻¹, Mitsuba's `blackbody` units).
+    pub scale: f32,
 }
 
 impl Blackbody {
@@ -157,8 +160,14 @@ impl Blackbody {
 impl Emission {
     /// Le at the world point `p` (zero outside a grid's box).
     pub fn radiance(&self, p: Vec3) -> Vec3 {
+        self.radiance_in(p, &RgbMode)
+    }
+
+    /// [`Self::radiance`] in the colour of `m`: RGB radiance as an illuminant spectrum, a
+    /// temperature by Planck's law at the path's wavelengths.
+    pub fn radiance_in<M: ColorMode>(&self, p: Vec3, m: &M) -> M::C {
         match self {
-            Emission::Const(le) => *le,
+            Emission::Const(le) => m.illuminant(*le),
             Emission::Grid {
                 grid,
                 to_grid,
@@ -166,11 +175,18 @@ impl Emission {
             } => {
                 let q = to_grid.transform_point3a(p);
                 if !grid::inside(q) {
-                    return Vec3::ZERO;
+                    return M::C::ZERO;
                 }
                 match blackbody {
-                    Some(b) => b.rgb(grid.scalar(q)),
-                    None => grid.rgb(q),
+                    Some(b) => {
+                        let t = grid.scalar(q);
+                        let planck = |l: f32| {
+                            (crate::spectral::planck(f64::from(l), f64::from(t)) * 1e-9) as f32
+                                * b.scale
+                        };
+                        m.spectrum(planck, b.rgb(t))
+                    }
+                    None => m.illuminant(grid.rgb(q)),
                 }
             }
         }
@@ -225,23 +241,46 @@ impl Medium {
     /// without their noise.
     #[inline]
     pub fn sample(&self, ray: &Ray, d_max: f32, hero: usize, sampler: &mut Sampler) -> Flight {
+        self.sample_in(ray, d_max, hero, sampler, &RgbMode)
+    }
+
+    /// [`Self::sample`] in the colour of `m` (`hero` a lane of it).
+    #[inline]
+    pub fn sample_in<M: ColorMode>(
+        &self,
+        ray: &Ray,
+        d_max: f32,
+        hero: usize,
+        sampler: &mut Sampler,
+        m: &M,
+    ) -> Flight<M::C> {
         match &self.kind {
             MediumKind::Homogeneous(h) if h.sigma_s == Vec3::ZERO && self.emission.is_none() => {
                 Flight::Pass {
-                    weight: h.transmittance(d_max),
-                    ratio: Vec3::ONE,
+                    weight: h.transmittance_in(d_max, m),
+                    ratio: M::C::ONE,
                 }
             }
-            MediumKind::Homogeneous(h) => h.sample(d_max, sampler.next_1d(), hero),
-            MediumKind::Heterogeneous(h) => h.sample(ray, d_max, sampler),
+            MediumKind::Homogeneous(h) => h.sample_in(d_max, sampler.next_1d(), hero, m),
+            MediumKind::Heterogeneous(h) => {
+                h.sample_with_in(ray, d_max, &mut || sampler.next_1d(), m)
+            }
         }
     }
 
     /// The absorption coefficient σa = σt − σs at the world point `p`.
     pub fn sigma_a(&self, p: Vec3) -> Vec3 {
+        self.sigma_a_in(p, &RgbMode)
+    }
+
+    /// [`Self::sigma_a`] in the colour of `m`.
+    pub fn sigma_a_in<M: ColorMode>(&self, p: Vec3, m: &M) -> M::C {
         match &self.kind {
-            MediumKind::Homogeneous(h) => h.sigma_t - h.sigma_s,
-            MediumKind::Heterogeneous(h) => h.sigma_a(p),
+            MediumKind::Homogeneous(h) => {
+                let (sigma_t, sigma_s) = h.coefficients(m);
+                sigma_t - sigma_s
+            }
+            MediumKind::Heterogeneous(h) => h.sigma_a_in(p, m),
         }
     }
 
@@ -270,9 +309,25 @@ impl Medium {
         estimator: TransmittanceEstimator,
         sampler: &mut Sampler,
     ) -> Vec3 {
+        self.transmittance_in(ray, d_max, estimator, sampler, &RgbMode)
+    }
+
+    /// [`Self::transmittance`] in the colour of `m` (grids are grey: the estimate in every
+    /// lane).
+    #[inline]
+    pub fn transmittance_in<M: ColorMode>(
+        &self,
+        ray: &Ray,
+        d_max: f32,
+        estimator: TransmittanceEstimator,
+        sampler: &mut Sampler,
+        m: &M,
+    ) -> M::C {
         match &self.kind {
-            MediumKind::Homogeneous(h) => h.transmittance(d_max),
-            MediumKind::Heterogeneous(h) => h.transmittance(ray, d_max, estimator, sampler),
+            MediumKind::Homogeneous(h) => h.transmittance_in(d_max, m),
+            MediumKind::Heterogeneous(h) => {
+                M::C::splat(h.estimate(ray, d_max, estimator, &mut || sampler.next_1d()))
+            }
         }
     }
 }
@@ -302,6 +357,49 @@ mod tests {
         assert!(
             matches!(beyond, Flight::Pass { weight, .. } if weight.x == 0.0 && weight.z == 0.0)
         );
+    }
+
+    /// A temperature grid emits Planck's law itself at the path's wavelengths in spectral
+    /// mode (W·m⁻²·sr⁻¹·nm⁻¹ times the scale), and its tabulated RGB in RGB mode.
+    #[test]
+    fn blackbody_emission_is_exact_in_spectral_mode() {
+        use crate::spectral::{RgbToSpectrumTable, SampledWavelengths, lanes::SpectralMode};
+        let (t, scale) = (2750.0f32, 3.0f32);
+        let grid = grid::VoxelGrid {
+            res: [1, 1, 1],
+            channels: 1,
+            data: vec![t],
+            trilinear: false,
+        };
+        let table = vec![Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.4, 0.5, 0.6)];
+        let e = Emission::Grid {
+            grid,
+            to_grid: Mat4::IDENTITY,
+            blackbody: Some(Blackbody {
+                table,
+                step: 1e4,
+                scale,
+            }),
+        };
+        let p = Vec3::splat(0.5);
+        let rgb = Vec3::new(0.1, 0.2, 0.3) * (1.0 - 0.275) + Vec3::new(0.4, 0.5, 0.6) * 0.275;
+        assert!((e.radiance(p) - rgb).abs().max_element() < 1e-6);
+        let m = SpectralMode::new(
+            SampledWavelengths::sample_visible(0.37),
+            RgbToSpectrumTable::srgb(),
+        );
+        let le = e.radiance_in(p, &m);
+        for i in 0..4 {
+            let want = crate::spectral::planck(m.wavelengths().lambda(i) as f64, t as f64)
+                * 1e-9
+                * scale as f64;
+            assert!(
+                (le[i] as f64 / want - 1.0).abs() < 1e-5,
+                "{} vs {want}",
+                le[i]
+            );
+        }
+        assert!(e.radiance_in(Vec3::splat(2.0), &m).is_black());
     }
 
     #[test]

@@ -148,6 +148,10 @@ pub trait ColorMode {
     /// the unbounded spectrum times D65 of unit luminance, so that the colour comes back
     /// under the CIE observer (Mitsuba's and pbrt-v4's RGB illuminant spectrum).
     fn illuminant(&self, rgb: Vec3) -> Self::C;
+    /// A quantity known as a function of wavelength (nm) — a black body, a tabulated
+    /// spectrum — whose RGB-mode value is `rgb`: RGB mode uses `rgb`, spectral mode
+    /// evaluates `f` at the path's wavelengths (exact, no upsampling).
+    fn spectrum(&self, f: impl Fn(f32) -> f32, rgb: Vec3) -> Self::C;
     /// A colour parameter read as a reflectance at `at`. Parameters declared as spectra
     /// (see [`Params`]) are sampled as declared in spectral mode.
     #[inline(always)]
@@ -192,6 +196,10 @@ impl ColorMode for RgbMode {
         rgb
     }
     #[inline(always)]
+    fn spectrum(&self, _f: impl Fn(f32) -> f32, rgb: Vec3) -> Vec3 {
+        rgb
+    }
+    #[inline(always)]
     fn smooth_eta(&self, _dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> f32 {
         rgb_value
     }
@@ -232,6 +240,10 @@ impl ColorMode for SpectralMode<'_> {
     fn illuminant(&self, rgb: Vec3) -> SampledSpectrum {
         RgbIlluminantSpectrum::new(self.table, rgb).sample(&self.wavelengths.get())
     }
+    fn spectrum(&self, f: impl Fn(f32) -> f32, _rgb: Vec3) -> SampledSpectrum {
+        let wl = self.wavelengths.get();
+        SampledSpectrum::from_fn(|i| f(wl.lambda(i)))
+    }
     fn smooth_eta(&self, dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> f32 {
         match dispersive {
             None => rgb_value,
@@ -269,6 +281,14 @@ pub trait PathMode: ColorMode + Sized {
     /// The largest lane of a throughput that still counts (Russian roulette): terminated
     /// secondary wavelengths no longer contribute and must not keep a path alive.
     fn live_max(&self, c: Self::C) -> f32;
+    /// The lane whose density samples free flights in media (the hero), from a uniform `u`
+    /// drawn in both modes: a channel chosen uniformly in RGB mode; in spectral mode the
+    /// hero wavelength, lane 0 (the four wavelengths are already a uniformly rotated set).
+    fn hero(&self, u: f32) -> usize;
+    /// The spectral-MIS weight of a path whose lane densities relative to the hero's are
+    /// `ratio` (balance heuristic over the choice of hero: 1 / mean ratio). Once the
+    /// secondary wavelengths are terminated only the hero's own strategy is left: 1.
+    fn hero_weight(&self, ratio: Self::C) -> f32;
 }
 
 impl PathMode for RgbMode {
@@ -283,6 +303,14 @@ impl PathMode for RgbMode {
     #[inline(always)]
     fn live_max(&self, c: Vec3) -> f32 {
         c.max_element()
+    }
+    #[inline(always)]
+    fn hero(&self, u: f32) -> usize {
+        ((u * 3.0) as usize).min(2)
+    }
+    #[inline(always)]
+    fn hero_weight(&self, ratio: Vec3) -> f32 {
+        3.0 / ratio.element_sum()
     }
 }
 
@@ -304,6 +332,18 @@ impl PathMode for SpectralMode<'static> {
             c[0]
         } else {
             c.max_component()
+        }
+    }
+    #[inline]
+    fn hero(&self, _u: f32) -> usize {
+        0
+    }
+    #[inline]
+    fn hero_weight(&self, ratio: SampledSpectrum) -> f32 {
+        if self.wavelengths.get().secondary_terminated() {
+            1.0 / ratio[0]
+        } else {
+            N_SPECTRUM_SAMPLES as f32 / (ratio[0] + ratio[1] + ratio[2] + ratio[3])
         }
     }
 }
