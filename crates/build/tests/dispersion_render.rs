@@ -44,6 +44,9 @@ impl<const LO: u32, const HI: u32> ColorMode for Band<LO, HI> {
     fn illuminant(&self, rgb: Vec3) -> SampledSpectrum {
         self.0.illuminant(rgb)
     }
+    fn spectrum(&self, f: impl Fn(f32) -> f32, rgb: Vec3) -> SampledSpectrum {
+        self.0.spectrum(f, rgb)
+    }
     fn albedo_at<P: Params + ?Sized>(&self, p: &P, r: &ColorRef, at: TexCoord) -> SampledSpectrum {
         self.0.albedo_at(p, r, at)
     }
@@ -74,6 +77,12 @@ impl<const LO: u32, const HI: u32> PathMode for Band<LO, HI> {
     }
     fn live_max(&self, c: SampledSpectrum) -> f32 {
         self.0.live_max(c)
+    }
+    fn hero(&self, u: f32) -> usize {
+        self.0.hero(u)
+    }
+    fn hero_weight(&self, ratio: SampledSpectrum) -> f32 {
+        self.0.hero_weight(ratio)
     }
 }
 

@@ -194,10 +194,7 @@ fn dispersive_lanes() -> Vec<(&'static str, SampledSpectrum)> {
         .into_iter()
         .map(|name| {
             let d = base::dispersion::Dispersion::named(name).unwrap();
-            (
-                name,
-                SampledSpectrum::from_fn(|i| d.ior(lambdas[i] as f64) as f32),
-            )
+            (name, SampledSpectrum::from_fn(|i| d.ior(lambdas[i]) as f32))
         })
         .collect();
     out.push(("exaggerated", SampledSpectrum::new([1.7, 1.25, 1.5, 2.2])));
