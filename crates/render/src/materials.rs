@@ -268,9 +268,10 @@ impl MaterialKind {
     /// The BSDF with its parameters evaluated at `at` and converted to the colour type of
     /// `m`: reflectances and transmittances as albedo spectra (clamped to [0, 1] in spectral
     /// mode, also the unnormalised CENG795 Phong kd/ks), conductor η and k as unbounded
-    /// spectra; IORs stay scalar but for dispersive dielectrics (see [`MaterialKind::Dielectric`]
-    /// and [`ColorMode::smooth_eta`], [`ColorMode::lane_ior`]). Lobe-selection weights and other fixed 3-channel or
-    /// channel-mean arithmetic are computed from the RGB values in every mode.
+    /// spectra; IORs stay scalar but for dispersive dielectrics (see
+    /// [`MaterialKind::Dielectric`], [`ColorMode::smooth_eta`], [`ColorMode::lane_ior`]).
+    /// Lobe-selection weights and other fixed 3-channel or channel-mean arithmetic are
+    /// computed from the RGB values in every mode.
     #[inline(always)]
     pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
