@@ -50,7 +50,16 @@ SCENES = {
                             "references/media-heterogeneous.exr", "media_spp"),
     "media-fog": ("references/scenes/media-fog.xml", {"res": "128"},
                   "references/media-fog.exr", "media_spp"),
+    # Spectral rendering (issue 21): penumbra --mode spectral against Mitsuba's *_spectral
+    # variant of each Mitsuba renderer asked for (llvm_ad_rgb -> llvm_ad_spectral, ...).
+    "mitsuba-cbox-spectral": ("scenes/standard/mitsuba-cbox/cbox-rgb.xml", {"res": "128"},
+                              "references/mitsuba-cbox-spectral.exr", "spp"),
+    "spectral-materials": ("references/scenes/spectral-materials.xml", {"res": "128"},
+                           "references/spectral-materials.exr", "spp"),
 }
+
+# Scenes both renderers render in their spectral mode.
+SPECTRAL = {"mitsuba-cbox-spectral", "spectral-materials"}
 
 RENDERERS = ["penumbra", "mitsuba-llvm_ad_rgb", "mitsuba-scalar_rgb"]
 
@@ -192,15 +201,19 @@ def timed_run(cmd: list[str], env: dict, log_path: Path) -> tuple[float, float, 
 
 
 def command(renderer: str, exe: dict, scene: Path, defines: dict, spp: int, out: Path,
-            threads: int | None) -> list[str]:
+            threads: int | None, spectral: bool = False) -> list[str]:
     if renderer == "penumbra":
         cmd = [exe["penumbra"], "render", str(scene), "-q", "--spp", str(spp), "-o", str(out)]
+        if spectral:
+            cmd += ["--mode", "spectral"]
         for k, v in defines.items():
             cmd += ["-D", f"{k}={v}"]
         if threads:
             cmd += ["--threads", str(threads)]
         return cmd
     variant = renderer.split("-", 1)[1]
+    if spectral:
+        variant = variant.replace("_rgb", "_spectral")
     cmd = [exe["mitsuba"], "-m", variant, "-D", f"spp={spp}", "-o", str(out)]
     for k, v in defines.items():
         cmd += ["-D", f"{k}={v}"]
@@ -292,7 +305,8 @@ def main() -> int:
         spp = getattr(args, spp_key)
         for r in renderers:
             img = out_dir / f"{name}.{r}.exr"
-            jobs.append((name, r, command(r, exe, shared / rel, defines, spp, img, args.threads), img))
+            cmd = command(r, exe, shared / rel, defines, spp, img, args.threads, name in SPECTRAL)
+            jobs.append((name, r, cmd, img))
 
     load_before = os.getloadavg()
     samples: dict[tuple[str, str], list[tuple[float, float, float]]] = {}

@@ -11,9 +11,7 @@
 //! Every BSDF model is generic; where a model does fixed 3-channel or channel-mean
 //! arithmetic (lobe-selection weights), it is done on the RGB parameters in every mode.
 
-use super::rgb::{
-    RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum,
-};
+use super::rgb::{RgbAlbedoSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum};
 use super::sampled::{N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum};
 use crate::math::Vec3;
 use crate::sampling::Sampler;
@@ -214,11 +212,15 @@ impl ColorMode for RgbMode {
 pub struct SpectralMode<'a> {
     wavelengths: Cell<SampledWavelengths>,
     table: &'a RgbToSpectrumTable,
+    /// Unit-luminance D65 at the wavelengths: every RGB illuminant is an unbounded spectrum
+    /// times it, several times per path.
+    d65: SampledSpectrum,
 }
 
 impl<'a> SpectralMode<'a> {
     pub fn new(wavelengths: SampledWavelengths, table: &'a RgbToSpectrumTable) -> Self {
         SpectralMode {
+            d65: SampledSpectrum::from_fn(|i| super::cie::d65_unit_y(wavelengths.lambda(i))),
             wavelengths: Cell::new(wavelengths),
             table,
         }
@@ -238,7 +240,8 @@ impl ColorMode for SpectralMode<'_> {
         RgbUnboundedSpectrum::new(self.table, rgb).sample(&self.wavelengths.get())
     }
     fn illuminant(&self, rgb: Vec3) -> SampledSpectrum {
-        RgbIlluminantSpectrum::new(self.table, rgb).sample(&self.wavelengths.get())
+        // = RgbIlluminantSpectrum::new(self.table, rgb).sample(..), D65 looked up once.
+        RgbUnboundedSpectrum::new(self.table, rgb).sample(&self.wavelengths.get()) * self.d65
     }
     fn spectrum(&self, f: impl Fn(f32) -> f32, _rgb: Vec3) -> SampledSpectrum {
         let wl = self.wavelengths.get();
@@ -398,6 +401,31 @@ mod tests {
             .sample(wo, 0.5, Vec2::new(0.3, 0.6), TransportMode::Radiance)
             .unwrap();
         assert_eq!(s.weight, rgb);
+    }
+
+    /// The illuminant conversion is pbrt-v4's `RGBIlluminantSpectrum` at the wavelengths.
+    #[test]
+    fn illuminant_is_the_rgb_illuminant_spectrum() {
+        for (k, rgb) in [
+            Vec3::ONE,
+            Vec3::new(17.0, 12.0, 4.0),
+            Vec3::new(0.0, 0.2, 0.9),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let m = spectral(0.13 + 0.3 * k as f32);
+            let want =
+                super::super::rgb::RgbIlluminantSpectrum::new(RgbToSpectrumTable::srgb(), rgb)
+                    .sample(&m.wavelengths());
+            let got = m.illuminant(rgb);
+            for i in 0..N_SPECTRUM_SAMPLES {
+                assert!(
+                    (got[i] - want[i]).abs() <= 1e-6 * want[i].abs(),
+                    "{got:?} vs {want:?}"
+                );
+            }
+        }
     }
 
     /// Per-lane conductor Fresnel: each lane is the scalar formula at that lane's η, k.
