@@ -27,6 +27,32 @@ pub enum Dispersion {
     Cauchy { a: f64, b: f64 },
 }
 
+/// How a rough dielectric with a dispersive index treats the four wavelengths of a spectral
+/// path (smooth dielectrics always keep only the hero; thin sheets always keep all four).
+/// Mitsuba-XML spelling: `<string name="dispersion_sampling" value="mis|terminate"/>` on
+/// `roughdielectric`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DispersionSampling {
+    /// Keep all four: one-sample MIS over the wavelengths' sampling densities (issue 21's
+    /// choice, after the extended-Nori write-up's hero-wavelength sampling).
+    #[default]
+    Mis,
+    /// Keep only the hero wavelength, as a smooth dielectric does (pbrt-v4's scheme; the
+    /// comparison strategy of issue 21's colour-noise measurement).
+    Terminate,
+}
+
+impl DispersionSampling {
+    /// From its scene-file name: `mis` (also `hero`) or `terminate`.
+    pub fn parse(s: &str) -> Option<DispersionSampling> {
+        match s.to_ascii_lowercase().as_str() {
+            "mis" | "hero" => Some(DispersionSampling::Mis),
+            "terminate" => Some(DispersionSampling::Terminate),
+            _ => None,
+        }
+    }
+}
+
 /// Named dispersive materials: the name, its Sellmeier B₁..B₃ and C₁..C₃ (µm²).
 const NAMED: &[(&str, [f64; 3], [f64; 3])] = &[
     (

@@ -316,23 +316,27 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
         Material::Dielectric {
             int_ior,
             ext_ior,
+            dispersion,
             specular_reflectance,
             specular_transmittance,
             ..
         } => MaterialKind::Dielectric {
             int_ior: *int_ior,
             ext_ior: *ext_ior,
+            dispersion: *dispersion,
             reflectance: declared.color_ref(specular_reflectance),
             transmittance: declared.color_ref(specular_transmittance),
         },
         Material::ThinDielectric {
             int_ior,
             ext_ior,
+            dispersion,
             specular_reflectance,
             specular_transmittance,
         } => MaterialKind::ThinDielectric {
             int_ior: *int_ior,
             ext_ior: *ext_ior,
+            dispersion: *dispersion,
             reflectance: declared.color_ref(specular_reflectance),
             transmittance: declared.color_ref(specular_transmittance),
         },
@@ -342,6 +346,8 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
             alpha_v,
             int_ior,
             ext_ior,
+            dispersion,
+            dispersion_sampling,
             specular_reflectance,
             specular_transmittance,
         } => MaterialKind::RoughDielectric {
@@ -350,6 +356,8 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
             alpha_v: float_ref(alpha_v),
             int_ior: *int_ior,
             ext_ior: *ext_ior,
+            dispersion: *dispersion,
+            dispersion_sampling: *dispersion_sampling,
             reflectance: declared.color_ref(specular_reflectance),
             transmittance: declared.color_ref(specular_transmittance),
         },

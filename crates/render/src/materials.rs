@@ -11,6 +11,7 @@
 use std::sync::Arc;
 
 use base::PhongModel;
+use base::dispersion::{Dispersion, DispersionSampling};
 
 use crate::bsdf::{
     Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, Microfacet, MicrofacetType,
@@ -20,7 +21,7 @@ use crate::bsdf::{
 use crate::math::{Frame, Vec3};
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::DeclaredSpectrum;
-use crate::spectral::lanes::{ColorMode, RgbMode};
+use crate::spectral::lanes::{Color, ColorMode, RgbMode};
 use crate::textures::{ColorRef, FloatRef, Params, TexCoord, TexRef, Textures};
 
 /// A material as the renderer uses it.
@@ -83,24 +84,34 @@ pub enum MaterialKind {
         /// η and k as declared spectra (spectral mode only; `None` in RGB mode).
         spectra: Option<Arc<ConductorSpectra>>,
     },
+    /// `int_ior` is the index RGB mode uses (a dispersive one's at the d line); spectral mode
+    /// evaluates `dispersion`, when set, at the path's wavelengths (here: the hero's, and the
+    /// secondary wavelengths are terminated).
     Dielectric {
         int_ior: f32,
         ext_ior: f32,
+        dispersion: Option<Dispersion>,
         reflectance: ColorRef,
         transmittance: ColorRef,
     },
+    /// As `Dielectric`; a dispersive sheet keeps every wavelength.
     ThinDielectric {
         int_ior: f32,
         ext_ior: f32,
+        dispersion: Option<Dispersion>,
         reflectance: ColorRef,
         transmittance: ColorRef,
     },
+    /// As `Dielectric`; `dispersion_sampling` says how a dispersive index treats the path's
+    /// wavelengths.
     RoughDielectric {
         distribution: MicrofacetType,
         alpha_u: FloatRef,
         alpha_v: FloatRef,
         int_ior: f32,
         ext_ior: f32,
+        dispersion: Option<Dispersion>,
+        dispersion_sampling: DispersionSampling,
         reflectance: ColorRef,
         transmittance: ColorRef,
     },
@@ -283,8 +294,10 @@ impl MaterialKind {
     /// The BSDF with its parameters evaluated at `at` and converted to the colour type of
     /// `m`: reflectances and transmittances as albedo spectra (clamped to [0, 1] in spectral
     /// mode, also the unnormalised CENG795 Phong kd/ks), conductor η and k as unbounded
-    /// spectra; IORs stay scalar. Lobe-selection weights and other fixed 3-channel or
-    /// channel-mean arithmetic are computed from the RGB values in every mode.
+    /// spectra; IORs stay scalar but for dispersive dielectrics (see
+    /// [`MaterialKind::Dielectric`], [`ColorMode::smooth_eta`], [`ColorMode::lane_ior`]).
+    /// Lobe-selection weights and other fixed 3-channel or channel-mean arithmetic are
+    /// computed from the RGB values in every mode.
     #[inline(always)]
     pub fn bsdf_in<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
         match self {
@@ -329,10 +342,12 @@ impl MaterialKind {
             MaterialKind::Dielectric {
                 int_ior,
                 ext_ior,
+                dispersion,
                 reflectance,
                 transmittance,
             } => {
-                let mut d = Dielectric::with_lanes(*int_ior, *ext_ior);
+                let ior = with_ior(dispersion, |f| m.smooth_eta(f, *int_ior));
+                let mut d = Dielectric::with_lanes(ior, *ext_ior);
                 d.specular_reflectance = m.albedo_at(p, reflectance, at);
                 d.specular_transmittance = m.albedo_at(p, transmittance, at);
                 Bsdf::Dielectric(d)
@@ -340,10 +355,12 @@ impl MaterialKind {
             MaterialKind::ThinDielectric {
                 int_ior,
                 ext_ior,
+                dispersion,
                 reflectance,
                 transmittance,
             } => {
-                let mut d = ThinDielectric::with_lanes(*int_ior, *ext_ior);
+                let ior = with_ior(dispersion, |f| m.lane_ior(f, *int_ior));
+                let mut d = ThinDielectric::with_lane_ior(ior, *ext_ior);
                 d.specular_reflectance = m.albedo_at(p, reflectance, at);
                 d.specular_transmittance = m.albedo_at(p, transmittance, at);
                 Bsdf::ThinDielectric(d)
@@ -354,14 +371,20 @@ impl MaterialKind {
                 alpha_v,
                 int_ior,
                 ext_ior,
+                dispersion,
+                dispersion_sampling,
                 reflectance,
                 transmittance,
             } => {
-                let mut d = RoughDielectric::with_lanes(
+                let ior = with_ior(dispersion, |f| match dispersion_sampling {
+                    DispersionSampling::Mis => m.lane_ior(f, *int_ior),
+                    DispersionSampling::Terminate => M::C::splat(m.smooth_eta(f, *int_ior)),
+                });
+                let mut d = RoughDielectric::with_lane_ior(
                     *distribution,
                     alpha(p.float(alpha_u, at)),
                     alpha(p.float(alpha_v, at)),
-                    *int_ior,
+                    ior,
                     *ext_ior,
                 );
                 d.specular_reflectance = m.albedo_at(p, reflectance, at);
@@ -435,6 +458,16 @@ impl MaterialKind {
                 }
             }
         }
+    }
+}
+
+/// `k` called with a dispersive index as a function of the wavelength in nm (what
+/// [`ColorMode`] resolves), or with `None`.
+#[inline]
+fn with_ior<R>(d: &Option<Dispersion>, k: impl FnOnce(Option<&dyn Fn(f32) -> f32>) -> R) -> R {
+    match d {
+        None => k(None),
+        Some(d) => k(Some(&|lambda: f32| d.ior(f64::from(lambda)) as f32)),
     }
 }
 

@@ -6,6 +6,11 @@
 //! so the outcome is deterministic; a correct implementation fails with probability < 1 %).
 //! The same sampling pass checks that every non-delta sample's weight equals eval/pdf and
 //! that `pdf(wo, wi)` reproduces the sample's pdf.
+//!
+//! The dispersive rough dielectric (spectral mode, one index per wavelength) is a second
+//! family with its own α = 0.01 over its cases: its sampling density is the mixture of the
+//! four wavelengths' densities, which its `pdf` returns, and each lane's weight is that lane's
+//! eval over the mixture.
 
 use base::PhongModel;
 use render::bsdf::{
@@ -13,6 +18,8 @@ use render::bsdf::{
     RoughConductor, RoughDielectric, RoughPlastic, TransportMode,
 };
 use render::math::{Vec2, Vec3};
+use render::spectral::SampledSpectrum;
+use render::spectral::lanes::Color;
 use render::stats::{Chi2Config, Pcg32, chi2_test, sidak};
 
 const ANGLES: [f32; 5] = [0.0, 30.0, 60.0, 80.0, 89.0];
@@ -168,6 +175,71 @@ fn rel_close(a: Vec3, b: Vec3, tol: f32) -> bool {
     (a - b).abs().max_element() <= tol * a.abs().max(b.abs()).max_element().max(1e-6)
 }
 
+/// [`rel_close`] over the lanes of any colour type.
+fn rel_close_lanes<C: Color>(a: C, b: C, tol: f32) -> bool {
+    let (mut diff, mut scale) = (0.0f32, 1e-6f32);
+    for i in 0..C::LANES {
+        diff = diff.max((a.lane(i) - b.lane(i)).abs());
+        scale = scale.max(a.lane(i).abs()).max(b.lane(i).abs());
+    }
+    diff <= tol * scale
+}
+
+/// Relative indices per wavelength: BK7 and the strongly dispersive F11 and diamond at four
+/// wavelengths spread over the visible range (as a stratified path would carry them), and an
+/// exaggerated set whose lanes' lobes barely overlap at low roughness.
+fn dispersive_lanes() -> Vec<(&'static str, SampledSpectrum)> {
+    let lambdas = [452.0, 531.0, 608.0, 689.0];
+    let mut out: Vec<(&'static str, SampledSpectrum)> = ["glass-bk7", "glass-f11", "diamond"]
+        .into_iter()
+        .map(|name| {
+            let d = base::dispersion::Dispersion::named(name).unwrap();
+            (name, SampledSpectrum::from_fn(|i| d.ior(lambdas[i]) as f32))
+        })
+        .collect();
+    out.push(("exaggerated", SampledSpectrum::new([1.7, 1.25, 1.5, 2.2])));
+    out
+}
+
+/// Dispersive rough dielectrics (`Bsdf<SampledSpectrum>`): both distributions, three
+/// roughnesses, from outside and inside (where some lanes reflect totally).
+fn dispersive_cases() -> Vec<(String, Bsdf<SampledSpectrum>, Vec3)> {
+    let mut out = Vec::new();
+    for (name, eta) in dispersive_lanes() {
+        for kind in KINDS {
+            for alpha in [0.05, 0.3, 0.8] {
+                let rd = RoughDielectric::with_lane_ior(kind, alpha, alpha, eta, 1.0);
+                assert!(rd.is_dispersive());
+                for inside in [false, true] {
+                    for (i, a) in [0.0, 45.0, 80.0].into_iter().enumerate() {
+                        let mut wo = dir(a, 0.35 * i as f32);
+                        if inside {
+                            wo.z = -wo.z;
+                        }
+                        out.push((
+                            format!(
+                                "dispersive roughdielectric {name} {kind:?} α={alpha} θ={a}{}",
+                                if inside { " inside" } else { "" }
+                            ),
+                            rd.into(),
+                            wo,
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    // Anisotropic.
+    let (_, eta) = dispersive_lanes().pop().unwrap();
+    let rd = RoughDielectric::with_lane_ior(MicrofacetType::Ggx, 0.1, 0.4, eta, 1.0);
+    out.push((
+        "dispersive roughdielectric exaggerated Ggx α=(0.1,0.4) θ=60".into(),
+        rd.into(),
+        dir(60.0, 0.7),
+    ));
+    out
+}
+
 #[test]
 fn chi2_conductors_diffuse_plastic() {
     run_family(|n| {
@@ -178,6 +250,13 @@ fn chi2_conductors_diffuse_plastic() {
 #[test]
 fn chi2_rough_dielectric() {
     run_family(|n| n.starts_with("roughdielectric"));
+}
+
+/// The dispersive rough dielectric: sampling against its mixture density.
+#[test]
+fn chi2_rough_dielectric_dispersive() {
+    let cases = dispersive_cases();
+    run_cases(&cases, sidak(0.01, cases.len()), 5000);
 }
 
 #[test]
@@ -214,6 +293,11 @@ fn run_family(filter: impl Fn(&str) -> bool) {
     let all = cases();
     let significance = sidak(0.01, all.len());
     let cases: Vec<_> = all.into_iter().filter(|(n, ..)| filter(n)).collect();
+    run_cases(&cases, significance, 1000);
+}
+
+/// Runs `cases` at the per-case `significance`, seeded from `seed_base`.
+fn run_cases<C: Color>(cases: &[(String, Bsdf<C>, Vec3)], significance: f64, seed_base: u64) {
     let mut failures = Vec::new();
     let mut min_p = (1.0f64, String::new());
     for (idx, (name, bsdf, wo)) in cases.iter().enumerate() {
@@ -226,7 +310,7 @@ fn run_family(filter: impl Fn(&str) -> bool) {
             sample_count: 100_000,
             min_exp_frequency: 5.0,
             significance,
-            seed: 1000 + idx as u64,
+            seed: seed_base + idx as u64,
         };
         let r = chi2_test(
             |u2, u1| {
@@ -236,17 +320,26 @@ fn run_family(filter: impl Fn(&str) -> bool) {
                 }
                 let f = bsdf.eval(*wo, s.wi, mode);
                 let p = bsdf.pdf(*wo, s.wi);
-                if !rel_close(Vec3::splat(p), Vec3::splat(s.pdf), 2e-3) {
+                let (f2, p2) = bsdf.eval_pdf(*wo, s.wi, mode);
+                if !rel_close_lanes(f, f2, 1e-5)
+                    || !rel_close_lanes(Vec3::splat(p), Vec3::splat(p2), 1e-5)
+                {
+                    bad_pdf += 1;
+                    if first_bad.is_empty() {
+                        first_bad = format!("eval_pdf ({f2:?}, {p2}) vs eval, pdf ({f:?}, {p})");
+                    }
+                }
+                if !rel_close_lanes(Vec3::splat(p), Vec3::splat(s.pdf), 2e-3) {
                     bad_pdf += 1;
                     if first_bad.is_empty() {
                         first_bad = format!("pdf {p} vs sample {} at wi {}", s.pdf, s.wi);
                     }
                 }
-                if !rel_close(f / s.pdf, s.weight, 2e-3) {
+                if !rel_close_lanes(f / s.pdf, s.weight, 2e-3) {
                     bad_weight += 1;
                     if first_bad.is_empty() {
                         first_bad = format!(
-                            "eval/pdf {} vs weight {} at wi {}",
+                            "eval/pdf {:?} vs weight {:?} at wi {}",
                             f / s.pdf,
                             s.weight,
                             s.wi

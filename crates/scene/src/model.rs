@@ -15,6 +15,7 @@ pub use glam::{Mat3, Mat4, Vec2, Vec3};
 
 use crate::error::{Loc, Warning};
 
+pub use base::dispersion::{Dispersion, DispersionSampling};
 pub use base::*;
 
 /// Linear RGB triple (Rec.709 primaries).
@@ -546,27 +547,35 @@ pub enum Material {
         specular_reflectance: ColorParam,
     },
     /// Smooth dielectric interface; `absorption` is a Beer–Lambert coefficient per unit length
-    /// inside the medium (COMP30019, CENG795).
+    /// inside the medium (COMP30019, CENG795). `int_ior` is the index an RGB render uses; when
+    /// `dispersion` is set (a named glass, Sellmeier or Cauchy coefficients), `int_ior` is its
+    /// value at the d line and a spectral render evaluates `dispersion` per wavelength.
     Dielectric {
         int_ior: f32,
         ext_ior: f32,
+        dispersion: Option<Dispersion>,
         specular_reflectance: ColorParam,
         specular_transmittance: ColorParam,
         absorption: Option<Rgb>,
     },
-    /// Thin dielectric sheet (no refraction offset).
+    /// Thin dielectric sheet (no refraction offset). IORs as in `Dielectric`.
     ThinDielectric {
         int_ior: f32,
         ext_ior: f32,
+        dispersion: Option<Dispersion>,
         specular_reflectance: ColorParam,
         specular_transmittance: ColorParam,
     },
+    /// IORs as in `Dielectric`; `dispersion_sampling` says how a spectral render keeps the
+    /// wavelengths through a dispersive index.
     RoughDielectric {
         distribution: MicrofacetDistribution,
         alpha_u: FloatParam,
         alpha_v: FloatParam,
         int_ior: f32,
         ext_ior: f32,
+        dispersion: Option<Dispersion>,
+        dispersion_sampling: DispersionSampling,
         specular_reflectance: ColorParam,
         specular_transmittance: ColorParam,
     },

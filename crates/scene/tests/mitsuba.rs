@@ -1071,3 +1071,114 @@ fn nori_style_media() {
         m => panic!("{m:?}"),
     }
 }
+
+/// Dispersive dielectrics (docs/formats.md): a pbrt-v4 glass name, Cauchy and Sellmeier
+/// coefficients; the RGB index is the d-line one; errors for conflicting or invalid input.
+#[test]
+fn dispersive_dielectrics() {
+    let s = scene_of(
+        r#"<scene version="3.0.0">
+        <bsdf type="dielectric" id="named"><string name="int_ior" value="glass-BK7"/></bsdf>
+        <bsdf type="dielectric" id="mitsuba"><string name="int_ior" value="bk7"/></bsdf>
+        <bsdf type="thindielectric" id="cauchy">
+            <float name="cauchy_a" value="1.5"/><float name="cauchy_b" value="0.0042"/>
+        </bsdf>
+        <bsdf type="roughdielectric" id="sellmeier">
+            <float name="sellmeier_b1" value="1.03961212"/>
+            <float name="sellmeier_b2" value="0.231792344"/>
+            <float name="sellmeier_b3" value="1.01046945"/>
+            <float name="sellmeier_c1" value="0.00600069867"/>
+            <float name="sellmeier_c2" value="0.0200179144"/>
+            <float name="sellmeier_c3" value="103.560653"/>
+            <string name="dispersion_sampling" value="terminate"/>
+        </bsdf>
+        <bsdf type="roughdielectric" id="plain"/>
+        </scene>"#,
+    );
+    assert!(
+        !s.warnings.iter().any(|w| w.message.contains("parameter")),
+        "{:?}",
+        s.warnings
+    );
+    let by_name = |n: &str| {
+        &s.materials
+            .iter()
+            .find(|m| m.name.as_deref() == Some(n))
+            .unwrap()
+            .material
+    };
+    let bk7 = Dispersion::named("glass-bk7").unwrap();
+    let Material::Dielectric {
+        int_ior,
+        dispersion,
+        ..
+    } = by_name("named")
+    else {
+        panic!()
+    };
+    assert_eq!((*int_ior, *dispersion), (bk7.ior_rgb() as f32, Some(bk7)));
+    assert!(
+        matches!(by_name("mitsuba"), Material::Dielectric { int_ior, dispersion: None, .. } if *int_ior == 1.5046)
+    );
+    let Material::ThinDielectric {
+        int_ior,
+        dispersion: Some(d @ Dispersion::Cauchy { .. }),
+        ..
+    } = by_name("cauchy")
+    else {
+        panic!()
+    };
+    assert!((d.ior(500.0) - (1.5 + 0.0042 / 0.25)).abs() < 1e-7);
+    assert_eq!(*int_ior, d.ior_rgb() as f32);
+    let Material::RoughDielectric {
+        int_ior,
+        dispersion: Some(d),
+        dispersion_sampling,
+        ..
+    } = by_name("sellmeier")
+    else {
+        panic!()
+    };
+    assert_eq!(*dispersion_sampling, DispersionSampling::Terminate);
+    assert!((d.ior(486.1) - bk7.ior(486.1)).abs() < 1e-6);
+    assert!((*int_ior - 1.5168).abs() < 1e-4);
+    assert!(matches!(
+        by_name("plain"),
+        Material::RoughDielectric {
+            dispersion: None,
+            dispersion_sampling: DispersionSampling::Mis,
+            ..
+        }
+    ));
+    for (bad, what) in [
+        (
+            r#"<float name="int_ior" value="1.5"/><float name="cauchy_a" value="1.5"/><float name="cauchy_b" value="0.004"/>"#,
+            "both 'int_ior' and dispersion",
+        ),
+        (
+            r#"<float name="cauchy_a" value="1.5"/><float name="sellmeier_b1" value="1"/>"#,
+            "both Cauchy and Sellmeier",
+        ),
+        (
+            r#"<float name="cauchy_a" value="1.5"/>"#,
+            "needs both 'cauchy_a' and 'cauchy_b'",
+        ),
+        (
+            r#"<float name="cauchy_a" value="0.5"/><float name="cauchy_b" value="0"/>"#,
+            "not a valid index",
+        ),
+        (
+            r#"<float name="sellmeier_b1" value="1"/><float name="sellmeier_c1" value="0.25"/>"#,
+            "not a valid index",
+        ),
+        (
+            r#"<string name="dispersion_sampling" value="sometimes"/>"#,
+            "unknown dispersion_sampling",
+        ),
+    ] {
+        let e = load_err(&format!(
+            r#"<scene version="3.0.0"><bsdf type="roughdielectric">{bad}</bsdf></scene>"#
+        ));
+        assert!(e.to_string().contains(what), "{bad}: {e}");
+    }
+}

@@ -186,6 +186,13 @@ pub trait ColorMode {
     /// at the hero wavelength and terminates the secondary wavelengths (pbrt-v4's scheme);
     /// RGB mode uses `rgb_value` unchanged.
     fn smooth_eta(&self, dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> f32;
+    /// An index of refraction per lane, for interfaces that keep every wavelength through a
+    /// dispersive index (the rough dielectric by MIS over the lanes, the thin sheet whose
+    /// directions do not depend on it): RGB mode and non-dispersive indices give `rgb_value`
+    /// in every lane; a dispersive one in spectral mode gives its value at each lane's
+    /// wavelength, or the hero's in every lane once the secondary wavelengths are terminated
+    /// (only the hero still counts). Nothing is terminated here.
+    fn lane_ior(&self, dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> Self::C;
 }
 
 /// RGB mode: every conversion is the identity.
@@ -213,6 +220,10 @@ impl ColorMode for RgbMode {
     #[inline(always)]
     fn smooth_eta(&self, _dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> f32 {
         rgb_value
+    }
+    #[inline(always)]
+    fn lane_ior(&self, _dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> Vec3 {
+        Vec3::splat(rgb_value)
     }
 }
 
@@ -314,6 +325,19 @@ impl ColorMode for SpectralMode<'_> {
                 wl.terminate_secondary();
                 self.wavelengths.set(wl);
                 ior(wl.lambda(0))
+            }
+        }
+    }
+    fn lane_ior(&self, dispersive: Option<&dyn Fn(f32) -> f32>, rgb_value: f32) -> SampledSpectrum {
+        match dispersive {
+            None => SampledSpectrum::splat(rgb_value),
+            Some(ior) => {
+                let wl = self.wavelengths.get();
+                if wl.secondary_terminated() {
+                    SampledSpectrum::splat(ior(wl.lambda(0)))
+                } else {
+                    SampledSpectrum::from_fn(|i| ior(wl.lambda(i)))
+                }
             }
         }
     }
@@ -509,6 +533,28 @@ mod tests {
         assert!(s.transmission && (s.eta - eta).abs() < 1e-6);
         // RGB mode ignores the dispersion.
         assert_eq!(RgbMode.smooth_eta(Some(&ior), 1.5168), 1.5168);
+        assert_eq!(RgbMode.lane_ior(Some(&ior), 1.5168), Vec3::splat(1.5168));
+    }
+
+    /// An index per lane: each wavelength's own, nothing terminated; the hero's everywhere
+    /// once the secondaries are terminated; the constant for a non-dispersive index.
+    #[test]
+    fn lane_ior_keeps_every_wavelength() {
+        let bk7 = base::dispersion::Dispersion::named("glass-bk7").unwrap();
+        let ior = |l: f32| bk7.ior(l as f64) as f32;
+        let m = spectral(0.6);
+        assert_eq!(m.lane_ior(None, 1.5), SampledSpectrum::splat(1.5));
+        let wl = m.wavelengths();
+        let lanes = m.lane_ior(Some(&ior), 1.5168);
+        assert!(!m.wavelengths().secondary_terminated());
+        for i in 0..N_SPECTRUM_SAMPLES {
+            assert_eq!(lanes[i], ior(wl.lambda(i)));
+        }
+        m.smooth_eta(Some(&ior), 1.5168);
+        assert_eq!(
+            m.lane_ior(Some(&ior), 1.5168),
+            SampledSpectrum::splat(ior(wl.lambda(0)))
+        );
     }
 
     /// Every BSDF model runs in spectral mode (no RGB bridge is left to panic): the weights

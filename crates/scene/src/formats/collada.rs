@@ -881,6 +881,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                             Material::Dielectric {
                                 int_ior: ior,
                                 ext_ior: 1.0,
+                                dispersion: None,
                                 specular_reflectance: c(refl),
                                 specular_transmittance: c(self.cgl_rgb(
                                     k,

@@ -625,6 +625,8 @@ impl Parser<'_> {
                         alpha_v: FloatParam::Const(alpha),
                         int_ior: ior,
                         ext_ior: 1.0,
+                        dispersion: None,
+                        dispersion_sampling: Default::default(),
                         specular_reflectance: ColorParam::constant(1.0),
                         specular_transmittance: ColorParam::Const(unused_is_white(color)),
                     }
@@ -876,6 +878,7 @@ fn glass(ior: f32, color: Rgb) -> Material {
     Material::Dielectric {
         int_ior: ior,
         ext_ior: 1.0,
+        dispersion: None,
         specular_reflectance: ColorParam::constant(1.0),
         specular_transmittance: ColorParam::constant(1.0),
         absorption: beer_absorption(color),

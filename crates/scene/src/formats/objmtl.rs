@@ -598,6 +598,7 @@ fn map_material(
         Material::Dielectric {
             int_ior: m.ni.filter(|n| *n > 1.0).unwrap_or(1.5),
             ext_ior: 1.0,
+            dispersion: None,
             specular_reflectance: ColorParam::constant(1.0),
             specular_transmittance: ColorParam::Const(m.tf.unwrap_or(Rgb::ONE).min(Rgb::ONE)),
             absorption: None,

@@ -370,14 +370,28 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     /// dispersive glass by pbrt-v4's name (`glass-BK7`...; see [`Dispersion::named`]), whose
     /// index at the d line an RGB render uses.
     fn ior(&self, pl: &Plugin<'s>, name: &str, default: f32) -> Result<f32> {
+        Ok(self.ior_dispersive(pl, name, default)?.0)
+    }
+
+    /// [`Self::ior`], with the dispersion of a named dispersive glass.
+    fn ior_dispersive(
+        &self,
+        pl: &Plugin<'s>,
+        name: &str,
+        default: f32,
+    ) -> Result<(f32, Option<Dispersion>)> {
         let Some(p) = pl.props.get(name) else {
-            return Ok(default);
+            return Ok((default, None));
         };
+        let mut dispersion = None;
         let v = match &p.value {
             Value::Float(v) => *v as f32,
             Value::Int(v) => *v as f32,
             Value::Str(s) => ior::dielectric(s)
-                .or_else(|| Dispersion::named(s.trim()).map(|d| d.ior_rgb() as f32))
+                .or_else(|| {
+                    dispersion = Dispersion::named(s.trim());
+                    dispersion.map(|d| d.ior_rgb() as f32)
+                })
                 .ok_or_else(|| {
                     err(
                         &p.loc,
@@ -399,7 +413,93 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         if v <= 0.0 {
             return Err(err(&p.loc, format!("'{name}' must be positive, found {v}")));
         }
-        Ok(v)
+        Ok((v, dispersion))
+    }
+
+    /// A dielectric's interior index and its dispersion (docs/formats.md, "Dispersion"):
+    /// `int_ior` as in [`Self::ior_dispersive`], or Cauchy's `cauchy_a`, `cauchy_b` (µm²), or
+    /// Sellmeier's `sellmeier_b1`..`sellmeier_b3`, `sellmeier_c1`..`sellmeier_c3` (µm²;
+    /// missing terms are 0). The RGB index of a dispersive one is its value at the d line.
+    fn int_ior(&self, pl: &Plugin<'s>) -> Result<(f32, Option<Dispersion>)> {
+        const CAUCHY: [&str; 2] = ["cauchy_a", "cauchy_b"];
+        const SELLMEIER: [&str; 6] = [
+            "sellmeier_b1",
+            "sellmeier_b2",
+            "sellmeier_b3",
+            "sellmeier_c1",
+            "sellmeier_c2",
+            "sellmeier_c3",
+        ];
+        let given = |names: &[&str]| names.iter().any(|n| pl.props.has(n));
+        let (cauchy, sellmeier) = (given(&CAUCHY), given(&SELLMEIER));
+        if !cauchy && !sellmeier {
+            return self.ior_dispersive(pl, "int_ior", ior::BK7);
+        }
+        let loc = pl.loc();
+        if cauchy && sellmeier {
+            return Err(err(
+                loc,
+                format!(
+                    "{} '{}' has both Cauchy and Sellmeier coefficients",
+                    pl.elem.tag, pl.ty
+                ),
+            ));
+        }
+        if pl.props.has("int_ior") {
+            return Err(err(
+                loc,
+                format!(
+                    "{} '{}' has both 'int_ior' and dispersion coefficients",
+                    pl.elem.tag, pl.ty
+                ),
+            ));
+        }
+        let d = if cauchy {
+            let a = pl.props.float_opt("cauchy_a")?;
+            let b = pl.props.float_opt("cauchy_b")?;
+            let (Some(a), Some(b)) = (a, b) else {
+                return Err(err(
+                    loc,
+                    "Cauchy dispersion needs both 'cauchy_a' and 'cauchy_b'",
+                ));
+            };
+            Dispersion::Cauchy {
+                a: f64::from(a),
+                b: f64::from(b),
+            }
+        } else {
+            let mut v = [0.0f64; 6];
+            for (v, n) in v.iter_mut().zip(SELLMEIER) {
+                *v = f64::from(pl.props.float(n, 0.0)?);
+            }
+            Dispersion::Sellmeier {
+                b: [v[0], v[1], v[2]],
+                c: [v[3], v[4], v[5]],
+            }
+        };
+        if !d.is_valid_visible() {
+            return Err(err(
+                loc,
+                format!(
+                    "the dispersion of {} '{}' is not a valid index (finite, ≥ 1, no Sellmeier \
+                     pole) over 360–830 nm",
+                    pl.elem.tag, pl.ty
+                ),
+            ));
+        }
+        Ok((d.ior_rgb() as f32, Some(d)))
+    }
+
+    fn dispersion_sampling(&self, pl: &Plugin<'s>) -> Result<DispersionSampling> {
+        match pl.props.string_opt("dispersion_sampling")? {
+            None => Ok(DispersionSampling::default()),
+            Some((s, loc)) => DispersionSampling::parse(s).ok_or_else(|| {
+                err(
+                    loc,
+                    format!("unknown dispersion_sampling '{s}' (mis, terminate)"),
+                )
+            }),
+        }
     }
 
     fn distribution(&self, pl: &Plugin<'s>) -> Result<MicrofacetDistribution> {
@@ -831,27 +931,38 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     }
                 }
             }
-            "dielectric" => Material::Dielectric {
-                int_ior: self.ior(pl, "int_ior", ior::BK7)?,
-                ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
-                specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
-                specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
-                absorption: None,
-            },
-            "thindielectric" => Material::ThinDielectric {
-                int_ior: self.ior(pl, "int_ior", ior::BK7)?,
-                ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
-                specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
-                specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
-            },
+            "dielectric" => {
+                let (int_ior, dispersion) = self.int_ior(pl)?;
+                Material::Dielectric {
+                    int_ior,
+                    ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                    dispersion,
+                    specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+                    specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
+                    absorption: None,
+                }
+            }
+            "thindielectric" => {
+                let (int_ior, dispersion) = self.int_ior(pl)?;
+                Material::ThinDielectric {
+                    int_ior,
+                    ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                    dispersion,
+                    specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+                    specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
+                }
+            }
             "roughdielectric" => {
                 let (alpha_u, alpha_v) = self.alphas(pl)?;
+                let (int_ior, dispersion) = self.int_ior(pl)?;
                 Material::RoughDielectric {
                     distribution: self.distribution(pl)?,
                     alpha_u,
                     alpha_v,
-                    int_ior: self.ior(pl, "int_ior", ior::BK7)?,
+                    int_ior,
                     ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
+                    dispersion,
+                    dispersion_sampling: self.dispersion_sampling(pl)?,
                     specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
                     specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
                 }
