@@ -204,3 +204,45 @@ fn defines_outside_mitsuba_xml_are_errors() {
         .unwrap();
     assert!(o.status.success());
 }
+
+/// `--mode` (and `-m` with Mitsuba variant names) selects the colour mode: every spelling of
+/// spectral gives the same image, which is not the RGB one; `rgb` is the default; anything
+/// else is a usage error naming what is accepted.
+#[test]
+fn mode_selects_rgb_or_spectral() {
+    let dir = temp_dir("mode");
+    let px = |i: &Image| i.pixels.clone();
+    let seed = ["--spp", "4", "--seed", "1"];
+    let with = |name: &str, extra: &[&str]| {
+        let flags: Vec<&str> = seed.iter().chain(extra).copied().collect();
+        render(&dir, name, &flags).0
+    };
+    let default = with("default", &[]);
+    let rgb = with("rgb", &["--mode", "rgb"]);
+    let llvm_rgb = with("llvm-rgb", &["-m", "llvm_ad_rgb"]);
+    let spectral = with("spectral", &["--mode", "spectral"]);
+    let scalar = with("scalar", &["-m", "scalar_spectral"]);
+    let llvm = with("llvm", &["-m", "llvm_ad_spectral"]);
+    assert_eq!(px(&default), px(&rgb));
+    assert_eq!(px(&default), px(&llvm_rgb));
+    assert_eq!(px(&spectral), px(&scalar));
+    assert_eq!(px(&spectral), px(&llvm));
+    assert_ne!(px(&spectral), px(&rgb));
+    // Same scene, same light: the spectral image is the RGB one up to noise and the
+    // upsampling's few percent.
+    let (s, r) = (mean(&spectral), mean(&rgb));
+    assert!((s / r - 1.0).abs() < 0.1, "spectral mean {s} vs RGB {r}");
+    for bad in ["bogus", "llvm_ad_mono"] {
+        let o = penumbra()
+            .current_dir(repo_root())
+            .args(["render", "scenes/cornell-box.xml", "-q", "--mode", bad])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "--mode {bad}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("expected rgb, spectral"),
+            "--mode {bad}: {err}"
+        );
+    }
+}
