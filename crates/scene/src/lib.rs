@@ -28,12 +28,15 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
 }
 
 /// A scene given as Mitsuba/Nori XML text, as tests write them: the text is saved as
-/// `<temp>/penumbra-scenes-<pid>/<name>.xml` (relative file references resolve there) and
-/// loaded. Errors (unwritable file, load error, a test file instead of a scene) come back as
-/// messages.
+/// `<temp>/penumbra-scenes-<pid>/<name>-<n>.xml` (relative file references resolve there;
+/// `n` counts the calls, so that tests running in parallel threads never write the file
+/// another one is reading) and loaded. Errors (unwritable file, load error, a test file
+/// instead of a scene) come back as messages.
 pub fn load_xml_text(name: &str, xml: &str) -> std::result::Result<Box<SceneDesc>, String> {
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!("penumbra-scenes-{}", std::process::id()));
-    let path = dir.join(format!("{name}.xml"));
+    let path = dir.join(format!("{name}-{n}.xml"));
     std::fs::create_dir_all(&dir)
         .and_then(|()| std::fs::write(&path, xml))
         .map_err(|e| format!("{}: {e}", path.display()))?;
