@@ -3,6 +3,15 @@
 use crate::math::{Vec3, safe_sqrt};
 use crate::spectral::lanes::Color;
 
+/// Whether the per-lane relative indices `lane_eta` differ from the hero's `eta`: a
+/// dispersive interface. Only spectral colours can be dispersive (RGB has one index per
+/// material), so for 3-lane colours the test is a constant `false`.
+#[inline]
+pub fn lanes_disperse<C: Color>(lane_eta: C, eta: f32) -> bool {
+    C::LANES == crate::spectral::N_SPECTRUM_SAMPLES
+        && (0..C::LANES).any(|i| lane_eta.lane(i) != eta)
+}
+
 /// Unpolarised Fresnel reflectance of a smooth dielectric interface.
 ///
 /// `eta` is the relative index η_inside/η_outside; `cos_theta_i` is signed: negative means the

@@ -95,8 +95,7 @@ impl<C: Color> RoughDielectric<C> {
     /// material, and the test is a constant `false` for 3-lane colours).
     #[inline]
     pub fn is_dispersive(&self) -> bool {
-        C::LANES == crate::spectral::N_SPECTRUM_SAMPLES
-            && (0..C::LANES).any(|i| self.lane_eta.lane(i) != self.eta)
+        super::fresnel::lanes_disperse(self.lane_eta, self.eta)
     }
 
     /// Generalised half vector (pointing to the +z side), the relative index η_i/η_o seen from

@@ -56,8 +56,7 @@ impl<C: Color> ThinDielectric<C> {
     /// Whether the lanes' indices differ (never for RGB's 3 lanes).
     #[inline]
     pub fn is_dispersive(&self) -> bool {
-        C::LANES == crate::spectral::N_SPECTRUM_SAMPLES
-            && (0..C::LANES).any(|i| self.lane_eta.lane(i) != self.eta)
+        super::fresnel::lanes_disperse(self.lane_eta, self.eta)
     }
 
     /// Total reflectance of the slab for a direction with cosine `cos_theta`.
