@@ -31,6 +31,20 @@ pub fn planck(lambda_nm: f64, t: f64) -> f64 {
     c1 / (l.powi(5) * (c2 / (l * t)).exp_m1())
 }
 
+/// [`planck`] at four wavelengths at once (4-wide double precision: the same formula, the
+/// scalar `exp_m1` replaced by `wide`'s, equal to 1e-12 relative).
+pub fn planck4(lambda_nm: [f64; 4], t: f64) -> [f64; 4] {
+    if t <= 0.0 || lambda_nm.iter().any(|&l| l <= 0.0) {
+        return lambda_nm.map(|l| planck(l, t));
+    }
+    let l = wide::f64x4::from(lambda_nm) * 1e-9;
+    let c1 = 2.0 * PLANCK_H * SPEED_OF_LIGHT * SPEED_OF_LIGHT;
+    let c2 = PLANCK_H * SPEED_OF_LIGHT / BOLTZMANN_K;
+    let l2 = l * l;
+    (wide::f64x4::splat(c1) / (l2 * l2 * l * (wide::f64x4::splat(c2) / (l * t)).exp_m1()))
+        .to_array()
+}
+
 /// A black body's spectrum scaled to a maximum of 1 (pbrt-v4's normalisation).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlackbodySpectrum {
@@ -69,6 +83,26 @@ impl Spectrum for BlackbodySpectrum {
 
 #[cfg(test)]
 mod tests {
+    /// The 4-wide Planck's law is the scalar one, over the temperatures and wavelengths a
+    /// scene can declare.
+    #[test]
+    fn planck4_is_planck() {
+        for t in [1.0, 300.0, 1000.0, 3000.0, 6504.0, 1e5, 1e8] {
+            for l0 in [360.0, 412.5, 555.0, 700.0, 829.9] {
+                let ls = [l0, l0 + 0.3, l0 * 0.5, l0 * 2.0];
+                let got = planck4(ls, t);
+                for (g, &l) in got.iter().zip(&ls) {
+                    let want = planck(l, t);
+                    assert!(
+                        (g - want).abs() <= 1e-12 * want,
+                        "{t} K, {l} nm: {g} vs {want}"
+                    );
+                }
+            }
+        }
+        assert_eq!(planck4([500.0; 4], 0.0), [0.0; 4]);
+    }
+
     use super::*;
 
     #[test]

@@ -6,7 +6,7 @@
 //! integrates): ∫ȳ = [`CIE_Y_INTEGRAL`] ≈ 106.857. Quantities meant to be colorimetric (the
 //! upsampling tables, the round-trip tests) use that same rule.
 
-use crate::math::Vec3;
+use crate::math::{Vec3, Vec4};
 use base::cie_data;
 
 pub use cie_data::{CIE_D65, CIE_X, CIE_Y, CIE_Z};
@@ -121,6 +121,45 @@ pub fn integrate_xyz(f: impl Fn(f64) -> f64) -> [f64; 3] {
     xyz
 }
 
+/// Per 1 nm sample, interleaved in f32: the CIE observer in linear sRGB divided by ∫ȳ
+/// (r̄, ḡ, b̄ = `XYZ_TO_SRGB` · (x̄, ȳ, z̄) / ∫ȳ) and D65 of unit luminance. What a spectral path
+/// needs at each of its wavelengths, once: its light's white and the weights that turn its
+/// estimate into the film's colour (interpolation commutes with the linear map, so
+/// Σ wᵢ·(r̄, ḡ, b̄)(λᵢ) is `xyz_to_srgb` of the XYZ estimate, to rounding). Four 16-byte loads
+/// per path instead of twelve lookups in three f64 tables, built at compile time.
+pub static SRGB_BAR_D65: [[f32; 4]; CIE_SAMPLES] = srgb_bar_d65();
+
+const fn srgb_bar_d65() -> [[f32; 4]; CIE_SAMPLES] {
+    let m = cie_data::XYZ_TO_SRGB;
+    let mut t = [[0.0f32; 4]; CIE_SAMPLES];
+    let mut i = 0;
+    while i < CIE_SAMPLES {
+        let xyz = [CIE_X[i], CIE_Y[i], CIE_Z[i]];
+        let mut r = 0;
+        while r < 3 {
+            let v = m[r][0] * xyz[0] + m[r][1] * xyz[1] + m[r][2] * xyz[2];
+            t[i][r] = (v / CIE_Y_INTEGRAL) as f32;
+            r += 1;
+        }
+        t[i][3] = (CIE_D65[i] * D65_TO_UNIT_Y) as f32;
+        i += 1;
+    }
+    t
+}
+
+/// [`SRGB_BAR_D65`] at `lambda` (nm), linearly interpolated, 0 outside [360, 830] nm.
+#[inline]
+pub fn srgb_bar_d65_at(lambda: f32) -> Vec4 {
+    match locate(lambda) {
+        Some((i, t)) => {
+            let a = Vec4::from_array(SRGB_BAR_D65[i]);
+            let b = Vec4::from_array(SRGB_BAR_D65[i + 1]);
+            a + (b - a) * t
+        }
+        None => Vec4::ZERO,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,5 +215,26 @@ mod tests {
         let v = xyz_bar(612.3);
         assert_eq!(v, Vec3::new(x_bar(612.3), y_bar(612.3), z_bar(612.3)));
         assert!((d65_unit_y(560.0) as f64 - 100.0 * D65_TO_UNIT_Y).abs() < 1e-4);
+    }
+
+    /// The interleaved table is the sRGB observer and unit-luminance D65 of the separate
+    /// lookups (f32 rounding apart), and vanishes outside the tables like them.
+    #[test]
+    fn interleaved_table_matches_the_lookups() {
+        let m = super::super::colorspace::XYZ_TO_SRGB_F32;
+        for k in 0..=4700 {
+            let l = 360.0 + k as f32 * 0.1;
+            let v = srgb_bar_d65_at(l);
+            let rgb = m.mul_vec3a(xyz_bar(l)) / CIE_Y_INTEGRAL as f32;
+            let d = d65_unit_y(l);
+            for (got, want) in [(v.x, rgb.x), (v.y, rgb.y), (v.z, rgb.z), (v.w, d)] {
+                assert!(
+                    (got - want).abs() <= 1e-6 * (1.0 + want.abs()),
+                    "{l}: {v} vs {rgb}, {d}"
+                );
+            }
+        }
+        assert_eq!(srgb_bar_d65_at(359.9), Vec4::ZERO);
+        assert_eq!(srgb_bar_d65_at(f32::NAN), Vec4::ZERO);
     }
 }

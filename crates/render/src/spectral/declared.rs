@@ -17,9 +17,27 @@
 //! Values are as declared: a reflectance above 1 is not clamped (Mitsuba's spectral variants
 //! do not clamp either; its RGB variants clamp the converted RGB, which RGB mode renders).
 
-use super::blackbody::planck;
-use super::sampled::Spectrum;
+use super::blackbody::{planck, planck4};
+use super::sampled::{SampledSpectrum, SampledWavelengths, Spectrum};
 pub use base::spectrum::DeclaredSpectrum;
+
+/// A tabulated spectrum at `lambda`: linear between the nodes, 0 outside.
+#[inline(always)]
+fn tabulated(
+    wavelengths: &[f32],
+    values: &[f32],
+    cells: &[u32],
+    cells_per_nm: f32,
+    lambda: f32,
+) -> f32 {
+    let n = wavelengths.len();
+    if !(wavelengths[0]..=wavelengths[n - 1]).contains(&lambda) {
+        return 0.0;
+    }
+    let i = DeclaredSpectrum::interval(wavelengths, cells, cells_per_nm, lambda);
+    let t = (lambda - wavelengths[i]) / (wavelengths[i + 1] - wavelengths[i]);
+    values[i] + (values[i + 1] - values[i]) * t
+}
 
 impl Spectrum for DeclaredSpectrum {
     fn eval(&self, lambda: f32) -> f32 {
@@ -27,22 +45,34 @@ impl Spectrum for DeclaredSpectrum {
             DeclaredSpectrum::Tabulated {
                 wavelengths,
                 values,
-            } => {
-                let n = wavelengths.len();
-                if !(wavelengths[0]..=wavelengths[n - 1]).contains(&lambda) {
-                    return 0.0;
-                }
-                let i = wavelengths
-                    .partition_point(|&w| w <= lambda)
-                    .saturating_sub(1)
-                    .min(n - 2);
-                let t = (lambda - wavelengths[i]) / (wavelengths[i + 1] - wavelengths[i]);
-                values[i] + (values[i + 1] - values[i]) * t
-            }
+                cells,
+                cells_per_nm,
+            } => tabulated(wavelengths, values, cells, *cells_per_nm, lambda),
             DeclaredSpectrum::Constant(v) => *v,
             DeclaredSpectrum::Blackbody { temperature, scale } => {
                 (planck(lambda as f64, *temperature) * 1e-9 * scale) as f32
             }
+        }
+    }
+
+    /// One dispatch for the four wavelengths.
+    #[inline]
+    fn sample(&self, wavelengths: &SampledWavelengths) -> SampledSpectrum {
+        match self {
+            DeclaredSpectrum::Constant(v) => SampledSpectrum::splat(*v),
+            DeclaredSpectrum::Blackbody { temperature, scale } => {
+                let l = wavelengths.lambdas().map(f64::from);
+                let p = planck4(l, *temperature);
+                SampledSpectrum::from_fn(|i| (p[i] * 1e-9 * scale) as f32)
+            }
+            DeclaredSpectrum::Tabulated {
+                wavelengths: w,
+                values,
+                cells,
+                cells_per_nm,
+            } => SampledSpectrum::from_fn(|i| {
+                tabulated(w, values, cells, *cells_per_nm, wavelengths.lambda(i))
+            }),
         }
     }
 }

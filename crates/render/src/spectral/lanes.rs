@@ -14,7 +14,7 @@
 use super::declared::DeclaredSpectrum;
 use super::rgb::{RgbAlbedoSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum};
 use super::sampled::{N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum};
-use crate::math::Vec3;
+use crate::math::{Mat4, Vec3, Vec4};
 use crate::sampling::Sampler;
 use crate::textures::{ColorRef, Params, TexCoord};
 use std::cell::Cell;
@@ -235,12 +235,19 @@ pub struct SpectralMode<'a> {
     /// Unit-luminance D65 at the wavelengths: every RGB illuminant is an unbounded spectrum
     /// times it, several times per path.
     d65: SampledSpectrum,
+    /// The observer in linear sRGB at the wavelengths (r̄, ḡ, b̄ over the lanes, divided by
+    /// ∫ȳ): the path's estimate becomes the film's colour by three dot products.
+    srgb_bar: [Vec4; 3],
 }
 
 impl<'a> SpectralMode<'a> {
     pub fn new(wavelengths: SampledWavelengths, table: &'a RgbToSpectrumTable) -> Self {
+        // One interleaved (r̄, ḡ, b̄, D65) lookup per wavelength, transposed to lanes.
+        let l = wavelengths.lambdas().map(super::cie::srgb_bar_d65_at);
+        let lanes = Mat4::from_cols(l[0], l[1], l[2], l[3]).transpose();
         SpectralMode {
-            d65: SampledSpectrum::from_fn(|i| super::cie::d65_unit_y(wavelengths.lambda(i))),
+            d65: SampledSpectrum::from_vec4(lanes.w_axis),
+            srgb_bar: [lanes.x_axis, lanes.y_axis, lanes.z_axis],
             wavelengths: Cell::new(wavelengths),
             table,
         }
@@ -397,7 +404,11 @@ impl PathMode for SpectralMode<'static> {
     }
     #[inline]
     fn to_rgb(&self, c: SampledSpectrum) -> Vec3 {
-        c.to_srgb(&self.wavelengths.get())
+        // = c.to_srgb(&wavelengths), with the observer looked up once per path.
+        let w =
+            c.safe_div(self.wavelengths.get().pdf()).as_vec4() * (1.0 / N_SPECTRUM_SAMPLES as f32);
+        let [r, g, b] = self.srgb_bar;
+        Vec3::new(w.dot(r), w.dot(g), w.dot(b))
     }
     #[inline]
     fn live_max(&self, c: SampledSpectrum) -> f32 {
@@ -471,6 +482,28 @@ mod tests {
             .sample(wo, 0.5, Vec2::new(0.3, 0.6), TransportMode::Radiance)
             .unwrap();
         assert_eq!(s.weight, rgb);
+    }
+
+    /// The per-path observer gives the film the estimate's `to_srgb`, with all four
+    /// wavelengths and after the secondaries are terminated.
+    #[test]
+    fn to_rgb_is_to_srgb() {
+        let bk7 = base::dispersion::Dispersion::named("glass-bk7").unwrap();
+        let ior = |l: f32| bk7.ior(l as f64) as f32;
+        for k in 0..200 {
+            let m = spectral((k as f32 + 0.5) / 200.0);
+            let c = SampledSpectrum::new([0.3, 1.7, 0.02, 4.0]) * (1.0 + k as f32);
+            for _ in 0..2 {
+                let (got, want) = (m.to_rgb(c), c.to_srgb(&m.wavelengths()));
+                let tol = 1e-5 * want.abs().max_element().max(1e-3);
+                assert!((got - want).abs().max_element() <= tol, "{got} vs {want}");
+                m.smooth_eta(Some(&ior), 1.5);
+            }
+            let d65 = SampledSpectrum::from_fn(|i| {
+                super::super::cie::d65_unit_y(m.wavelengths().lambda(i))
+            });
+            assert!((m.d65 - d65).as_vec4().abs().max_element() < 1e-6);
+        }
     }
 
     /// The illuminant conversion is pbrt-v4's `RGBIlluminantSpectrum` at the wavelengths.
