@@ -10,11 +10,13 @@
 use super::LightScene;
 use super::bvh::LightBounds;
 use super::select::{mean_radiance, omni};
-use super::{LightModel, LightSample, Receiver, ShadowTarget};
-use crate::math::{PI, Vec2, Vec3, rsqrt};
+use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
+use crate::geometry::Ray;
+use crate::math::{Frame, PI, Vec2, Vec3, rsqrt};
 use crate::sampling::warp;
 use crate::shapes::{
-    MeshSampling, ShapeGeom, SurfaceInteraction, disk_uv, ellipsoid, gamma, sphere, sphere_uv,
+    MeshSampling, ShapeGeom, SurfaceInteraction, disk_uv, ellipsoid, gamma, offset_ray_origin,
+    sphere, sphere_uv,
 };
 use crate::spectral::lanes::{Color, ColorMode};
 use crate::textures::{ColorRef, TexCoord, TexRef};
@@ -33,36 +35,20 @@ pub struct AreaLight {
     pub area: f32,
 }
 
-impl LightModel for AreaLight {
-    fn is_delta(&self) -> bool {
-        false
-    }
-
-    fn sample_li<M: ColorMode>(
+impl AreaLight {
+    /// A point on an emitting mesh or disk, uniform by area: its position, error bound,
+    /// emitting normal (`flip` applied, turned to the shading normal's side), uv (for a
+    /// radiance texture, when `textured`) and area density. `None` for other shapes and
+    /// degenerate meshes.
+    #[inline(always)]
+    fn sample_point(
         &self,
-        scene: &impl LightScene,
-        r: &Receiver,
+        geom: &ShapeGeom,
+        flip: f32,
+        textured: bool,
         u: Vec2,
-        m: &M,
-    ) -> Option<LightSample<M::C>> {
-        let info = scene.shape(self.shape);
-        let flip = if info.flip_normals { -1.0 } else { 1.0 };
-        // The sampled point's uv only feeds a radiance texture.
-        let textured = matches!(self.radiance, TexRef::Texture(_));
-        let (p, p_error, n, uv, pdf) = match &info.geom {
-            ShapeGeom::Sphere { center, radius } => {
-                return sample_sphere(
-                    scene,
-                    *center,
-                    *radius,
-                    flip,
-                    self.two_sided,
-                    &self.radiance,
-                    r,
-                    u,
-                    m,
-                );
-            }
+    ) -> Option<(Vec3, Vec3, Vec3, Vec2, f32)> {
+        Some(match geom {
             ShapeGeom::Mesh {
                 positions,
                 normals,
@@ -110,6 +96,44 @@ impl LightModel for AreaLight {
                 let err = gamma(6) * (p.abs() + Vec3::from_vec4(to_world.w_axis).abs());
                 let uv = if textured { disk_uv(d) } else { Vec2::ZERO };
                 (p, err, *normal * flip, uv, 1.0 / self.area)
+            }
+            _ => return None,
+        })
+    }
+}
+
+impl LightModel for AreaLight {
+    fn is_delta(&self) -> bool {
+        false
+    }
+
+    fn sample_li<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        r: &Receiver,
+        u: Vec2,
+        m: &M,
+    ) -> Option<LightSample<M::C>> {
+        let info = scene.shape(self.shape);
+        let flip = if info.flip_normals { -1.0 } else { 1.0 };
+        // The sampled point's uv only feeds a radiance texture.
+        let textured = matches!(self.radiance, TexRef::Texture(_));
+        let (p, p_error, n, uv, pdf) = match &info.geom {
+            ShapeGeom::Sphere { center, radius } => {
+                return sample_sphere(
+                    scene,
+                    *center,
+                    *radius,
+                    flip,
+                    self.two_sided,
+                    &self.radiance,
+                    r,
+                    u,
+                    m,
+                );
+            }
+            ShapeGeom::Mesh { .. } | ShapeGeom::Disk { .. } => {
+                self.sample_point(&info.geom, flip, textured, u)?
             }
             ShapeGeom::Ellipsoid(e) => {
                 let (dir, pdf_solid) = ellipsoid::sample(e, r.p, u)?;
@@ -188,6 +212,59 @@ impl LightModel for AreaLight {
         } else {
             M::C::ZERO
         }
+    }
+
+    /// A point uniform by area (spheres too: photons leave every part of them), a direction
+    /// cosine-weighted about its normal (a two-sided light picks a side with `u_dir.x`
+    /// first). Ellipsoids: not yet.
+    fn sample_le<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        let info = scene.shape(self.shape);
+        let flip = if info.flip_normals { -1.0 } else { 1.0 };
+        let textured = matches!(self.radiance, TexRef::Texture(_));
+        let (p, p_error, n, uv, pdf_pos) = match &info.geom {
+            ShapeGeom::Sphere { center, radius } => {
+                let d = warp::square_to_uniform_sphere(u_pos);
+                let p = *center + d * *radius;
+                let uv = if textured { sphere_uv(d) } else { Vec2::ZERO };
+                let err = gamma(5) * (p.abs() + center.abs());
+                (p, err, d * flip, uv, 1.0 / self.area)
+            }
+            geom => self.sample_point(geom, flip, textured, u_pos)?,
+        };
+        if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
+            return None;
+        }
+        let (mut ud, mut n, mut sides) = (u_dir, n, 1.0);
+        if self.two_sided {
+            sides = 2.0;
+            if ud.x < 0.5 {
+                ud.x *= 2.0;
+            } else {
+                ud.x = (ud.x - 0.5) * 2.0;
+                n = -n;
+            }
+        }
+        let local = warp::square_to_cosine_hemisphere(ud);
+        let cos = local.z;
+        if cos <= 0.0 {
+            return None;
+        }
+        let w = Frame::from_normal(n).to_world(local);
+        let pdf_dir = cos / (PI * sides);
+        let le = m.illuminant_at(scene, &self.radiance, TexCoord { uv, p });
+        Some(EmissionSample {
+            ray: Ray::new(offset_ray_origin(p, p_error, n, w), w),
+            weight: le * (cos / (pdf_pos * pdf_dir)),
+            pdf_pos,
+            pdf_dir,
+            n,
+        })
     }
 
     /// π·A·L̄, twice for a two-sided light.

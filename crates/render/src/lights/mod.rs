@@ -77,6 +77,24 @@ impl ShadowTarget {
     }
 }
 
+/// A ray leaving an emitter: how photon tracing (and light tracing) starts a path.
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample<C = Vec3> {
+    /// Leaves the emitter (off its surface, for an area light).
+    pub ray: Ray,
+    /// Le(p, ω)·|cos θ| / (pdf_pos·pdf_dir): the power the path carries, given that this
+    /// light was chosen (divide by the light's selection probability). Its mean over the
+    /// samples is the light's emitted power Φ.
+    pub weight: C,
+    /// Density of the origin per unit area: of the emitting surface, of the disk an
+    /// infinite light's rays start from (its normal is the direction); 1 for a point light.
+    pub pdf_pos: f32,
+    /// Density of the direction per unit solid angle; 1 for a directional light.
+    pub pdf_dir: f32,
+    /// Surface normal at the origin (area lights; zero for the others).
+    pub n: Vec3,
+}
+
 /// The receiving point of a light query.
 #[derive(Clone, Copy, Debug)]
 pub struct Receiver {
@@ -151,6 +169,18 @@ pub(crate) trait LightModel {
 
     /// Emitted power, up to a common factor ([`select`] has the definitions).
     fn power(&self, scene: &impl LightScene) -> f32;
+
+    /// A ray leaving the light (photon emission): `u_pos` places its origin, `u_dir` its
+    /// direction. `None` for a degenerate sample.
+    fn sample_le<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        _u_pos: Vec2,
+        _u_dir: Vec2,
+        _m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        None
+    }
 
     /// Bounds for the light BVH of a bounded light of power `phi` (`None`: infinite).
     fn bounds(&self, _scene: &impl LightScene, _phi: f32) -> Option<LightBounds> {
@@ -240,6 +270,17 @@ impl Light {
         m: &M,
     ) -> M::C {
         dispatch!(self, l => l.le(scene, si, m))
+    }
+
+    /// A ray leaving the light, for photon tracing ([`EmissionSample`]).
+    pub fn sample_le<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        dispatch!(self, l => l.sample_le(scene, u_pos, u_dir, m))
     }
 
     /// Emitted power (see [`select`]); 0 for a light that emits nothing.
