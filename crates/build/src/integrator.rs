@@ -1,6 +1,7 @@
 //! Integrator factories: the scene's integrator description to the runtime integrator.
 
 use render::integrators::path::{Combine, PathConfig};
+use render::integrators::sppm::SppmConfig;
 use render::integrators::volpath::VolPathConfig;
 use render::integrators::{Integrator, UnsupportedIntegrator};
 use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
@@ -42,6 +43,13 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
             emitter_samples: *emitter_samples,
             bsdf_samples: *bsdf_samples,
         },
+        IntegratorDesc::Sppm(d) => Integrator::Sppm(SppmConfig {
+            max_depth: d.max_depth,
+            rr_depth: d.rr_depth,
+            photons: d.photons,
+            initial_radius: d.initial_radius,
+            alpha: d.alpha,
+        }),
         IntegratorDesc::Whitted { max_depth } => Integrator::Path(PathConfig::whitted(*max_depth)),
         IntegratorDesc::NoriSimple => Integrator::Path(PathConfig::nori(2, Combine::EmitterOnly)),
         IntegratorDesc::Nori(n) => Integrator::Path(match n {

@@ -140,6 +140,20 @@ fn integrator(i: &IntegratorDesc) -> String {
                 ""
             }
         ),
+        IntegratorDesc::Sppm(d) => format!(
+            "stochastic progressive photon mapping: max depth {}, {} photons per iteration, \
+             initial radius {}, alpha {}",
+            if d.max_depth < 0 {
+                "unbounded".to_string()
+            } else {
+                d.max_depth.to_string()
+            },
+            d.photons
+                .map_or("one per pixel".to_string(), |n| n.to_string()),
+            d.initial_radius
+                .map_or("guessed".to_string(), |r| r.to_string()),
+            d.alpha
+        ),
         IntegratorDesc::Whitted { max_depth } => format!("Whitted, max depth {max_depth}"),
         IntegratorDesc::NoriSimple => "Nori simple".into(),
         IntegratorDesc::Nori(n) => format!(

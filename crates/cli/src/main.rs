@@ -117,7 +117,9 @@ struct RenderArgs {
     /// Time budget in seconds: stop after the last whole pass that fits.
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
-    /// Replace the scene's integrator: normals, albedo, depth, ao[:samples].
+    /// Replace the scene's integrator: normals, albedo, depth, ao[:samples], or
+    /// sppm[:photons[,radius]] (stochastic progressive photon mapping; --spp iterations of
+    /// `photons` photons, default one per pixel; the scene's max depth is kept).
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<IntegratorDesc>,
     /// Which sensor of the scene to render (0-based).
@@ -240,6 +242,13 @@ impl TransportArgs {
             }
         }
         let path_only = self.rr_depth.is_some() || self.clamp.is_some() || self.nee.is_some();
+        // `--integrator sppm` keeps the scene's path length (a scene's max_depth is part of
+        // what its reference shows).
+        if let Some(IntegratorDesc::Sppm(d)) = integrator.as_mut()
+            && let Some(m) = max_depth_of(&desc.integrator)
+        {
+            d.max_depth = m;
+        }
         let targets = std::iter::once(&mut desc.integrator)
             .chain(
                 desc.sensors
@@ -268,10 +277,16 @@ impl TransportArgs {
                         *max_depth = d.max(0) as u32;
                     }
                 }
+                IntegratorDesc::Sppm(d) if !path_only => {
+                    if let Some(m) = self.max_depth {
+                        d.max_depth = m.max(-1);
+                    }
+                }
                 _ if self.max_depth.is_some() || path_only => {
                     return Err(Failure::input(
                         "--max-depth, --rr-depth, --clamp and --nee apply to the path tracer \
-                         (and --max-depth to Whitted); this scene or --integrator uses another",
+                         (and --max-depth to Whitted and sppm); this scene or --integrator \
+                         uses another",
                     ));
                 }
                 _ => {}
@@ -487,6 +502,16 @@ fn parse_adaptive(s: &str) -> Result<AdaptiveSettings, String> {
     Ok(AdaptiveSettings { batch, tolerance })
 }
 
+/// The longest path a scene's integrator allows, in Mitsuba's terms (−1: unbounded).
+fn max_depth_of(i: &IntegratorDesc) -> Option<i32> {
+    match i {
+        IntegratorDesc::Path(p) => Some(p.max_depth),
+        IntegratorDesc::VolPath { max_depth, .. } => Some(*max_depth),
+        IntegratorDesc::Sppm(d) => Some(d.max_depth),
+        _ => None,
+    }
+}
+
 fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
     let (name, arg) = s.split_once(':').unwrap_or((s, ""));
     Ok(match name {
@@ -502,9 +527,33 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             },
             length: None,
         },
+        "sppm" => IntegratorDesc::Sppm({
+            let mut d = scene::SppmDesc::default();
+            let mut parts = arg.split(',').filter(|p| !p.is_empty());
+            if let Some(n) = parts.next() {
+                d.photons = Some(n.parse().ok().filter(|&n: &u64| n > 0).ok_or_else(|| {
+                    format!("sppm:PHOTONS[,RADIUS] expects a photon count > 0, found '{n}'")
+                })?);
+            }
+            if let Some(r) = parts.next() {
+                d.initial_radius = Some(
+                    r.parse()
+                        .ok()
+                        .filter(|&r: &f32| r > 0.0 && r.is_finite())
+                        .ok_or_else(|| {
+                            format!("sppm:PHOTONS,RADIUS expects a radius > 0, found '{r}'")
+                        })?,
+                );
+            }
+            if parts.next().is_some() {
+                return Err(format!("sppm takes at most PHOTONS,RADIUS, found '{arg}'"));
+            }
+            d
+        }),
         _ => {
             return Err(format!(
-                "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N])"
+                "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
+                 sppm[:PHOTONS[,RADIUS]])"
             ));
         }
     })
@@ -800,6 +849,16 @@ pub(crate) fn render_scene_with(
     }
     for w in &scene.warnings {
         eprintln!("{w}");
+    }
+    if let render::integrators::Integrator::Sppm(_) = &integrator {
+        if let Some(why) = render::integrators::sppm::unsupported(&scene) {
+            return Err(Failure::input(why));
+        }
+        if job.adaptive.is_some() {
+            return Err(Failure::input(
+                "--adaptive needs an integrator with per-sample estimates (not sppm)",
+            ));
+        }
     }
 
     let cancel = Arc::new(AtomicBool::new(false));

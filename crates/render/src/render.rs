@@ -141,6 +141,9 @@ pub fn render(
     opts: &RenderOptions,
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
+    if let Integrator::Sppm(cfg) = integrator {
+        return crate::integrators::sppm::render(scene, cfg, opts, observer);
+    }
     let start = Instant::now();
     let f = &scene.film;
     let mut film = Film::new(f.width, f.height, f.crop, f.filter);

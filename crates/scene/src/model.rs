@@ -867,6 +867,33 @@ pub struct Film {
 // ---------------------------------------------------------------------------------------------
 // Integrators
 
+/// Parameters of stochastic progressive photon mapping.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SppmDesc {
+    /// Longest path in edges (−1: unbounded).
+    pub max_depth: i32,
+    /// Russian roulette on camera paths through delta bounces from this depth on.
+    pub rr_depth: u32,
+    /// Photon paths per iteration (`None`: one per pixel).
+    pub photons: Option<u64>,
+    /// Initial radius (`None`: guessed from the scene's size and the film's).
+    pub initial_radius: Option<f32>,
+    /// The fraction of new photons kept per iteration.
+    pub alpha: f32,
+}
+
+impl Default for SppmDesc {
+    fn default() -> Self {
+        SppmDesc {
+            max_depth: -1,
+            rr_depth: 5,
+            photons: None,
+            initial_radius: None,
+            alpha: 2.0 / 3.0,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum IntegratorDesc {
     /// Shading normal as colour (n * 0.5 + 0.5 is *not* applied: raw normal, like Mitsuba's AOV).
@@ -901,6 +928,9 @@ pub enum IntegratorDesc {
         /// collision estimation only.
         sample_emission: bool,
     },
+    /// Stochastic progressive photon mapping (pbrt-v4's `sppm`, Mitsuba 0.6's `sppm`): the
+    /// sample count is the number of iterations.
+    Sppm(SppmDesc),
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },
     /// Nori's `simple` (one point light, no shadows from area lights).

@@ -7,6 +7,7 @@
 mod aov;
 mod direct;
 pub mod path;
+pub mod sppm;
 pub mod volpath;
 
 use self::path::PathConfig;
@@ -41,6 +42,9 @@ pub enum Integrator {
         emitter_samples: u32,
         bsdf_samples: u32,
     },
+    /// Stochastic progressive photon mapping: not an estimator per camera sample, so
+    /// [`crate::render::render`] runs it as a whole ([`sppm::render`]).
+    Sppm(sppm::SppmConfig),
 }
 
 /// An integrator the scene asks for that this build does not have.
@@ -58,10 +62,18 @@ impl Integrator {
             Integrator::Path(_) => "path",
             Integrator::VolPath(_) => "volpath",
             Integrator::Direct { .. } => "direct",
+            Integrator::Sppm(_) => "sppm",
         }
     }
 
-    /// The estimate along one camera ray.
+    /// Whether [`Self::li`] estimates the radiance of one camera sample (every integrator
+    /// but the photon-mapping family, which [`crate::render::render`] runs as a whole).
+    pub fn per_sample(&self) -> bool {
+        !matches!(self, Integrator::Sppm(_))
+    }
+
+    /// The estimate along one camera ray; 0 for an integrator that is not
+    /// [`Self::per_sample`] (callers check).
     pub fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
         match self {
             Integrator::Normals => aov::normals(scene, cray),
@@ -88,6 +100,7 @@ impl Integrator {
                     RenderMode::Spectral => direct::li_in::<Spectral>(scene, cray, sampler, e, b),
                 }
             }
+            Integrator::Sppm(_) => Vec3::ZERO,
         }
     }
 

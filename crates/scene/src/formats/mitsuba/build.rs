@@ -1836,6 +1836,35 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     bsdf_samples: pl.props.int_in("bsdf_samples", shading, 0, 1 << 20)? as u32,
                 }
             }
+            // Mitsuba 0.6's parameters (camelCase arrives as snake_case): photonCount per
+            // pass, initialRadius (0: guess), alpha, maxDepth, rrDepth.
+            "sppm" => IntegratorDesc::Sppm(SppmDesc {
+                max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
+                photons: match pl.props.int_in("photon_count", 0, 0, 1 << 40)? {
+                    0 => None,
+                    n => Some(n as u64),
+                },
+                initial_radius: match pl.props.float_opt("initial_radius")? {
+                    Some(r) if r > 0.0 && r.is_finite() => Some(r),
+                    Some(0.0) | None => None,
+                    Some(r) => {
+                        return Err(err(
+                            pl.loc(),
+                            format!("sppm: initialRadius = {r} must be ≥ 0 (0: guess one)"),
+                        ));
+                    }
+                },
+                alpha: match pl.props.float("alpha", 2.0 / 3.0)? {
+                    a if a > 0.0 && a <= 1.0 => a,
+                    a => {
+                        return Err(err(
+                            pl.loc(),
+                            format!("sppm: alpha = {a} must lie in (0, 1]"),
+                        ));
+                    }
+                },
+            }),
             "whitted" => IntegratorDesc::Whitted {
                 // Nori's whitted has no depth limit (specular chains end by Russian roulette).
                 max_depth: pl
@@ -1886,7 +1915,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "path, direct, normals, albedo, depth, aov, ao, whitted, simple, \
+                    "path, direct, sppm, normals, albedo, depth, aov, ao, whitted, simple, \
                      direct_ems, direct_mats, direct_mis, path_mats, path_ems, path_mis",
                 ));
             }

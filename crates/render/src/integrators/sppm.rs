@@ -1,0 +1,561 @@
+//! Stochastic progressive photon mapping (Hachisuka & Jensen 2009) with pbrt-v4's semantics:
+//! `--spp` is the number of iterations; each iteration
+//!
+//! 1. traces one camera path per pixel to its first vertex with a non-delta BSDF lobe — a
+//!    *visible point* — adding the emission seen directly or through delta bounces and one
+//!    next-event estimate at the visible point (`ld`); a BSDF with delta and non-delta lobes
+//!    (smooth plastic) gets a visible point for its non-delta part and its path goes on
+//!    through the delta part when the BSDF samples it, so a pixel may hold several;
+//! 2. puts the visible points in a hash grid of cells as wide as the largest radius
+//!    (counting sort, so the grid is the same whatever the thread count);
+//! 3. traces `photons` photon paths from the lights (chosen by power, [`Light::sample_le`]);
+//!    from its second surface hit on (the first is direct light, already in `ld`) a photon
+//!    adds β·f(wo, wi) to every visible point within its pixel's radius whose camera path
+//!    leaves room for it (`max_depth` bounds the whole path: camera edges + photon edges);
+//! 4. shrinks each pixel's radius: with M photons found, N' = N + αM, R' = R·√(N'/(N + M)),
+//!    τ' = (τ + Σ β_vp·Φ)·R'²/R².
+//!
+//! The pixel's radiance after k iterations of `photons` photons is
+//! Σ ld / k + τ / (k·photons·π·R²).
+//!
+//! Determinism: camera paths draw from the pixel's sampler stream (sample index = iteration),
+//! photon `j` of iteration `i` from its own stream, and photons are traced in fixed chunks whose
+//! contributions are added to the pixels in chunk order: the image is a function of the seed
+//! and never of the thread count.
+//!
+//! Not yet: media (volumetric photon mapping), spectral mode.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::film::{Film, Filter};
+use crate::lights::Receiver;
+use crate::math::{Frame, PI, UVec2, Vec2, Vec3};
+use crate::render::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::sampling::{Distribution1D, Sampler};
+use crate::spectral::lanes::{Color, RgbMode};
+use crate::world::Scene;
+use base::{FilterDesc, SamplerKind};
+use std::sync::atomic::Ordering;
+
+/// The parameters of [`render`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SppmConfig {
+    /// Longest path in edges, camera to light (−1: unbounded; Mitsuba's `max_depth`).
+    pub max_depth: i32,
+    /// Russian roulette on camera paths through delta bounces from this depth on.
+    pub rr_depth: u32,
+    /// Photon paths per iteration; `None`: the number of pixels (pbrt-v4).
+    pub photons: Option<u64>,
+    /// Initial radius of every pixel; `None`: 5 × the scene's bounding radius divided by the
+    /// film's larger side (Mitsuba 0.6's guess).
+    pub initial_radius: Option<f32>,
+    /// The fraction α of the new photons a pixel keeps (pbrt-v4: 2/3).
+    pub alpha: f32,
+}
+
+impl Default for SppmConfig {
+    fn default() -> Self {
+        SppmConfig {
+            max_depth: -1,
+            rr_depth: 5,
+            photons: None,
+            initial_radius: None,
+            alpha: 2.0 / 3.0,
+        }
+    }
+}
+
+impl SppmConfig {
+    fn allows(&self, edges: u32) -> bool {
+        self.max_depth < 0 || edges <= self.max_depth as u32
+    }
+}
+
+/// Why a scene cannot be rendered with SPPM (yet).
+pub fn unsupported(scene: &Scene) -> Option<&'static str> {
+    if scene.mode != base::RenderMode::Rgb {
+        return Some("sppm: spectral mode is not implemented yet (use --mode rgb)");
+    }
+    if !scene.media.is_empty() {
+        return Some("sppm: participating media are not implemented yet (use volpath)");
+    }
+    None
+}
+
+/// A camera path's first vertex with a non-delta BSDF lobe.
+struct VisiblePoint {
+    /// Index of the pixel among the film's pixels (row-major within the crop window).
+    pixel: u32,
+    /// Edges from the camera to this point.
+    depth: u32,
+    p: Vec3,
+    /// Towards the camera, in the BSDF's frame.
+    wo: Vec3,
+    frame: Frame,
+    bsdf: Bsdf,
+    /// Camera path throughput up to here.
+    beta: Vec3,
+}
+
+/// A pixel's statistics across iterations.
+#[derive(Clone, Copy)]
+struct PixelState {
+    /// Σ over iterations of the directly seen emission and next-event estimates.
+    ld: Vec3,
+    radius: f32,
+    /// N: photons kept (fractional).
+    n: f32,
+    /// τ: flux kept, already times the visible points' throughput.
+    tau: Vec3,
+}
+
+/// Counting-sorted hash grid over the visible points.
+struct Grid {
+    lo: Vec3,
+    inv_cell: f32,
+    res: [i64; 3],
+    /// Table slot → range in `items`.
+    starts: Vec<u32>,
+    items: Vec<u32>,
+}
+
+fn hash_cell(c: [i64; 3], slots: usize) -> usize {
+    let h = (c[0].wrapping_mul(73_856_093))
+        ^ (c[1].wrapping_mul(19_349_663))
+        ^ (c[2].wrapping_mul(83_492_791));
+    (h as u64 % slots as u64) as usize
+}
+
+impl Grid {
+    fn build(vps: &[VisiblePoint], radius: impl Fn(&VisiblePoint) -> f32) -> Option<Grid> {
+        let max_r = vps.iter().map(&radius).fold(0.0f32, f32::max);
+        if vps.is_empty() || !(max_r > 0.0 && max_r.is_finite()) {
+            return None;
+        }
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for v in vps {
+            lo = lo.min(v.p);
+            hi = hi.max(v.p);
+        }
+        lo -= Vec3::splat(max_r);
+        hi += Vec3::splat(max_r);
+        let inv_cell = 1.0 / max_r;
+        let ext = (hi - lo) * inv_cell;
+        let res = [ext.x, ext.y, ext.z].map(|e| (e.ceil() as i64).clamp(1, 1 << 20));
+        let slots = vps.len().next_power_of_two().max(1);
+        let cell = |p: Vec3, res: &[i64; 3]| {
+            let q = (p - lo) * inv_cell;
+            [q.x, q.y, q.z]
+                .iter()
+                .zip(res)
+                .map(|(&x, &r)| (x.floor() as i64).clamp(0, r - 1))
+                .collect::<Vec<_>>()
+        };
+        // Count, then fill, in visible point order.
+        let mut counts = vec![0u32; slots + 1];
+        let each = |f: &mut dyn FnMut(usize, u32)| {
+            for (i, v) in vps.iter().enumerate() {
+                let r = Vec3::splat(radius(v));
+                let (a, b) = (cell(v.p - r, &res), cell(v.p + r, &res));
+                for z in a[2]..=b[2] {
+                    for y in a[1]..=b[1] {
+                        for x in a[0]..=b[0] {
+                            f(hash_cell([x, y, z], slots), i as u32);
+                        }
+                    }
+                }
+            }
+        };
+        each(&mut |s, _| counts[s + 1] += 1);
+        for s in 0..slots {
+            counts[s + 1] += counts[s];
+        }
+        let mut items = vec![0u32; counts[slots] as usize];
+        let mut fill = counts.clone();
+        each(&mut |s, i| {
+            items[fill[s] as usize] = i;
+            fill[s] += 1;
+        });
+        Some(Grid {
+            lo,
+            inv_cell,
+            res,
+            starts: counts,
+            items,
+        })
+    }
+
+    /// The visible points whose cells may hold `p`.
+    fn near(&self, p: Vec3) -> &[u32] {
+        let q = (p - self.lo) * self.inv_cell;
+        let mut c = [0i64; 3];
+        for (k, x) in [q.x, q.y, q.z].into_iter().enumerate() {
+            let x = x.floor();
+            if !(x >= 0.0 && (x as i64) < self.res[k]) {
+                return &[];
+            }
+            c[k] = x as i64;
+        }
+        let s = hash_cell(c, self.starts.len() - 1);
+        &self.items[self.starts[s] as usize..self.starts[s + 1] as usize]
+    }
+}
+
+/// Camera pass for one pixel: the estimate `ld` and the visible points.
+fn camera_path(
+    scene: &Scene,
+    cfg: &SppmConfig,
+    sampler: &mut Sampler,
+    pixel: UVec2,
+    pixel_index: u32,
+    iteration: u32,
+    vps: &mut Vec<VisiblePoint>,
+) -> Vec3 {
+    let m = &RgbMode;
+    let (_, cray) = camera_sample(scene, sampler, pixel, iteration);
+    let (mut ray, mut t_max) = (cray.ray, cray.t_max);
+    let mut beta = Vec3::ONE;
+    let mut ld = Vec3::ZERO;
+    let mut specular = true; // the camera ray counts as a delta bounce
+    let mut depth = 0u32; // edges traced so far
+    loop {
+        depth += 1;
+        let Some(si) = scene.intersect(&ray, t_max) else {
+            if specular {
+                for &i in &scene.infinite_lights {
+                    ld += beta * scene.lights[i as usize].environment(ray.d, m);
+                }
+            }
+            break;
+        };
+        if specular && let Some(l) = scene.shape_light(&si) {
+            ld += beta * scene.lights[l as usize].le(scene, &si, m);
+        }
+        let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
+            // No surface here (an index-matched boundary): go on through.
+            ray = si.spawn_ray(ray.d);
+            t_max = f32::INFINITY;
+            depth -= 1;
+            continue;
+        };
+        let wo = frame.to_local(si.wo);
+        if bsdf.has_smooth() {
+            if cfg.allows(depth + 1) {
+                ld += beta * next_event(scene, &si, &bsdf, &frame, wo, sampler);
+            }
+            if cfg.allows(depth + 2) {
+                vps.push(VisiblePoint {
+                    pixel: pixel_index,
+                    depth,
+                    p: si.p,
+                    wo,
+                    frame,
+                    bsdf: bsdf.clone(),
+                    beta,
+                });
+            }
+        }
+        if !cfg.allows(depth + 1) {
+            break;
+        }
+        // Delta lobes carry the path on; a non-delta sample ends it (the visible point
+        // stands for that part).
+        let u1 = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance) else {
+            break;
+        };
+        if !bs.delta {
+            break;
+        }
+        beta *= bs.weight;
+        if depth >= cfg.rr_depth {
+            let q = beta.max_element().min(0.95);
+            if sampler.next_1d() >= q || q.is_nan() {
+                break;
+            }
+            beta /= q;
+        }
+        if beta.is_black() {
+            break;
+        }
+        ray = si.spawn_ray(frame.to_world(bs.wi));
+        t_max = f32::INFINITY;
+        specular = true;
+    }
+    ld
+}
+
+/// One light sample at a visible point (light sampling only, as pbrt-v4's SPPM).
+fn next_event(
+    scene: &Scene,
+    si: &crate::shapes::SurfaceInteraction,
+    bsdf: &Bsdf,
+    frame: &Frame,
+    wo: Vec3,
+    sampler: &mut Sampler,
+) -> Vec3 {
+    let receiver = Receiver::from(si);
+    let u = sampler.next_1d();
+    let u2 = sampler.next_2d();
+    let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
+        return Vec3::ZERO;
+    };
+    let Some(ls) = light.sample_li(scene, &receiver, u2, &RgbMode) else {
+        return Vec3::ZERO;
+    };
+    if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
+        return Vec3::ZERO;
+    }
+    let f = bsdf.eval(wo, frame.to_local(ls.wi), TransportMode::Radiance);
+    if f.is_black() {
+        return Vec3::ZERO;
+    }
+    let (ray, t_max) = ls.target.ray_from(si, ls.wi);
+    if scene.occluded(&ray, t_max) {
+        return Vec3::ZERO;
+    }
+    f * ls.li / (ls.pdf * pmf)
+}
+
+/// Photons per chunk: the unit of parallel work whose contributions are merged in order.
+const CHUNK: u64 = 4096;
+
+/// Trace photon `j` of an iteration; push (visible point, β·f) for every visible point it
+/// reaches.
+#[allow(clippy::too_many_arguments)]
+fn photon_path(
+    scene: &Scene,
+    cfg: &SppmConfig,
+    lights: &Distribution1D,
+    grid: &Grid,
+    vps: &[VisiblePoint],
+    radii: &[f32],
+    sampler: &mut Sampler,
+    out: &mut Vec<(u32, Vec3)>,
+) {
+    let m = &RgbMode;
+    let (li, pmf, _) = lights.sample_discrete(sampler.next_1d());
+    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+    let Some(e) = scene.lights[li].sample_le(scene, u_pos, u_dir, m) else {
+        return;
+    };
+    if pmf.is_nan() || pmf <= 0.0 {
+        return;
+    }
+    let mut beta = e.weight / pmf;
+    let mut ray = e.ray;
+    let mut edges = 0u32;
+    while !beta.is_black() && beta.is_finite() {
+        edges += 1;
+        let Some(si) = scene.intersect(&ray, f32::INFINITY) else {
+            break;
+        };
+        if edges > 1 {
+            let wi = -ray.d; // towards where the photon came from
+            for &v in grid.near(si.p) {
+                let vp = &vps[v as usize];
+                let r = radii[vp.pixel as usize];
+                if (vp.p - si.p).length_squared() > r * r || !cfg.allows(vp.depth + edges) {
+                    continue;
+                }
+                let wl = vp.frame.to_local(wi);
+                if wl.z == 0.0 {
+                    continue;
+                }
+                // eval is f·|cos θi|; the photon's flux already holds the cosine.
+                let f = vp.bsdf.eval(vp.wo, wl, TransportMode::Radiance) / wl.z.abs();
+                if !f.is_black() {
+                    out.push((v, beta * f));
+                }
+            }
+        }
+        let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
+            ray = si.spawn_ray(ray.d);
+            edges -= 1;
+            continue;
+        };
+        // A photon that has used up the path's edges no longer reaches any visible point.
+        if !cfg.allows(edges + 2) {
+            break;
+        }
+        let wo = frame.to_local(si.wo);
+        let u1 = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Importance) else {
+            break;
+        };
+        let next = beta * bs.weight;
+        // pbrt-v4's roulette: keep the photon's power about constant.
+        let q = (1.0 - next.max_element() / beta.max_element()).max(0.0);
+        if sampler.next_1d() < q {
+            break;
+        }
+        beta = next / (1.0 - q);
+        ray = si.spawn_ray(frame.to_world(bs.wi));
+    }
+}
+
+/// Render `scene` with SPPM: `opts.spp` iterations (a time budget or cancellation stops
+/// after a whole iteration).
+pub fn render(
+    scene: &Scene,
+    cfg: &SppmConfig,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
+    let start = Instant::now();
+    let f = &scene.film;
+    let box_filter = Filter::new(&FilterDesc::Box { radius: 0.5 });
+    let mut film = Film::new(f.width, f.height, f.crop, box_filter);
+    let (pmin, pmax) = film.pixel_bounds();
+    let size = pmax - pmin;
+    let pixel_count = (size.x as usize) * (size.y as usize);
+    let photons = cfg.photons.unwrap_or(pixel_count as u64).max(1);
+    let radius0 = cfg.initial_radius.unwrap_or_else(|| {
+        let (lo, hi) = scene.bounds;
+        let r = 0.5 * (hi - lo).length();
+        let r = if r.is_finite() && r > 0.0 { r } else { 1.0 };
+        5.0 * r / f.width.max(f.height).max(1) as f32
+    });
+    let mut pixels = vec![
+        PixelState {
+            ld: Vec3::ZERO,
+            radius: radius0,
+            n: 0.0,
+            tau: Vec3::ZERO,
+        };
+        pixel_count
+    ];
+    let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(scene)).collect();
+    let lights = Distribution1D::new(&powers);
+    let have_lights = powers.iter().any(|&p| p > 0.0);
+    let camera_template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
+    let photon_template = Sampler::new(
+        SamplerKind::Independent,
+        1,
+        scene.sampler.seed ^ 0x5350_504D_5048_4F54, // "SPPMPHOT"
+    );
+    let target = opts.spp.max(1);
+    let mut done = 0u32;
+    let mut cancelled = false;
+    let row_len = size.x as usize;
+    while done < target {
+        if opts.cancel.load(Ordering::Relaxed) {
+            cancelled = true;
+            break;
+        }
+        if let Some(b) = opts.time_budget
+            && done > 0
+            && start.elapsed() >= b
+        {
+            break;
+        }
+        let iteration = done;
+        // 1. Camera pass, one row per task.
+        let rows: Vec<(Vec<Vec3>, Vec<VisiblePoint>)> = (0..size.y)
+            .into_par_iter()
+            .map(|y| {
+                let mut sampler = camera_template.clone();
+                let mut vps = Vec::new();
+                let ld = (0..size.x)
+                    .map(|x| {
+                        let idx = y * size.x + x;
+                        let pixel = pmin + UVec2::new(x, y);
+                        camera_path(scene, cfg, &mut sampler, pixel, idx, iteration, &mut vps)
+                    })
+                    .collect();
+                (ld, vps)
+            })
+            .collect();
+        let mut vps = Vec::new();
+        for (y, (ld, v)) in rows.into_iter().enumerate() {
+            for (x, l) in ld.into_iter().enumerate() {
+                pixels[y * row_len + x].ld += l;
+            }
+            vps.extend(v);
+        }
+        // 2. The grid; 3. photons in fixed chunks, merged in order.
+        let radii: Vec<f32> = pixels.iter().map(|p| p.radius).collect();
+        let mut phi = vec![Vec3::ZERO; vps.len()];
+        let mut found = vec![0u32; vps.len()];
+        if have_lights && let Some(grid) = Grid::build(&vps, |v| radii[v.pixel as usize]) {
+            let chunks = photons.div_ceil(CHUNK);
+            let lists: Vec<Vec<(u32, Vec3)>> = (0..chunks)
+                .into_par_iter()
+                .map(|c| {
+                    let mut sampler = photon_template.clone();
+                    let mut out = Vec::new();
+                    for j in c * CHUNK..((c + 1) * CHUNK).min(photons) {
+                        sampler
+                            .start_pixel_sample(UVec2::new(j as u32, (j >> 32) as u32), iteration);
+                        photon_path(
+                            scene,
+                            cfg,
+                            &lights,
+                            &grid,
+                            &vps,
+                            &radii,
+                            &mut sampler,
+                            &mut out,
+                        );
+                    }
+                    out
+                })
+                .collect();
+            for list in lists {
+                for (v, c) in list {
+                    phi[v as usize] += c;
+                    found[v as usize] += 1;
+                }
+            }
+        }
+        // 4. Radius reduction per pixel.
+        let mut pixel_phi = vec![Vec3::ZERO; pixel_count];
+        let mut pixel_m = vec![0u32; pixel_count];
+        for (i, vp) in vps.iter().enumerate() {
+            pixel_phi[vp.pixel as usize] += vp.beta * phi[i];
+            pixel_m[vp.pixel as usize] += found[i];
+        }
+        for ((p, &dphi), &m) in pixels.iter_mut().zip(&pixel_phi).zip(&pixel_m) {
+            if m == 0 {
+                continue;
+            }
+            let n_new = p.n + cfg.alpha * m as f32;
+            let r_new = p.radius * (n_new / (p.n + m as f32)).sqrt();
+            let shrink = (r_new / p.radius) * (r_new / p.radius);
+            p.tau = (p.tau + dphi) * shrink;
+            p.n = n_new;
+            p.radius = r_new;
+        }
+        done += 1;
+        observer.progress(&Progress {
+            samples_done: done as u64 * pixel_count as u64,
+            samples_total: target as u64 * pixel_count as u64,
+            elapsed: start.elapsed(),
+            spp_done: done,
+        });
+    }
+    // The film: one sample at each pixel's centre, weight 1 under the box filter.
+    if done > 0 {
+        let mut tile = film.tile(pmin, pmax);
+        let np = done as f64 * photons as f64;
+        for (i, p) in pixels.iter().enumerate() {
+            let (x, y) = ((i % row_len) as u32, (i / row_len) as u32);
+            let area = PI as f64 * (p.radius as f64) * (p.radius as f64);
+            let indirect = p.tau.as_dvec3() / (np * area);
+            let l = p.ld / done as f32 + Vec3::from(indirect.as_vec3());
+            tile.add_sample((pmin + UVec2::new(x, y)).as_vec2() + Vec2::splat(0.5), l);
+        }
+        film.merge(&tile);
+    }
+    observer.pass_done(&film, done);
+    RenderOutcome {
+        film,
+        spp: done,
+        passes: done,
+        elapsed: start.elapsed(),
+        cancelled,
+    }
+}
