@@ -1,7 +1,7 @@
 //! Integrator factories: the scene's integrator description to the runtime integrator.
 
 use render::integrators::path::{Combine, PathConfig};
-use render::integrators::sppm::SppmConfig;
+use render::integrators::sppm::{Progressive, SppmConfig};
 use render::integrators::volpath::VolPathConfig;
 use render::integrators::{Integrator, UnsupportedIntegrator};
 use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
@@ -49,6 +49,10 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
             photons: d.photons,
             initial_radius: d.initial_radius,
             alpha: d.alpha,
+            kind: match d.fixed_eye_samples {
+                None => Progressive::Stochastic,
+                Some(eye_samples) => Progressive::Fixed { eye_samples },
+            },
         }),
         IntegratorDesc::Whitted { max_depth } => Integrator::Path(PathConfig::whitted(*max_depth)),
         IntegratorDesc::NoriSimple => Integrator::Path(PathConfig::nori(2, Combine::EmitterOnly)),

@@ -141,8 +141,11 @@ fn integrator(i: &IntegratorDesc) -> String {
             }
         ),
         IntegratorDesc::Sppm(d) => format!(
-            "stochastic progressive photon mapping: max depth {}, {} photons per iteration, \
-             initial radius {}, alpha {}",
+            "{}: max depth {}, {} photons per iteration, initial radius {}, alpha {}",
+            match d.fixed_eye_samples {
+                None => "stochastic progressive photon mapping".to_string(),
+                Some(n) => format!("progressive photon mapping, {n} visible points per pixel"),
+            },
             if d.max_depth < 0 {
                 "unbounded".to_string()
             } else {

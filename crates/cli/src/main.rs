@@ -119,7 +119,8 @@ struct RenderArgs {
     time: Option<f64>,
     /// Replace the scene's integrator: normals, albedo, depth, ao[:samples], or
     /// sppm[:photons[,radius]] (stochastic progressive photon mapping; --spp iterations of
-    /// `photons` photons, default one per pixel; the scene's max depth is kept).
+    /// `photons` photons, default one per pixel; the scene's max depth is kept) or
+    /// ppm[:photons[,radius[,eye_samples]]] (fixed visible points, 4 per pixel by default).
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<IntegratorDesc>,
     /// Which sensor of the scene to render (0-based).
@@ -527,33 +528,52 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             },
             length: None,
         },
-        "sppm" => IntegratorDesc::Sppm({
+        "sppm" | "ppm" => IntegratorDesc::Sppm({
+            // Positional fields, an empty one keeps its default.
+            let usage = if name == "ppm" {
+                "ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]]"
+            } else {
+                "sppm[:PHOTONS[,RADIUS]]"
+            };
             let mut d = scene::SppmDesc::default();
-            let mut parts = arg.split(',').filter(|p| !p.is_empty());
-            if let Some(n) = parts.next() {
-                d.photons = Some(n.parse().ok().filter(|&n: &u64| n > 0).ok_or_else(|| {
-                    format!("sppm:PHOTONS[,RADIUS] expects a photon count > 0, found '{n}'")
-                })?);
+            let fields: Vec<&str> = if arg.is_empty() {
+                vec![]
+            } else {
+                arg.split(',').collect()
+            };
+            let max_fields = if name == "ppm" { 3 } else { 2 };
+            if fields.len() > max_fields {
+                return Err(format!("{usage}: too many fields in '{arg}'"));
             }
-            if let Some(r) = parts.next() {
+            let field = |k: usize| fields.get(k).copied().filter(|f| !f.is_empty());
+            if let Some(n) = field(0) {
+                d.photons =
+                    Some(n.parse().ok().filter(|&n: &u64| n > 0).ok_or_else(|| {
+                        format!("{usage}: PHOTONS must be a count > 0, found '{n}'")
+                    })?);
+            }
+            if let Some(r) = field(1) {
                 d.initial_radius = Some(
                     r.parse()
                         .ok()
                         .filter(|&r: &f32| r > 0.0 && r.is_finite())
-                        .ok_or_else(|| {
-                            format!("sppm:PHOTONS,RADIUS expects a radius > 0, found '{r}'")
-                        })?,
+                        .ok_or_else(|| format!("{usage}: RADIUS must be > 0, found '{r}'"))?,
                 );
             }
-            if parts.next().is_some() {
-                return Err(format!("sppm takes at most PHOTONS,RADIUS, found '{arg}'"));
+            if name == "ppm" {
+                d.fixed_eye_samples = Some(match field(2) {
+                    None => 4,
+                    Some(e) => e.parse().ok().filter(|&e: &u32| e > 0).ok_or_else(|| {
+                        format!("{usage}: EYE_SAMPLES must be a count > 0, found '{e}'")
+                    })?,
+                });
             }
             d
         }),
         _ => {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
-                 sppm[:PHOTONS[,RADIUS]])"
+                 sppm[:PHOTONS[,RADIUS]], ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]])"
             ));
         }
     })
@@ -856,7 +876,7 @@ pub(crate) fn render_scene_with(
         }
         if job.adaptive.is_some() {
             return Err(Failure::input(
-                "--adaptive needs an integrator with per-sample estimates (not sppm)",
+                "--adaptive needs an integrator with per-sample estimates (not sppm or ppm)",
             ));
         }
     }

@@ -880,6 +880,9 @@ pub struct SppmDesc {
     pub initial_radius: Option<f32>,
     /// The fraction of new photons kept per iteration.
     pub alpha: f32,
+    /// `Some(n)`: PPM — visible points traced once, `n` per pixel, each keeping its own
+    /// radius; `None`: SPPM.
+    pub fixed_eye_samples: Option<u32>,
 }
 
 impl Default for SppmDesc {
@@ -890,6 +893,7 @@ impl Default for SppmDesc {
             photons: None,
             initial_radius: None,
             alpha: 2.0 / 3.0,
+            fixed_eye_samples: None,
         }
     }
 }
@@ -928,8 +932,9 @@ pub enum IntegratorDesc {
         /// collision estimation only.
         sample_emission: bool,
     },
-    /// Stochastic progressive photon mapping (pbrt-v4's `sppm`, Mitsuba 0.6's `sppm`): the
-    /// sample count is the number of iterations.
+    /// Progressive photon mapping, stochastic (pbrt-v4's and Mitsuba 0.6's `sppm`) or with
+    /// fixed visible points (Mitsuba 0.6's `ppm`): the sample count is the number of
+    /// iterations.
     Sppm(SppmDesc),
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },

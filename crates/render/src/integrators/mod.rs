@@ -62,7 +62,10 @@ impl Integrator {
             Integrator::Path(_) => "path",
             Integrator::VolPath(_) => "volpath",
             Integrator::Direct { .. } => "direct",
-            Integrator::Sppm(_) => "sppm",
+            Integrator::Sppm(c) => match c.kind {
+                sppm::Progressive::Stochastic => "sppm",
+                sppm::Progressive::Fixed { .. } => "ppm",
+            },
         }
     }
 

@@ -1,5 +1,9 @@
-//! Stochastic progressive photon mapping (Hachisuka & Jensen 2009) with pbrt-v4's semantics:
-//! `--spp` is the number of iterations; each iteration
+//! Progressive photon mapping: stochastic (SPPM, Hachisuka & Jensen 2009) with pbrt-v4's
+//! semantics, and the original with fixed visible points (PPM, Hachisuka, Ogaki & Jensen
+//! 2008, [`Progressive::Fixed`]: the camera pass below runs once, with `eye_samples` paths
+//! per pixel, each its own measurement with its own radius; photons deposit from their
+//! first hit, since no next-event estimate is made). `--spp` is the number of iterations;
+//! each SPPM iteration
 //!
 //! 1. traces one camera path per pixel to its first vertex with a non-delta BSDF lobe — a
 //!    *visible point* — adding the emission seen directly or through delta bounces and one
@@ -54,6 +58,21 @@ pub struct SppmConfig {
     pub initial_radius: Option<f32>,
     /// The fraction α of the new photons a pixel keeps (pbrt-v4: 2/3).
     pub alpha: f32,
+    /// Stochastic (SPPM) or fixed visible points (PPM).
+    pub kind: Progressive,
+}
+
+/// Which progressive photon mapping.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Progressive {
+    /// SPPM: new visible points every iteration, one camera path per pixel; direct light by
+    /// next-event estimation at the visible points.
+    #[default]
+    Stochastic,
+    /// PPM (Hachisuka, Ogaki & Jensen 2008): `eye_samples` camera paths per pixel traced
+    /// once; their visible points keep their own radius and gather every photon, direct
+    /// light included.
+    Fixed { eye_samples: u32 },
 }
 
 impl Default for SppmConfig {
@@ -64,6 +83,7 @@ impl Default for SppmConfig {
             photons: None,
             initial_radius: None,
             alpha: 2.0 / 3.0,
+            kind: Progressive::Stochastic,
         }
     }
 }
@@ -87,8 +107,9 @@ pub fn unsupported(scene: &Scene) -> Option<&'static str> {
 
 /// A camera path's first vertex with a non-delta BSDF lobe.
 struct VisiblePoint {
-    /// Index of the pixel among the film's pixels (row-major within the crop window).
-    pixel: u32,
+    /// The measurement it adds to: the pixel (row-major within the crop window) in SPPM,
+    /// the pixel's eye sample in PPM.
+    slot: u32,
     /// Edges from the camera to this point.
     depth: u32,
     p: Vec3,
@@ -100,10 +121,11 @@ struct VisiblePoint {
     beta: Vec3,
 }
 
-/// A pixel's statistics across iterations.
+/// A measurement's statistics across iterations.
 #[derive(Clone, Copy)]
-struct PixelState {
-    /// Σ over iterations of the directly seen emission and next-event estimates.
+struct Slot {
+    /// SPPM: Σ over iterations of the emission seen along delta bounces and the next-event
+    /// estimates. PPM: the emission seen along the slot's fixed path.
     ld: Vec3,
     radius: f32,
     /// N: photons kept (fractional).
@@ -205,17 +227,19 @@ impl Grid {
 }
 
 /// Camera pass for one pixel: the estimate `ld` and the visible points.
+#[allow(clippy::too_many_arguments)]
 fn camera_path(
     scene: &Scene,
     cfg: &SppmConfig,
     sampler: &mut Sampler,
     pixel: UVec2,
-    pixel_index: u32,
-    iteration: u32,
+    sample: u32,
+    slot: u32,
+    nee: bool,
     vps: &mut Vec<VisiblePoint>,
 ) -> Vec3 {
     let m = &RgbMode;
-    let (_, cray) = camera_sample(scene, sampler, pixel, iteration);
+    let (_, cray) = camera_sample(scene, sampler, pixel, sample);
     let (mut ray, mut t_max) = (cray.ray, cray.t_max);
     let mut beta = Vec3::ONE;
     let mut ld = Vec3::ZERO;
@@ -243,12 +267,15 @@ fn camera_path(
         };
         let wo = frame.to_local(si.wo);
         if bsdf.has_smooth() {
-            if cfg.allows(depth + 1) {
+            if nee && cfg.allows(depth + 1) {
                 ld += beta * next_event(scene, &si, &bsdf, &frame, wo, sampler);
             }
-            if cfg.allows(depth + 2) {
+            // The shortest photon path that can reach it: 2 edges when next-event estimation
+            // has the direct light, else 1.
+            let first = if nee { 2 } else { 1 };
+            if cfg.allows(depth + first) {
                 vps.push(VisiblePoint {
-                    pixel: pixel_index,
+                    slot,
                     depth,
                     p: si.p,
                     wo,
@@ -333,6 +360,7 @@ fn photon_path(
     grid: &Grid,
     vps: &[VisiblePoint],
     radii: &[f32],
+    first: u32,
     sampler: &mut Sampler,
     out: &mut Vec<(u32, Vec3)>,
 ) {
@@ -353,11 +381,11 @@ fn photon_path(
         let Some(si) = scene.intersect(&ray, f32::INFINITY) else {
             break;
         };
-        if edges > 1 {
+        if edges >= first {
             let wi = -ray.d; // towards where the photon came from
             for &v in grid.near(si.p) {
                 let vp = &vps[v as usize];
-                let r = radii[vp.pixel as usize];
+                let r = radii[vp.slot as usize];
                 if (vp.p - si.p).length_squared() > r * r || !cfg.allows(vp.depth + edges) {
                     continue;
                 }
@@ -419,19 +447,27 @@ pub fn render(
         let r = if r.is_finite() && r > 0.0 { r } else { 1.0 };
         5.0 * r / f.width.max(f.height).max(1) as f32
     });
-    let mut pixels = vec![
-        PixelState {
+    let (eye, nee) = match cfg.kind {
+        Progressive::Stochastic => (1, true),
+        Progressive::Fixed { eye_samples } => (eye_samples.max(1), false),
+    };
+    // The edge of a photon path from which it deposits (its first hit is direct light,
+    // which SPPM estimates by next-event estimation).
+    let first = if nee { 2 } else { 1 };
+    let slot_count = pixel_count * eye as usize;
+    let mut slots = vec![
+        Slot {
             ld: Vec3::ZERO,
             radius: radius0,
             n: 0.0,
             tau: Vec3::ZERO,
         };
-        pixel_count
+        slot_count
     ];
     let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(scene)).collect();
     let lights = Distribution1D::new(&powers);
     let have_lights = powers.iter().any(|&p| p > 0.0);
-    let camera_template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
+    let camera_template = Sampler::new(scene.sampler.kind, opts.spp.max(eye), scene.sampler.seed);
     let photon_template = Sampler::new(
         SamplerKind::Independent,
         1,
@@ -440,7 +476,7 @@ pub fn render(
     let target = opts.spp.max(1);
     let mut done = 0u32;
     let mut cancelled = false;
-    let row_len = size.x as usize;
+    let mut vps: Vec<VisiblePoint> = Vec::new();
     while done < target {
         if opts.cancel.load(Ordering::Relaxed) {
             cancelled = true;
@@ -453,34 +489,49 @@ pub fn render(
             break;
         }
         let iteration = done;
-        // 1. Camera pass, one row per task.
-        let rows: Vec<(Vec<Vec3>, Vec<VisiblePoint>)> = (0..size.y)
-            .into_par_iter()
-            .map(|y| {
-                let mut sampler = camera_template.clone();
-                let mut vps = Vec::new();
-                let ld = (0..size.x)
-                    .map(|x| {
-                        let idx = y * size.x + x;
+        // 1. Camera pass, one row per task: every iteration (SPPM) or once (PPM).
+        if nee || iteration == 0 {
+            let rows: Vec<(Vec<Vec3>, Vec<VisiblePoint>)> = (0..size.y)
+                .into_par_iter()
+                .map(|y| {
+                    let mut sampler = camera_template.clone();
+                    let mut vps = Vec::new();
+                    let mut ld = Vec::with_capacity(size.x as usize * eye as usize);
+                    for x in 0..size.x {
                         let pixel = pmin + UVec2::new(x, y);
-                        camera_path(scene, cfg, &mut sampler, pixel, idx, iteration, &mut vps)
-                    })
-                    .collect();
-                (ld, vps)
-            })
-            .collect();
-        let mut vps = Vec::new();
-        for (y, (ld, v)) in rows.into_iter().enumerate() {
-            for (x, l) in ld.into_iter().enumerate() {
-                pixels[y * row_len + x].ld += l;
+                        for e in 0..eye {
+                            let slot = (y * size.x + x) * eye + e;
+                            // SPPM's iteration is its sample index; PPM's eye sample is.
+                            let sample = if nee { iteration } else { e };
+                            ld.push(camera_path(
+                                scene,
+                                cfg,
+                                &mut sampler,
+                                pixel,
+                                sample,
+                                slot,
+                                nee,
+                                &mut vps,
+                            ));
+                        }
+                    }
+                    (ld, vps)
+                })
+                .collect();
+            vps.clear();
+            let row_slots = size.x as usize * eye as usize;
+            for (y, (ld, v)) in rows.into_iter().enumerate() {
+                for (k, l) in ld.into_iter().enumerate() {
+                    slots[y * row_slots + k].ld += l;
+                }
+                vps.extend(v);
             }
-            vps.extend(v);
         }
         // 2. The grid; 3. photons in fixed chunks, merged in order.
-        let radii: Vec<f32> = pixels.iter().map(|p| p.radius).collect();
+        let radii: Vec<f32> = slots.iter().map(|p| p.radius).collect();
         let mut phi = vec![Vec3::ZERO; vps.len()];
         let mut found = vec![0u32; vps.len()];
-        if have_lights && let Some(grid) = Grid::build(&vps, |v| radii[v.pixel as usize]) {
+        if have_lights && let Some(grid) = Grid::build(&vps, |v| radii[v.slot as usize]) {
             let chunks = photons.div_ceil(CHUNK);
             let lists: Vec<Vec<(u32, Vec3)>> = (0..chunks)
                 .into_par_iter()
@@ -497,6 +548,7 @@ pub fn render(
                             &grid,
                             &vps,
                             &radii,
+                            first,
                             &mut sampler,
                             &mut out,
                         );
@@ -511,14 +563,14 @@ pub fn render(
                 }
             }
         }
-        // 4. Radius reduction per pixel.
-        let mut pixel_phi = vec![Vec3::ZERO; pixel_count];
-        let mut pixel_m = vec![0u32; pixel_count];
+        // 4. Radius reduction per slot.
+        let mut slot_phi = vec![Vec3::ZERO; slot_count];
+        let mut slot_m = vec![0u32; slot_count];
         for (i, vp) in vps.iter().enumerate() {
-            pixel_phi[vp.pixel as usize] += vp.beta * phi[i];
-            pixel_m[vp.pixel as usize] += found[i];
+            slot_phi[vp.slot as usize] += vp.beta * phi[i];
+            slot_m[vp.slot as usize] += found[i];
         }
-        for ((p, &dphi), &m) in pixels.iter_mut().zip(&pixel_phi).zip(&pixel_m) {
+        for ((p, &dphi), &m) in slots.iter_mut().zip(&slot_phi).zip(&slot_m) {
             if m == 0 {
                 continue;
             }
@@ -541,12 +593,18 @@ pub fn render(
     if done > 0 {
         let mut tile = film.tile(pmin, pmax);
         let np = done as f64 * photons as f64;
-        for (i, p) in pixels.iter().enumerate() {
-            let (x, y) = ((i % row_len) as u32, (i / row_len) as u32);
-            let area = PI as f64 * (p.radius as f64) * (p.radius as f64);
-            let indirect = p.tau.as_dvec3() / (np * area);
-            let l = p.ld / done as f32 + Vec3::from(indirect.as_vec3());
-            tile.add_sample((pmin + UVec2::new(x, y)).as_vec2() + Vec2::splat(0.5), l);
+        // SPPM sums `ld` over the iterations; PPM's is the fixed path's.
+        let ld_scale = if nee { 1.0 / done as f32 } else { 1.0 };
+        for (i, px) in slots.chunks(eye as usize).enumerate() {
+            let mut l = Vec3::ZERO;
+            for p in px {
+                let area = PI as f64 * (p.radius as f64) * (p.radius as f64);
+                let indirect = p.tau.as_dvec3() / (np * area);
+                l += p.ld * ld_scale + Vec3::from(indirect.as_vec3());
+            }
+            let (x, y) = ((i % size.x as usize) as u32, (i / size.x as usize) as u32);
+            let centre = (pmin + UVec2::new(x, y)).as_vec2() + Vec2::splat(0.5);
+            tile.add_sample(centre, l / eye as f32);
         }
         film.merge(&tile);
     }

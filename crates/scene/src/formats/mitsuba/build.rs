@@ -1836,35 +1836,42 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     bsdf_samples: pl.props.int_in("bsdf_samples", shading, 0, 1 << 20)? as u32,
                 }
             }
-            // Mitsuba 0.6's parameters (camelCase arrives as snake_case): photonCount per
-            // pass, initialRadius (0: guess), alpha, maxDepth, rrDepth.
-            "sppm" => IntegratorDesc::Sppm(SppmDesc {
-                max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
-                rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
-                photons: match pl.props.int_in("photon_count", 0, 0, 1 << 40)? {
-                    0 => None,
-                    n => Some(n as u64),
-                },
-                initial_radius: match pl.props.float_opt("initial_radius")? {
+            // Mitsuba 0.6's parameters and defaults (camelCase arrives as snake_case):
+            // photonCount per pass (250 000), initialRadius (0: guess), alpha (0.7),
+            // maxDepth (−1), rrDepth (3); `ppm` also takes our `eye_samples` (visible points
+            // per pixel, 4).
+            "sppm" | "ppm" => {
+                let initial_radius = match pl.props.float_opt("initial_radius")? {
                     Some(r) if r > 0.0 && r.is_finite() => Some(r),
                     Some(0.0) | None => None,
                     Some(r) => {
                         return Err(err(
                             pl.loc(),
-                            format!("sppm: initialRadius = {r} must be ≥ 0 (0: guess one)"),
+                            format!("{}: initialRadius = {r} must be ≥ 0 (0: guess one)", pl.ty),
                         ));
                     }
-                },
-                alpha: match pl.props.float("alpha", 2.0 / 3.0)? {
+                };
+                let alpha = match pl.props.float("alpha", 0.7)? {
                     a if a > 0.0 && a <= 1.0 => a,
                     a => {
                         return Err(err(
                             pl.loc(),
-                            format!("sppm: alpha = {a} must lie in (0, 1]"),
+                            format!("{}: alpha = {a} must lie in (0, 1]", pl.ty),
                         ));
                     }
-                },
-            }),
+                };
+                IntegratorDesc::Sppm(SppmDesc {
+                    max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                    rr_depth: pl.props.int_in("rr_depth", 3, 0, u32::MAX as i64)? as u32,
+                    photons: Some(pl.props.int_in("photon_count", 250_000, 1, 1 << 40)? as u64),
+                    initial_radius,
+                    alpha,
+                    fixed_eye_samples: (pl.ty == "ppm")
+                        .then(|| pl.props.int_in("eye_samples", 4, 1, 1 << 16))
+                        .transpose()?
+                        .map(|n| n as u32),
+                })
+            }
             "whitted" => IntegratorDesc::Whitted {
                 // Nori's whitted has no depth limit (specular chains end by Russian roulette).
                 max_depth: pl
@@ -1915,7 +1922,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "path, direct, sppm, normals, albedo, depth, aov, ao, whitted, simple, \
+                    "path, direct, sppm, ppm, normals, albedo, depth, aov, ao, whitted, simple, \
                      direct_ems, direct_mats, direct_mis, path_mats, path_ems, path_mis",
                 ));
             }
