@@ -7,6 +7,7 @@
 mod aov;
 mod direct;
 pub mod path;
+pub mod photons;
 pub mod sppm;
 pub mod volpath;
 

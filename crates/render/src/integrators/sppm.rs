@@ -33,15 +33,16 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::photons::{self, PhotonHit, PhotonLights};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::{Film, Filter};
 use crate::lights::Receiver;
 use crate::math::{Frame, PI, UVec2, Vec2, Vec3};
 use crate::render::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
-use crate::sampling::{Distribution1D, Sampler};
+use crate::sampling::Sampler;
 use crate::spectral::lanes::{Color, RgbMode};
 use crate::world::Scene;
-use base::{FilterDesc, SamplerKind};
+use base::FilterDesc;
 use std::sync::atomic::Ordering;
 
 /// The parameters of [`render`].
@@ -347,81 +348,36 @@ fn next_event(
     f * ls.li / (ls.pdf * pmf)
 }
 
-/// Photons per chunk: the unit of parallel work whose contributions are merged in order.
-const CHUNK: u64 = 4096;
-
-/// Trace photon `j` of an iteration; push (visible point, β·f) for every visible point it
-/// reaches.
-#[allow(clippy::too_many_arguments)]
-fn photon_path(
-    scene: &Scene,
+/// Add photon `hit` to every visible point within its slot's radius whose camera path leaves
+/// room for it: (visible point, β·f) pairs.
+fn gather(
     cfg: &SppmConfig,
-    lights: &Distribution1D,
     grid: &Grid,
     vps: &[VisiblePoint],
     radii: &[f32],
     first: u32,
-    sampler: &mut Sampler,
+    hit: &PhotonHit,
     out: &mut Vec<(u32, Vec3)>,
 ) {
-    let m = &RgbMode;
-    let (li, pmf, _) = lights.sample_discrete(sampler.next_1d());
-    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-    let Some(e) = scene.lights[li].sample_le(scene, u_pos, u_dir, m) else {
-        return;
-    };
-    if pmf.is_nan() || pmf <= 0.0 {
+    if hit.edges < first {
         return;
     }
-    let mut beta = e.weight / pmf;
-    let mut ray = e.ray;
-    let mut edges = 0u32;
-    while !beta.is_black() && beta.is_finite() {
-        edges += 1;
-        let Some(si) = scene.intersect(&ray, f32::INFINITY) else {
-            break;
-        };
-        if edges >= first {
-            let wi = -ray.d; // towards where the photon came from
-            for &v in grid.near(si.p) {
-                let vp = &vps[v as usize];
-                let r = radii[vp.slot as usize];
-                if (vp.p - si.p).length_squared() > r * r || !cfg.allows(vp.depth + edges) {
-                    continue;
-                }
-                let wl = vp.frame.to_local(wi);
-                if wl.z == 0.0 {
-                    continue;
-                }
-                // eval is f·|cos θi|; the photon's flux already holds the cosine.
-                let f = vp.bsdf.eval(vp.wo, wl, TransportMode::Radiance) / wl.z.abs();
-                if !f.is_black() {
-                    out.push((v, beta * f));
-                }
-            }
-        }
-        let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
-            ray = si.spawn_ray(ray.d);
-            edges -= 1;
+    let p = hit.si.p;
+    for &v in grid.near(p) {
+        let vp = &vps[v as usize];
+        let r = radii[vp.slot as usize];
+        if (vp.p - p).length_squared() > r * r || !cfg.allows(vp.depth + hit.edges) {
             continue;
-        };
-        // A photon that has used up the path's edges no longer reaches any visible point.
-        if !cfg.allows(edges + 2) {
-            break;
         }
-        let wo = frame.to_local(si.wo);
-        let u1 = sampler.next_1d();
-        let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Importance) else {
-            break;
-        };
-        let next = beta * bs.weight;
-        // pbrt-v4's roulette: keep the photon's power about constant.
-        let q = (1.0 - next.max_element() / beta.max_element()).max(0.0);
-        if sampler.next_1d() < q {
-            break;
+        let wl = vp.frame.to_local(hit.wi);
+        if wl.z == 0.0 {
+            continue;
         }
-        beta = next / (1.0 - q);
-        ray = si.spawn_ray(frame.to_world(bs.wi));
+        // eval is f·|cos θi|; the photon's flux already holds the cosine.
+        let f = vp.bsdf.eval(vp.wo, wl, TransportMode::Radiance) / wl.z.abs();
+        if !f.is_black() {
+            out.push((v, hit.beta * f));
+        }
     }
 }
 
@@ -464,15 +420,8 @@ pub fn render(
         };
         slot_count
     ];
-    let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(scene)).collect();
-    let lights = Distribution1D::new(&powers);
-    let have_lights = powers.iter().any(|&p| p > 0.0);
+    let lights = PhotonLights::new(scene);
     let camera_template = Sampler::new(scene.sampler.kind, opts.spp.max(eye), scene.sampler.seed);
-    let photon_template = Sampler::new(
-        SamplerKind::Independent,
-        1,
-        scene.sampler.seed ^ 0x5350_504D_5048_4F54, // "SPPMPHOT"
-    );
     let target = opts.spp.max(1);
     let mut done = 0u32;
     let mut cancelled = false;
@@ -531,31 +480,19 @@ pub fn render(
         let radii: Vec<f32> = slots.iter().map(|p| p.radius).collect();
         let mut phi = vec![Vec3::ZERO; vps.len()];
         let mut found = vec![0u32; vps.len()];
-        if have_lights && let Some(grid) = Grid::build(&vps, |v| radii[v.slot as usize]) {
-            let chunks = photons.div_ceil(CHUNK);
-            let lists: Vec<Vec<(u32, Vec3)>> = (0..chunks)
-                .into_par_iter()
-                .map(|c| {
-                    let mut sampler = photon_template.clone();
-                    let mut out = Vec::new();
-                    for j in c * CHUNK..((c + 1) * CHUNK).min(photons) {
-                        sampler
-                            .start_pixel_sample(UVec2::new(j as u32, (j >> 32) as u32), iteration);
-                        photon_path(
-                            scene,
-                            cfg,
-                            &lights,
-                            &grid,
-                            &vps,
-                            &radii,
-                            first,
-                            &mut sampler,
-                            &mut out,
-                        );
-                    }
-                    out
-                })
-                .collect();
+        if lights.any()
+            && let Some(grid) = Grid::build(&vps, |v| radii[v.slot as usize])
+        {
+            let lists = photons::trace_all(
+                scene,
+                &lights,
+                cfg.max_depth,
+                scene.sampler.seed,
+                iteration,
+                photons,
+                Vec::new,
+                |out, hit| gather(cfg, &grid, &vps, &radii, first, hit, out),
+            );
             for list in lists {
                 for (v, c) in list {
                     phi[v as usize] += c;

@@ -1,0 +1,153 @@
+//! Photon tracing, shared by the photon-mapping family (`sppm`, `photon`): lights chosen in
+//! proportion to their power, paths started by [`crate::lights::Light::sample_le`], carried
+//! by BSDF sampling in importance transport with pbrt-v4's roulette (the photon's power stays
+//! about constant), and reported at every surface hit with a non-delta lobe.
+//!
+//! Photon `j` of pass `p` draws from its own sampler stream and photons are traced in fixed
+//! chunks whose results come back in chunk order, so whatever is built from them is the same
+//! for any thread count.
+
+use rayon::prelude::*;
+
+use crate::bsdf::TransportMode;
+use crate::math::{UVec2, Vec3};
+use crate::sampling::{Distribution1D, Sampler};
+use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::{Color, RgbMode};
+use crate::world::Scene;
+
+/// Photons per chunk: the unit of parallel work.
+pub const CHUNK: u64 = 4096;
+
+/// How photons choose their light: in proportion to its power.
+pub struct PhotonLights {
+    dist: Distribution1D,
+    any: bool,
+}
+
+impl PhotonLights {
+    pub fn new(scene: &Scene) -> PhotonLights {
+        let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(scene)).collect();
+        PhotonLights {
+            any: powers.iter().any(|&p| p > 0.0),
+            dist: Distribution1D::new(&powers),
+        }
+    }
+
+    /// Whether any light emits.
+    pub fn any(&self) -> bool {
+        self.any
+    }
+}
+
+/// A photon arriving at a surface with a non-delta lobe.
+pub struct PhotonHit<'a> {
+    pub si: &'a SurfaceInteraction,
+    /// Its power: Φ of the emitted sample times the path's throughput (divide by the number
+    /// of photons emitted for the flux it stands for).
+    pub beta: Vec3,
+    /// Unit direction towards where it came from (world space).
+    pub wi: Vec3,
+    /// Edges from the light to this hit (1: direct light).
+    pub edges: u32,
+    /// Every bounce before this hit was a delta one and there was at least one (a caustic
+    /// photon: light, specular surfaces, here).
+    pub caustic: bool,
+}
+
+/// Trace one photon path, reporting each surface hit with a non-delta lobe. `max_depth`
+/// (−1: unbounded) is the longest camera-to-light path the photons serve: a photon stops once
+/// a camera path of one edge could no longer reach it.
+pub fn trace(
+    scene: &Scene,
+    lights: &PhotonLights,
+    max_depth: i32,
+    sampler: &mut Sampler,
+    mut deposit: impl FnMut(&PhotonHit),
+) {
+    let allows = |edges: u32| max_depth < 0 || edges <= max_depth as u32;
+    let m = &RgbMode;
+    let (li, pmf, _) = lights.dist.sample_discrete(sampler.next_1d());
+    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+    if pmf.is_nan() || pmf <= 0.0 {
+        return;
+    }
+    let Some(e) = scene.lights[li].sample_le(scene, u_pos, u_dir, m) else {
+        return;
+    };
+    let mut beta = e.weight / pmf;
+    let mut ray = e.ray;
+    let mut edges = 0u32;
+    let mut specular_only = true;
+    while !beta.is_black() && beta.is_finite() {
+        edges += 1;
+        let Some(si) = scene.intersect(&ray, f32::INFINITY) else {
+            break;
+        };
+        let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
+            // No surface (an index-matched boundary): straight on.
+            ray = si.spawn_ray(ray.d);
+            edges -= 1;
+            continue;
+        };
+        if bsdf.has_smooth() {
+            deposit(&PhotonHit {
+                si: &si,
+                beta,
+                wi: -ray.d,
+                edges,
+                caustic: specular_only && edges > 1,
+            });
+        }
+        if !allows(edges + 2) {
+            break;
+        }
+        let wo = frame.to_local(si.wo);
+        let u1 = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Importance) else {
+            break;
+        };
+        specular_only &= bs.delta;
+        let next = beta * bs.weight;
+        let q = (1.0 - next.max_element() / beta.max_element()).max(0.0);
+        if sampler.next_1d() < q {
+            break;
+        }
+        beta = next / (1.0 - q);
+        ray = si.spawn_ray(frame.to_world(bs.wi));
+    }
+}
+
+/// Trace photons `0..count` of pass `pass` in parallel chunks: `start` makes each chunk's
+/// accumulator, `deposit` adds a hit to it; the accumulators come back in chunk order.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_all<T: Send>(
+    scene: &Scene,
+    lights: &PhotonLights,
+    max_depth: i32,
+    seed: u64,
+    pass: u32,
+    count: u64,
+    start: impl Fn() -> T + Sync,
+    deposit: impl Fn(&mut T, &PhotonHit) + Sync,
+) -> Vec<T> {
+    let template = Sampler::new(
+        base::SamplerKind::Independent,
+        1,
+        seed ^ 0x5048_4F54_4F4E_5321,
+    );
+    (0..count.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut sampler = template.clone();
+            let mut acc = start();
+            for j in c * CHUNK..((c + 1) * CHUNK).min(count) {
+                sampler.start_pixel_sample(UVec2::new(j as u32, (j >> 32) as u32), pass);
+                trace(scene, lights, max_depth, &mut sampler, |hit| {
+                    deposit(&mut acc, hit)
+                });
+            }
+            acc
+        })
+        .collect()
+}
