@@ -204,6 +204,29 @@ impl Default for SamplerDesc {
     }
 }
 
+/// The density estimation kernel of photon mapping radiance estimates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum PhotonKernel {
+    /// Uniform over the disk: 1/(πr²).
+    #[default]
+    Box,
+    /// Jensen's cone filter (k = 1): 3(1 − d/r)/(πr²).
+    Cone,
+    /// Epanechnikov: 2(1 − d²/r²)/(πr²).
+    Epanechnikov,
+}
+
+impl PhotonKernel {
+    pub fn from_name(name: &str) -> Option<PhotonKernel> {
+        Some(match name {
+            "box" | "uniform" => PhotonKernel::Box,
+            "cone" => PhotonKernel::Cone,
+            "epanechnikov" => PhotonKernel::Epanechnikov,
+            _ => return None,
+        })
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MisHeuristic {
     Balance,

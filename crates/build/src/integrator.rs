@@ -1,13 +1,18 @@
 //! Integrator factories: the scene's integrator description to the runtime integrator.
 
 use render::integrators::path::{Combine, PathConfig};
+use render::integrators::photon::{Lookup, PhotonConfig};
 use render::integrators::sppm::{Progressive, SppmConfig};
 use render::integrators::volpath::VolPathConfig;
 use render::integrators::{Integrator, UnsupportedIntegrator};
 use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
 
 /// The integrator a scene description asks for.
-pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegrator> {
+/// `scene_radius`: the bounding-sphere radius of the scene's geometry (relative lookup radii).
+pub fn integrator(
+    desc: &IntegratorDesc,
+    scene_radius: f32,
+) -> Result<Integrator, UnsupportedIntegrator> {
     Ok(match desc {
         IntegratorDesc::Normals => Integrator::Normals,
         IntegratorDesc::Albedo => Integrator::Albedo,
@@ -54,6 +59,33 @@ pub fn integrator(desc: &IntegratorDesc) -> Result<Integrator, UnsupportedIntegr
                 Some(eye_samples) => Progressive::Fixed { eye_samples },
             },
         }),
+        IntegratorDesc::Photon(d) => {
+            let lookup = |l: &scene::PhotonLookupDesc| {
+                let r = l
+                    .radius
+                    .map(|r| if l.relative { r * scene_radius } else { r });
+                match (l.k, r) {
+                    (Some(k), r) => Lookup::Nearest {
+                        k,
+                        max_radius: r.unwrap_or(f32::INFINITY),
+                    },
+                    (None, Some(r)) => Lookup::Radius(r),
+                    (None, None) => Lookup::Nearest {
+                        k: 64,
+                        max_radius: f32::INFINITY,
+                    },
+                }
+            };
+            Integrator::Photon(PhotonConfig {
+                max_depth: d.max_depth,
+                photons: d.photons,
+                global: lookup(&d.global),
+                caustic: lookup(&d.caustic),
+                kernel: d.kernel,
+                final_gather: d.final_gather,
+                direct_samples: d.direct_samples,
+            })
+        }
         IntegratorDesc::Whitted { max_depth } => Integrator::Path(PathConfig::whitted(*max_depth)),
         IntegratorDesc::NoriSimple => Integrator::Path(PathConfig::nori(2, Combine::EmitterOnly)),
         IntegratorDesc::Nori(n) => Integrator::Path(match n {

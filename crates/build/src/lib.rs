@@ -185,10 +185,15 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         })
         .map(Vec3::from)
         .sum();
-    let mut integrator = integrator::integrator(&integrator_desc).map_err(|e| BuildError {
-        loc: Loc::file(&desc.source),
-        message: e.to_string(),
-    })?;
+    let scene_radius = {
+        let r = 0.5 * (bounds.1 - bounds.0).length();
+        if r.is_finite() && r > 0.0 { r } else { 1.0 }
+    };
+    let mut integrator =
+        integrator::integrator(&integrator_desc, scene_radius).map_err(|e| BuildError {
+            loc: Loc::file(&desc.source),
+            message: e.to_string(),
+        })?;
     // Mitsuba's `path` ignores media, and so does ours for a scene that declares any. When
     // every medium comes from Beer absorption (purely absorbing, homogeneous), the path
     // tracer applies them, as the courses' tracers apply absorption inside their glass.

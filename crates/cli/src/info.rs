@@ -157,6 +157,35 @@ fn integrator(i: &IntegratorDesc) -> String {
                 .map_or("guessed".to_string(), |r| r.to_string()),
             d.alpha
         ),
+        IntegratorDesc::Photon(d) => {
+            let lookup = |l: &scene::PhotonLookupDesc| {
+                let r = |r: f32| {
+                    if l.relative {
+                        format!("{r} of the scene radius")
+                    } else {
+                        r.to_string()
+                    }
+                };
+                match (l.k, l.radius) {
+                    (Some(k), Some(c)) => format!("{k} nearest within {}", r(c)),
+                    (Some(k), None) => format!("{k} nearest"),
+                    (None, Some(c)) => format!("radius {}", r(c)),
+                    (None, None) => "default".to_string(),
+                }
+            };
+            format!(
+                "photon mapping: {} photons, global map {}, caustic map {}, {:?} kernel, {}",
+                d.photons,
+                lookup(&d.global),
+                lookup(&d.caustic),
+                d.kernel,
+                if d.final_gather > 0 {
+                    format!("{} final gathering rays", d.final_gather)
+                } else {
+                    "no final gathering".to_string()
+                }
+            )
+        }
         IntegratorDesc::Whitted { max_depth } => format!("Whitted, max depth {max_depth}"),
         IntegratorDesc::NoriSimple => "Nori simple".into(),
         IntegratorDesc::Nori(n) => format!(

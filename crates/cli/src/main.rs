@@ -120,7 +120,9 @@ struct RenderArgs {
     /// Replace the scene's integrator: normals, albedo, depth, ao[:samples], or
     /// sppm[:photons[,radius]] (stochastic progressive photon mapping; --spp iterations of
     /// `photons` photons, default one per pixel; the scene's max depth is kept) or
-    /// ppm[:photons[,radius[,eye_samples]]] (fixed visible points, 4 per pixel by default).
+    /// ppm[:photons[,radius[,eye_samples]]] (fixed visible points, 4 per pixel by default),
+    /// or photon[:photons[,gather[,k]]] (photon mapping: 10⁶ photons, 16 final gathering
+    /// rays, the 64 nearest photons by default).
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<IntegratorDesc>,
     /// Which sensor of the scene to render (0-based).
@@ -245,10 +247,12 @@ impl TransportArgs {
         let path_only = self.rr_depth.is_some() || self.clamp.is_some() || self.nee.is_some();
         // `--integrator sppm` keeps the scene's path length (a scene's max_depth is part of
         // what its reference shows).
-        if let Some(IntegratorDesc::Sppm(d)) = integrator.as_mut()
-            && let Some(m) = max_depth_of(&desc.integrator)
-        {
-            d.max_depth = m;
+        if let Some(m) = max_depth_of(&desc.integrator) {
+            match integrator.as_mut() {
+                Some(IntegratorDesc::Sppm(d)) => d.max_depth = m,
+                Some(IntegratorDesc::Photon(d)) => d.max_depth = m,
+                _ => {}
+            }
         }
         let targets = std::iter::once(&mut desc.integrator)
             .chain(
@@ -283,11 +287,16 @@ impl TransportArgs {
                         d.max_depth = m.max(-1);
                     }
                 }
+                IntegratorDesc::Photon(d) if !path_only => {
+                    if let Some(m) = self.max_depth {
+                        d.max_depth = m.max(-1);
+                    }
+                }
                 _ if self.max_depth.is_some() || path_only => {
                     return Err(Failure::input(
                         "--max-depth, --rr-depth, --clamp and --nee apply to the path tracer \
-                         (and --max-depth to Whitted and sppm); this scene or --integrator \
-                         uses another",
+                         (and --max-depth to Whitted and the photon mappers); this scene or \
+                         --integrator uses another",
                     ));
                 }
                 _ => {}
@@ -509,6 +518,7 @@ fn max_depth_of(i: &IntegratorDesc) -> Option<i32> {
         IntegratorDesc::Path(p) => Some(p.max_depth),
         IntegratorDesc::VolPath { max_depth, .. } => Some(*max_depth),
         IntegratorDesc::Sppm(d) => Some(d.max_depth),
+        IntegratorDesc::Photon(d) => Some(d.max_depth),
         _ => None,
     }
 }
@@ -570,10 +580,42 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             }
             d
         }),
+        "photon" => IntegratorDesc::Photon({
+            let usage = "photon[:PHOTONS[,GATHER[,K]]]";
+            let mut d = scene::PhotonDesc::default();
+            let fields: Vec<&str> = if arg.is_empty() {
+                vec![]
+            } else {
+                arg.split(',').collect()
+            };
+            if fields.len() > 3 {
+                return Err(format!("{usage}: too many fields in '{arg}'"));
+            }
+            let field = |k: usize| fields.get(k).copied().filter(|f| !f.is_empty());
+            let count = |f: &str, what: &str, min: u64| {
+                f.parse::<u64>()
+                    .ok()
+                    .filter(|&n| n >= min)
+                    .ok_or_else(|| format!("{usage}: {what} must be a count ≥ {min}, found '{f}'"))
+            };
+            if let Some(n) = field(0) {
+                d.photons = count(n, "PHOTONS", 1)?;
+            }
+            if let Some(g) = field(1) {
+                d.final_gather = count(g, "GATHER", 0)?.min(1 << 16) as u32;
+            }
+            if let Some(k) = field(2) {
+                let k = count(k, "K", 1)?.min(1 << 20) as u32;
+                d.global.k = Some(k);
+                d.caustic.k = Some(k);
+            }
+            d
+        }),
         _ => {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
-                 sppm[:PHOTONS[,RADIUS]], ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]])"
+                 photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
+                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]])"
             ));
         }
     })
@@ -870,15 +912,14 @@ pub(crate) fn render_scene_with(
     for w in &scene.warnings {
         eprintln!("{w}");
     }
-    if let render::integrators::Integrator::Sppm(_) = &integrator {
-        if let Some(why) = render::integrators::sppm::unsupported(&scene) {
-            return Err(Failure::input(why));
-        }
-        if job.adaptive.is_some() {
-            return Err(Failure::input(
-                "--adaptive needs an integrator with per-sample estimates (not sppm or ppm)",
-            ));
-        }
+    if let Some(why) = integrator.unsupported(&scene) {
+        return Err(Failure::input(why));
+    }
+    if job.adaptive.is_some() && !integrator.per_sample() {
+        return Err(Failure::input(format!(
+            "--adaptive needs an integrator with per-sample estimates, not {}",
+            integrator.name()
+        )));
     }
 
     let cancel = Arc::new(AtomicBool::new(false));

@@ -15,7 +15,8 @@ use rayon::prelude::*;
 use crate::camera::CameraRay;
 use crate::film::{Film, FilmTile};
 use crate::integrators::Integrator;
-use crate::math::{UVec2, Vec2};
+use crate::integrators::photon::{PhotonMapper, PhotonMaps};
+use crate::math::{UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
 use crate::world::Scene;
 
@@ -103,11 +104,52 @@ fn shutter_time(sampler: &mut Sampler) -> f32 {
     sampler.next_1d()
 }
 
+/// What estimates the radiance of a stream of camera samples: an [`Integrator`] that works
+/// per sample, or one with state built for the render first (the photon mapper's maps).
+pub trait Estimator: Sync {
+    /// See [`Integrator::li_stream`].
+    fn li_stream<T>(
+        &self,
+        scene: &Scene,
+        template: &Sampler,
+        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        done: impl FnMut(T, Vec3),
+    );
+}
+
+impl Estimator for Integrator {
+    #[inline]
+    fn li_stream<T>(
+        &self,
+        scene: &Scene,
+        template: &Sampler,
+        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        done: impl FnMut(T, Vec3),
+    ) {
+        Integrator::li_stream(self, scene, template, next, done)
+    }
+}
+
+impl Estimator for PhotonMapper<'_> {
+    fn li_stream<T>(
+        &self,
+        scene: &Scene,
+        template: &Sampler,
+        mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        mut done: impl FnMut(T, Vec3),
+    ) {
+        let mut sampler = template.clone();
+        while let Some((tag, cray)) = next(&mut sampler) {
+            done(tag, self.li(scene, &cray, &mut sampler));
+        }
+    }
+}
+
 /// Render sample indices `[s0, s1)` of every pixel of one tile (positions uniform in each
 /// pixel, splatted by the film's filter).
-fn render_tile(
+fn render_tile<E: Estimator>(
     scene: &Scene,
-    integrator: &Integrator,
+    integrator: &E,
     template: &Sampler,
     tile: &mut FilmTile,
     (lo, hi): (UVec2, UVec2),
@@ -141,9 +183,27 @@ pub fn render(
     opts: &RenderOptions,
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
-    if let Integrator::Sppm(cfg) = integrator {
-        return crate::integrators::sppm::render(scene, cfg, opts, observer);
+    match integrator {
+        Integrator::Sppm(cfg) => crate::integrators::sppm::render(scene, cfg, opts, observer),
+        Integrator::Photon(cfg) => {
+            let start = Instant::now();
+            let maps = PhotonMaps::build(scene, cfg, scene.sampler.seed);
+            let mapper = PhotonMapper { cfg, maps };
+            let mut out = render_samples(scene, &mapper, opts, observer);
+            out.elapsed = start.elapsed();
+            out
+        }
+        _ => render_samples(scene, integrator, opts, observer),
     }
+}
+
+/// The tile and pass loop of [`render`] for an [`Estimator`].
+fn render_samples<E: Estimator>(
+    scene: &Scene,
+    integrator: &E,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
     let start = Instant::now();
     let f = &scene.film;
     let mut film = Film::new(f.width, f.height, f.crop, f.filter);

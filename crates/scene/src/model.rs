@@ -867,6 +867,60 @@ pub struct Film {
 // ---------------------------------------------------------------------------------------------
 // Integrators
 
+/// How a photon map is searched around a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonLookupDesc {
+    /// The k nearest photons (with `radius` as a cap); `None`: every photon within `radius`.
+    pub k: Option<u32>,
+    /// Search radius (a cap for `k`); `None` with `k`: no cap.
+    pub radius: Option<f32>,
+    /// `radius` is a fraction of the scene's bounding-sphere radius (Mitsuba 0.6, Nori's
+    /// default), resolved by `build`.
+    pub relative: bool,
+}
+
+impl Default for PhotonLookupDesc {
+    fn default() -> Self {
+        PhotonLookupDesc {
+            k: Some(64),
+            radius: None,
+            relative: false,
+        }
+    }
+}
+
+/// Parameters of photon mapping (Jensen): one photon pass, then a camera pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotonDesc {
+    /// Longest path in edges (−1: unbounded).
+    pub max_depth: i32,
+    /// Photon paths emitted.
+    pub photons: u64,
+    /// Lookups in the global map.
+    pub global: PhotonLookupDesc,
+    /// Lookups in the caustic map.
+    pub caustic: PhotonLookupDesc,
+    pub kernel: PhotonKernel,
+    /// Final gathering rays per camera vertex (0: the map read directly).
+    pub final_gather: u32,
+    /// Light samples per camera vertex.
+    pub direct_samples: u32,
+}
+
+impl Default for PhotonDesc {
+    fn default() -> Self {
+        PhotonDesc {
+            max_depth: -1,
+            photons: 1_000_000,
+            global: PhotonLookupDesc::default(),
+            caustic: PhotonLookupDesc::default(),
+            kernel: PhotonKernel::Box,
+            final_gather: 16,
+            direct_samples: 1,
+        }
+    }
+}
+
 /// Parameters of stochastic progressive photon mapping.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SppmDesc {
@@ -936,6 +990,9 @@ pub enum IntegratorDesc {
     /// fixed visible points (Mitsuba 0.6's `ppm`): the sample count is the number of
     /// iterations.
     Sppm(SppmDesc),
+    /// Photon mapping with a global and a caustic map (Nori's and Mitsuba 0.6's
+    /// `photonmapper`).
+    Photon(PhotonDesc),
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },
     /// Nori's `simple` (one point light, no shadows from area lights).

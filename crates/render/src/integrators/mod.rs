@@ -7,6 +7,7 @@
 mod aov;
 mod direct;
 pub mod path;
+pub mod photon;
 pub mod photons;
 pub mod sppm;
 pub mod volpath;
@@ -46,6 +47,9 @@ pub enum Integrator {
     /// Stochastic progressive photon mapping: not an estimator per camera sample, so
     /// [`crate::render::render`] runs it as a whole ([`sppm::render`]).
     Sppm(sppm::SppmConfig),
+    /// Photon mapping: its maps are traced when the render starts, so
+    /// [`crate::render::render`] runs it ([`photon::PhotonMapper`]).
+    Photon(photon::PhotonConfig),
 }
 
 /// An integrator the scene asks for that this build does not have.
@@ -67,13 +71,35 @@ impl Integrator {
                 sppm::Progressive::Stochastic => "sppm",
                 sppm::Progressive::Fixed { .. } => "ppm",
             },
+            Integrator::Photon(_) => "photon",
         }
     }
 
     /// Whether [`Self::li`] estimates the radiance of one camera sample (every integrator
     /// but the photon-mapping family, which [`crate::render::render`] runs as a whole).
     pub fn per_sample(&self) -> bool {
-        !matches!(self, Integrator::Sppm(_))
+        !matches!(self, Integrator::Sppm(_) | Integrator::Photon(_))
+    }
+
+    /// Why `scene` cannot be rendered with this integrator (yet): the photon-mapping family
+    /// has no spectral mode and no media so far.
+    pub fn unsupported(&self, scene: &Scene) -> Option<String> {
+        if self.per_sample() {
+            return None;
+        }
+        if scene.mode != RenderMode::Rgb {
+            return Some(format!(
+                "{}: spectral mode is not implemented yet (use --mode rgb)",
+                self.name()
+            ));
+        }
+        if !scene.media.is_empty() {
+            return Some(format!(
+                "{}: participating media are not implemented yet (use volpath)",
+                self.name()
+            ));
+        }
+        None
     }
 
     /// The estimate along one camera ray; 0 for an integrator that is not
@@ -104,7 +130,7 @@ impl Integrator {
                     RenderMode::Spectral => direct::li_in::<Spectral>(scene, cray, sampler, e, b),
                 }
             }
-            Integrator::Sppm(_) => Vec3::ZERO,
+            Integrator::Sppm(_) | Integrator::Photon(_) => Vec3::ZERO,
         }
     }
 

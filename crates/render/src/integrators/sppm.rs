@@ -95,17 +95,6 @@ impl SppmConfig {
     }
 }
 
-/// Why a scene cannot be rendered with SPPM (yet).
-pub fn unsupported(scene: &Scene) -> Option<&'static str> {
-    if scene.mode != base::RenderMode::Rgb {
-        return Some("sppm: spectral mode is not implemented yet (use --mode rgb)");
-    }
-    if !scene.media.is_empty() {
-        return Some("sppm: participating media are not implemented yet (use volpath)");
-    }
-    None
-}
-
 /// A camera path's first vertex with a non-delta BSDF lobe.
 struct VisiblePoint {
     /// The measurement it adds to: the pixel (row-major within the crop window) in SPPM,

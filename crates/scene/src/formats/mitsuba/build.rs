@@ -1872,6 +1872,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                         .map(|n| n as u32),
                 })
             }
+            "photonmapper" => IntegratorDesc::Photon(self.photon_mapper(pl)?),
             "whitted" => IntegratorDesc::Whitted {
                 // Nori's whitted has no depth limit (specular chains end by Russian roulette).
                 max_depth: pl
@@ -1922,12 +1923,95 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "path, direct, sppm, ppm, normals, albedo, depth, aov, ao, whitted, simple, \
+                    "path, direct, photonmapper, sppm, ppm, normals, albedo, depth, aov, ao, whitted, simple, \
                      direct_ems, direct_mats, direct_mis, path_mats, path_ems, path_mis",
                 ));
             }
         };
         Ok(i)
+    }
+
+    /// `photonmapper`: Nori's (`photonCount`, `photonRadius`: every photon within the radius,
+    /// default 1/500 of the scene's bounding-box diagonal, read directly — no final
+    /// gathering) when either of its parameters is given, else Mitsuba 0.6's
+    /// (`globalPhotons` emitted, `lookupSize` nearest photons within `globalLookupRadius` /
+    /// `causticLookupRadius` of the scene's size, `directSamples`, `maxDepth`; its maps are
+    /// read directly too). Our own: `final_gather` rays, `kernel` (box, cone,
+    /// epanechnikov).
+    fn photon_mapper(&self, pl: &Plugin<'s>) -> Result<PhotonDesc> {
+        let p = &pl.props;
+        let nori = p.has("photon_count") || p.has("photon_radius");
+        let kernel = match p.string_opt("kernel")? {
+            None => PhotonKernel::Box,
+            Some((name, loc)) => PhotonKernel::from_name(name).ok_or_else(|| {
+                err(
+                    loc,
+                    format!("kernel '{name}': expected box, cone or epanechnikov"),
+                )
+            })?,
+        };
+        let positive = |name: &str, default: f32| -> Result<f32> {
+            let v = p.float(name, default)?;
+            if v > 0.0 && v.is_finite() {
+                Ok(v)
+            } else {
+                Err(err(
+                    pl.loc(),
+                    format!("{}: {name} = {v} must be > 0", pl.ty),
+                ))
+            }
+        };
+        let final_gather = p.int_in("final_gather", 0, 0, 1 << 16)? as u32;
+        let max_depth = p.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32;
+        if nori {
+            // Nori: 0 means "the bounding-box diagonal / 500" = the bounding radius / 250.
+            let radius = p.float("photon_radius", 0.0)?;
+            let lookup = if radius > 0.0 && radius.is_finite() {
+                PhotonLookupDesc {
+                    k: None,
+                    radius: Some(radius),
+                    relative: false,
+                }
+            } else if radius == 0.0 {
+                PhotonLookupDesc {
+                    k: None,
+                    radius: Some(1.0 / 250.0),
+                    relative: true,
+                }
+            } else {
+                return Err(err(
+                    pl.loc(),
+                    format!("photonmapper: photonRadius = {radius} must be ≥ 0"),
+                ));
+            };
+            return Ok(PhotonDesc {
+                max_depth,
+                photons: p.int_in("photon_count", 1_000_000, 1, 1 << 40)? as u64,
+                global: lookup,
+                caustic: lookup,
+                kernel,
+                final_gather,
+                direct_samples: 1,
+            });
+        }
+        let k = p.int_in("lookup_size", 120, 1, 1 << 20)? as u32;
+        Ok(PhotonDesc {
+            max_depth,
+            photons: p.int_in("global_photons", 250_000, 1, 1 << 40)? as u64,
+            global: PhotonLookupDesc {
+                k: Some(k),
+                radius: Some(positive("global_lookup_radius", 0.05)?),
+                relative: true,
+            },
+            caustic: PhotonLookupDesc {
+                k: Some(k),
+                radius: Some(positive("caustic_lookup_radius", 0.0125)?),
+                relative: true,
+            },
+            kernel,
+            final_gather,
+            direct_samples: p.int_in("direct_samples", 1, 1, 1 << 16)? as u32,
+        })
     }
 
     // -----------------------------------------------------------------------------------------

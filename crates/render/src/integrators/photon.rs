@@ -1,0 +1,450 @@
+//! Photon mapping (Jensen 2001): photons traced once ([`super::photons`]) and stored in
+//! k-d trees (the `kiddo` crate, built from the photons in emission order, so the maps do not
+//! depend on the thread count), then a camera pass that follows delta bounces to the first
+//! vertex with a non-delta lobe, x, and adds there
+//! - one next-event estimate (direct light),
+//! - the **caustic map**'s radiance estimate (photons that reached x through delta bounces
+//!   only: light → specular → x),
+//! - and the rest of the indirect light either by **final gathering** — `final_gather` BSDF
+//!   rays from x, each finding its first non-delta vertex y (through delta bounces) and the
+//!   **global map**'s estimate of the radiance y reflects towards x (every photon there:
+//!   direct, caustic and indirect) — or, with `final_gather = 0`, by the direct
+//!   visualisation of the map of photons that are neither direct nor caustic.
+//!
+//! A radiance estimate at x is Σ K(dₚ)·f(wo, wₚ)·βₚ / N over the photons found around x
+//! (wₚ their incoming direction, βₚ their power, N the photons emitted), with K the box
+//! 1/(πr²), the cone 3(1 − d/r)/(πr²) or the Epanechnikov 2(1 − d²/r²)/(πr²) kernel, and r
+//! the lookup radius: fixed, or the distance to the k-th nearest photon (capped).
+//! Like the other integrators a vertex with delta and non-delta lobes (smooth plastic) gets
+//! the estimates for its non-delta part and the path goes on when its BSDF samples a delta
+//! lobe. `max_depth` bounds camera edges + gather edges + photon edges.
+//!
+//! Memory: a stored photon is its position in the tree (12 bytes plus the tree's index,
+//! 4 bytes) and [`StoredPhoton`] (32 bytes): 48 bytes, counted by [`memory_needed`].
+//!
+//! Not yet: media (volumetric photon mapping), spectral mode.
+
+use std::num::NonZero;
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+
+use super::photons::{self, PhotonHit, PhotonLights};
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::camera::CameraRay;
+use crate::geometry::Ray;
+use crate::lights::Receiver;
+use crate::math::{Frame, PI, Vec3};
+use crate::sampling::Sampler;
+use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::{Color, RgbMode};
+use crate::world::Scene;
+
+/// How photons around a point are found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lookup {
+    /// The `k` nearest, within `max_radius` (∞: no cap).
+    Nearest { k: u32, max_radius: f32 },
+    /// Every photon within the radius.
+    Radius(f32),
+}
+
+pub use base::PhotonKernel as Kernel;
+
+/// K(d) for squared distance `d2` within radius² `r2`, normalised over the disk.
+fn kernel_weight(kernel: Kernel, d2: f32, r2: f32) -> f32 {
+    let base = 1.0 / (PI * r2);
+    match kernel {
+        Kernel::Box => base,
+        Kernel::Cone => 3.0 * (1.0 - (d2 / r2).sqrt()).max(0.0) * base,
+        Kernel::Epanechnikov => 2.0 * (1.0 - d2 / r2).max(0.0) * base,
+    }
+}
+
+/// The parameters of the photon mapper.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotonConfig {
+    /// Longest path in edges (−1: unbounded).
+    pub max_depth: i32,
+    /// Photon paths emitted.
+    pub photons: u64,
+    /// Lookups in the global map (final gathering) or the indirect map.
+    pub global: Lookup,
+    /// Lookups in the caustic map.
+    pub caustic: Lookup,
+    pub kernel: Kernel,
+    /// Final gathering rays per camera vertex (0: read the indirect map directly).
+    pub final_gather: u32,
+    /// Next-event estimates per camera vertex.
+    pub direct_samples: u32,
+}
+
+impl Default for PhotonConfig {
+    fn default() -> Self {
+        PhotonConfig {
+            max_depth: -1,
+            photons: 1_000_000,
+            global: Lookup::Nearest {
+                k: 64,
+                max_radius: f32::INFINITY,
+            },
+            caustic: Lookup::Nearest {
+                k: 64,
+                max_radius: f32::INFINITY,
+            },
+            kernel: Kernel::Box,
+            final_gather: 16,
+            direct_samples: 1,
+        }
+    }
+}
+
+impl PhotonConfig {
+    fn allows(&self, edges: u32) -> bool {
+        self.max_depth < 0 || edges <= self.max_depth as u32
+    }
+}
+
+/// What a map keeps of a photon besides its position.
+#[derive(Clone, Copy, Debug)]
+pub struct StoredPhoton {
+    /// Towards where it came from.
+    pub wi: Vec3,
+    pub beta: Vec3,
+    /// Edges from the light.
+    pub edges: u32,
+}
+
+/// Bytes per stored photon (see the module docs).
+pub const BYTES_PER_PHOTON: u64 = 48;
+
+/// A photon map.
+pub struct PhotonMap {
+    tree: ImmutableKdTree<f32, 3>,
+    photons: Vec<StoredPhoton>,
+}
+
+impl PhotonMap {
+    fn new(points: Vec<[f32; 3]>, photons: Vec<StoredPhoton>) -> Option<PhotonMap> {
+        if points.is_empty() {
+            return None;
+        }
+        let tree = ImmutableKdTree::new_from_slice(&points).ok()?;
+        Some(PhotonMap { tree, photons })
+    }
+
+    /// Photons stored.
+    pub fn len(&self) -> usize {
+        self.photons.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.photons.is_empty()
+    }
+
+    /// Σ K·f·β over the photons `lookup` finds around `p` whose path fits in `budget` edges
+    /// (f evaluated without its cosine: the photon's power holds it), not yet divided by the
+    /// number of photons emitted.
+    #[allow(clippy::too_many_arguments)]
+    fn estimate(
+        &self,
+        lookup: Lookup,
+        kernel: Kernel,
+        p: Vec3,
+        bsdf: &Bsdf,
+        frame: &Frame,
+        wo: Vec3,
+        budget: Option<u32>,
+    ) -> Vec3 {
+        let q = [p.x, p.y, p.z];
+        let (found, r2) = match lookup {
+            Lookup::Radius(r) => {
+                let found = self
+                    .tree
+                    .query(&q)
+                    .within::<SquaredEuclidean<f32>>(r * r)
+                    .unsorted()
+                    .execute();
+                (found, r * r)
+            }
+            Lookup::Nearest { k, max_radius } => {
+                let k = NonZero::new(k.max(1) as usize).unwrap_or(NonZero::<usize>::MIN);
+                let found = if max_radius.is_finite() {
+                    self.tree
+                        .query(&q)
+                        .nearest_n::<SquaredEuclidean<f32>>(k)
+                        .within(max_radius * max_radius)
+                        .execute()
+                } else {
+                    self.tree
+                        .query(&q)
+                        .nearest_n::<SquaredEuclidean<f32>>(k)
+                        .execute()
+                };
+                // The radius of the disk the photons were found in: the k-th distance, or the
+                // cap when fewer were found within it.
+                let r2 = if found.len() == k.get() || !max_radius.is_finite() {
+                    found.last().map_or(0.0, |n| n.distance)
+                } else {
+                    max_radius * max_radius
+                };
+                (found, r2)
+            }
+        };
+        if r2.is_nan() || r2 <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let mut sum = Vec3::ZERO;
+        for n in &found {
+            let ph = &self.photons[n.item as usize];
+            if budget.is_some_and(|b| ph.edges > b) {
+                continue;
+            }
+            let wl = frame.to_local(ph.wi);
+            if wl.z == 0.0 {
+                continue;
+            }
+            let f = bsdf.eval(wo, wl, TransportMode::Radiance) / wl.z.abs();
+            sum += f * ph.beta * kernel_weight(kernel, n.distance, r2);
+        }
+        sum
+    }
+}
+
+/// The photon maps of a scene.
+pub struct PhotonMaps {
+    /// Every photon (final gathering) or those neither direct nor caustic (read directly).
+    pub global: Option<PhotonMap>,
+    pub caustic: Option<PhotonMap>,
+    /// Photon paths emitted.
+    pub emitted: u64,
+}
+
+impl PhotonMaps {
+    /// Trace `cfg.photons` photons on the current rayon pool and build the maps.
+    pub fn build(scene: &Scene, cfg: &PhotonConfig, seed: u64) -> PhotonMaps {
+        let lights = PhotonLights::new(scene);
+        let gather = cfg.final_gather > 0;
+        type Acc = (
+            Vec<[f32; 3]>,
+            Vec<StoredPhoton>,
+            Vec<[f32; 3]>,
+            Vec<StoredPhoton>,
+        );
+        let chunks = if lights.any() {
+            photons::trace_all(
+                scene,
+                &lights,
+                cfg.max_depth,
+                seed,
+                0,
+                cfg.photons,
+                Acc::default,
+                |(gp, gs, cp, cs): &mut Acc, hit: &PhotonHit| {
+                    let p = [hit.si.p.x, hit.si.p.y, hit.si.p.z];
+                    let s = StoredPhoton {
+                        wi: hit.wi,
+                        beta: hit.beta,
+                        edges: hit.edges,
+                    };
+                    if hit.caustic {
+                        cp.push(p);
+                        cs.push(s);
+                    }
+                    if gather || (hit.edges > 1 && !hit.caustic) {
+                        gp.push(p);
+                        gs.push(s);
+                    }
+                },
+            )
+        } else {
+            Vec::new()
+        };
+        let (mut gp, mut gs, mut cp, mut cs) = Acc::default();
+        for (a, b, c, d) in chunks {
+            gp.extend(a);
+            gs.extend(b);
+            cp.extend(c);
+            cs.extend(d);
+        }
+        PhotonMaps {
+            global: PhotonMap::new(gp, gs),
+            caustic: PhotonMap::new(cp, cs),
+            emitted: cfg.photons.max(1),
+        }
+    }
+}
+
+/// Peak bytes of photon storage for `cfg` (every photon stored twice at worst: once in each
+/// map; a path deposits at most `max_depth` times, about 3 on average in closed scenes).
+pub fn memory_needed(cfg: &PhotonConfig) -> u64 {
+    let per_path = if cfg.max_depth > 0 {
+        (cfg.max_depth as u64).min(4)
+    } else {
+        4
+    };
+    cfg.photons
+        .saturating_mul(per_path)
+        .saturating_mul(BYTES_PER_PHOTON)
+}
+
+/// The photon mapper with its maps: estimates camera samples.
+pub struct PhotonMapper<'a> {
+    pub cfg: &'a PhotonConfig,
+    pub maps: PhotonMaps,
+}
+
+impl PhotonMapper<'_> {
+    /// The radiance along a camera ray.
+    pub fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        self.trace(scene, cray.ray, cray.t_max, Vec3::ONE, 0, true, sampler)
+    }
+
+    /// Follow `ray` through delta bounces to non-delta vertices and add their estimates.
+    /// `depth`: edges before `ray`; `camera`: a camera path (estimates everything) rather
+    /// than a final gathering ray (reads the global map only).
+    #[allow(clippy::too_many_arguments)]
+    fn trace(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        mut t_max: f32,
+        mut beta: Vec3,
+        mut depth: u32,
+        camera: bool,
+        sampler: &mut Sampler,
+    ) -> Vec3 {
+        let cfg = self.cfg;
+        let m = &RgbMode;
+        let mut l = Vec3::ZERO;
+        // Emission is seen by camera rays and along delta bounces from them; what gathering
+        // rays find is next-event estimation's and the caustic map's.
+        let see_emission = camera;
+        loop {
+            depth += 1;
+            let Some(si) = scene.intersect(&ray, t_max) else {
+                if see_emission {
+                    for &i in &scene.infinite_lights {
+                        l += beta * scene.lights[i as usize].environment(ray.d, m);
+                    }
+                }
+                break;
+            };
+            if see_emission && let Some(li) = scene.shape_light(&si) {
+                l += beta * scene.lights[li as usize].le(scene, &si, m);
+            }
+            let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
+                ray = si.spawn_ray(ray.d);
+                t_max = f32::INFINITY;
+                depth -= 1;
+                continue;
+            };
+            let wo = frame.to_local(si.wo);
+            if bsdf.has_smooth() {
+                l += beta * self.at_vertex(scene, &si, &bsdf, &frame, wo, depth, camera, sampler);
+            }
+            if !cfg.allows(depth + 1) {
+                break;
+            }
+            let u1 = sampler.next_1d();
+            let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance) else {
+                break;
+            };
+            if !bs.delta {
+                break;
+            }
+            beta *= bs.weight;
+            if beta.is_black() || !beta.is_finite() {
+                break;
+            }
+            ray = si.spawn_ray(frame.to_world(bs.wi));
+            t_max = f32::INFINITY;
+        }
+        l
+    }
+
+    /// The estimates at a non-delta vertex `depth` edges from the camera.
+    #[allow(clippy::too_many_arguments)]
+    fn at_vertex(
+        &self,
+        scene: &Scene,
+        si: &SurfaceInteraction,
+        bsdf: &Bsdf,
+        frame: &Frame,
+        wo: Vec3,
+        depth: u32,
+        camera: bool,
+        sampler: &mut Sampler,
+    ) -> Vec3 {
+        let cfg = self.cfg;
+        // Photons of at most `budget` edges fit in the path.
+        let budget = (cfg.max_depth >= 0).then(|| (cfg.max_depth as u32).saturating_sub(depth));
+        let inv_n = 1.0 / self.maps.emitted as f32;
+        let estimate = |map: &Option<PhotonMap>, lookup| {
+            map.as_ref().map_or(Vec3::ZERO, |m| {
+                m.estimate(lookup, cfg.kernel, si.p, bsdf, frame, wo, budget) * inv_n
+            })
+        };
+        if !camera {
+            return estimate(&self.maps.global, cfg.global);
+        }
+        let mut l = Vec3::ZERO;
+        if cfg.allows(depth + 1) {
+            for _ in 0..cfg.direct_samples {
+                l += next_event(scene, si, bsdf, frame, wo, sampler) / cfg.direct_samples as f32;
+            }
+        }
+        l += estimate(&self.maps.caustic, cfg.caustic);
+        if cfg.final_gather == 0 {
+            return l + estimate(&self.maps.global, cfg.global);
+        }
+        if !cfg.allows(depth + 2) {
+            return l;
+        }
+        let mut gathered = Vec3::ZERO;
+        for _ in 0..cfg.final_gather {
+            let u1 = sampler.next_1d();
+            let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance) else {
+                continue;
+            };
+            // Delta lobes are the camera path's to follow.
+            if bs.delta {
+                continue;
+            }
+            let ray = si.spawn_ray(frame.to_world(bs.wi));
+            gathered += self.trace(scene, ray, f32::INFINITY, bs.weight, depth, false, sampler);
+        }
+        l + gathered / cfg.final_gather as f32
+    }
+}
+
+/// One light sample at a vertex (light sampling only).
+pub(super) fn next_event(
+    scene: &Scene,
+    si: &SurfaceInteraction,
+    bsdf: &Bsdf,
+    frame: &Frame,
+    wo: Vec3,
+    sampler: &mut Sampler,
+) -> Vec3 {
+    let receiver = Receiver::from(si);
+    let u = sampler.next_1d();
+    let u2 = sampler.next_2d();
+    let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
+        return Vec3::ZERO;
+    };
+    let Some(ls) = light.sample_li(scene, &receiver, u2, &RgbMode) else {
+        return Vec3::ZERO;
+    };
+    if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
+        return Vec3::ZERO;
+    }
+    let f = bsdf.eval(wo, frame.to_local(ls.wi), TransportMode::Radiance);
+    if f.is_black() {
+        return Vec3::ZERO;
+    }
+    let (ray, t_max) = ls.target.ray_from(si, ls.wi);
+    if scene.occluded(&ray, t_max) {
+        return Vec3::ZERO;
+    }
+    f * ls.li / (ls.pdf * pmf)
+}
