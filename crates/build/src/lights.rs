@@ -16,13 +16,15 @@ use crate::BuildError;
 use crate::materials::Declared;
 
 /// Every emitter of the scene: area lights (one per emitting shape, or with `split` one per
-/// triangle of an emitting mesh) first, then the others.
+/// triangle of an emitting mesh) first, then the others; with the light of each shape and
+/// the medium each light emits into (an emitting shape's exterior, a point-like emitter's
+/// declared medium).
 pub(crate) fn lights(
     desc: &SceneDesc,
     shapes: &[ShapeInfo],
     split: bool,
     declared: &Declared,
-) -> Result<(Vec<Light>, Vec<ShapeLights>), BuildError> {
+) -> Result<(Vec<Light>, Vec<ShapeLights>, Vec<Option<u32>>), BuildError> {
     // In spectral mode, the spectrum a light's constant was declared as.
     let spectrum = |v: &scene::ColorValue| declared.value(v).map(Arc::new);
     let mut lights = Vec::new();
@@ -86,7 +88,18 @@ pub(crate) fn lights(
             area,
         }));
     }
+    // Area lights emit into their shape's exterior.
+    let mut media: Vec<Option<u32>> = lights
+        .iter()
+        .map(|l| match l {
+            Light::Area(a) => shapes[a.shape as usize].exterior,
+            _ => None,
+        })
+        .collect();
     for e in &desc.emitters {
+        if !matches!(e.emitter, scene::Emitter::Ambient { .. }) {
+            media.push(e.medium.map(|m| m.0));
+        }
         lights.push(match &e.emitter {
             // Not a light: the Whitted integrator's ambient term (`Scene::ambient`).
             scene::Emitter::Ambient { .. } => continue,
@@ -141,5 +154,5 @@ pub(crate) fn lights(
             }
         });
     }
-    Ok((lights, shape_light))
+    Ok((lights, shape_light, media))
 }

@@ -64,6 +64,10 @@ pub struct Scene {
     pub light_sampler: LightSampler,
     /// Lights seen by escaping rays (environment).
     pub infinite_lights: Vec<u32>,
+    /// The medium each light emits into (indexed like `lights`): an emitting shape's
+    /// exterior, the medium a point-like emitter was declared in. Paths that start on lights
+    /// (photons) begin there.
+    pub light_media: Vec<Option<u32>>,
     /// Bounds of the bounded geometry.
     pub bounds: (Vec3, Vec3),
     pub triangle_count: usize,

@@ -93,9 +93,9 @@ impl Integrator {
                 self.name()
             ));
         }
-        if !scene.media.is_empty() {
+        if !scene.media.is_empty() && !matches!(self, Integrator::Photon(_)) {
             return Some(format!(
-                "{}: participating media are not implemented yet (use volpath)",
+                "{}: participating media are not implemented yet (use photon or volpath)",
                 self.name()
             ));
         }

@@ -34,9 +34,10 @@ use crate::camera::CameraRay;
 use crate::geometry::Ray;
 use crate::lights::Receiver;
 use crate::math::{Frame, PI, Vec3};
+use crate::media::{Flight, Phase};
 use crate::sampling::Sampler;
 use crate::shapes::SurfaceInteraction;
-use crate::spectral::lanes::{Color, RgbMode};
+use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
 /// How photons around a point are found.
@@ -141,19 +142,14 @@ impl PhotonMap {
         self.photons.is_empty()
     }
 
-    /// Σ K·f·β over the photons `lookup` finds around `p` whose path fits in `budget` edges
-    /// (f evaluated without its cosine: the photon's power holds it), not yet divided by the
-    /// number of photons emitted.
-    #[allow(clippy::too_many_arguments)]
-    fn estimate(
+    /// Σ `term`(photon, d², r²) over the photons `lookup` finds around `p` whose path fits
+    /// in `budget` edges, r the radius of the region searched.
+    fn sum(
         &self,
         lookup: Lookup,
-        kernel: Kernel,
         p: Vec3,
-        bsdf: &Bsdf,
-        frame: &Frame,
-        wo: Vec3,
         budget: Option<u32>,
+        term: impl Fn(&StoredPhoton, f32, f32) -> Vec3,
     ) -> Vec3 {
         let q = [p.x, p.y, p.z];
         let (found, r2) = match lookup {
@@ -180,8 +176,8 @@ impl PhotonMap {
                         .nearest_n::<SquaredEuclidean<f32>>(k)
                         .execute()
                 };
-                // The radius of the disk the photons were found in: the k-th distance, or the
-                // cap when fewer were found within it.
+                // The radius of the region the photons were found in: the k-th distance, or
+                // the cap when fewer were found within it.
                 let r2 = if found.len() == k.get() || !max_radius.is_finite() {
                     found.last().map_or(0.0, |n| n.distance)
                 } else {
@@ -199,37 +195,102 @@ impl PhotonMap {
             if budget.is_some_and(|b| ph.edges > b) {
                 continue;
             }
-            let wl = frame.to_local(ph.wi);
-            if wl.z == 0.0 {
-                continue;
-            }
-            let f = bsdf.eval(wo, wl, TransportMode::Radiance) / wl.z.abs();
-            sum += f * ph.beta * kernel_weight(kernel, n.distance, r2);
+            sum += term(ph, n.distance, r2);
         }
         sum
+    }
+
+    /// Σ K·f·β over the photons around a surface point (f without its cosine: the photon's
+    /// power holds it), not yet divided by the number of photons emitted.
+    #[allow(clippy::too_many_arguments)]
+    fn surface(
+        &self,
+        lookup: Lookup,
+        kernel: Kernel,
+        p: Vec3,
+        bsdf: &Bsdf,
+        frame: &Frame,
+        wo: Vec3,
+        budget: Option<u32>,
+    ) -> Vec3 {
+        self.sum(lookup, p, budget, |ph, d2, r2| {
+            let wl = frame.to_local(ph.wi);
+            if wl.z == 0.0 {
+                return Vec3::ZERO;
+            }
+            let f = bsdf.eval(wo, wl, TransportMode::Radiance) / wl.z.abs();
+            f * ph.beta * kernel_weight(kernel, d2, r2)
+        })
+    }
+
+    /// Σ p(wo, wᵢ)·β / (4/3·π·r³) over the photons scattered around a point in a medium
+    /// with phase function `phase`: σs times the in-scattered radiance, not yet divided by
+    /// the number of photons emitted.
+    fn volume(
+        &self,
+        lookup: Lookup,
+        p: Vec3,
+        phase: &Phase,
+        wo: Vec3,
+        budget: Option<u32>,
+    ) -> Vec3 {
+        self.sum(lookup, p, budget, |ph, _, r2| {
+            let v = 4.0 / 3.0 * PI * r2 * r2.sqrt();
+            ph.beta * (phase.eval(wo, ph.wi) / v)
+        })
+    }
+}
+
+/// Photons gathered for one map, in emission order.
+#[derive(Default)]
+struct MapData {
+    points: Vec<[f32; 3]>,
+    photons: Vec<StoredPhoton>,
+}
+
+impl MapData {
+    fn push(&mut self, hit: &PhotonHit) {
+        self.points.push([hit.p.x, hit.p.y, hit.p.z]);
+        self.photons.push(StoredPhoton {
+            wi: hit.wi,
+            beta: hit.beta,
+            edges: hit.edges,
+        });
+    }
+
+    fn append(&mut self, mut other: MapData) {
+        self.points.append(&mut other.points);
+        self.photons.append(&mut other.photons);
+    }
+
+    fn build(self) -> Option<PhotonMap> {
+        PhotonMap::new(self.points, self.photons)
     }
 }
 
 /// The photon maps of a scene.
 pub struct PhotonMaps {
-    /// Every photon (final gathering) or those neither direct nor caustic (read directly).
+    /// Surfaces: every photon (final gathering, and in scenes with media), or those neither
+    /// direct nor caustic (read directly).
     pub global: Option<PhotonMap>,
     pub caustic: Option<PhotonMap>,
+    /// Scattering events in media.
+    pub volume: Option<PhotonMap>,
     /// Photon paths emitted.
     pub emitted: u64,
+    /// The scene has media: every estimate reads the photons, direct light included (no
+    /// next-event estimation, whose shadow rays would need the media's transmittance; the
+    /// extended-Nori write-up's volumetric photon mapping).
+    pub with_media: bool,
 }
 
 impl PhotonMaps {
     /// Trace `cfg.photons` photons on the current rayon pool and build the maps.
     pub fn build(scene: &Scene, cfg: &PhotonConfig, seed: u64) -> PhotonMaps {
         let lights = PhotonLights::new(scene);
-        let gather = cfg.final_gather > 0;
-        type Acc = (
-            Vec<[f32; 3]>,
-            Vec<StoredPhoton>,
-            Vec<[f32; 3]>,
-            Vec<StoredPhoton>,
-        );
+        let with_media = !scene.media.is_empty();
+        let gather = cfg.final_gather > 0 || with_media;
+        type Acc = [MapData; 3];
         let chunks = if lights.any() {
             photons::trace_all(
                 scene,
@@ -239,37 +300,34 @@ impl PhotonMaps {
                 0,
                 cfg.photons,
                 Acc::default,
-                |(gp, gs, cp, cs): &mut Acc, hit: &PhotonHit| {
-                    let p = [hit.si.p.x, hit.si.p.y, hit.si.p.z];
-                    let s = StoredPhoton {
-                        wi: hit.wi,
-                        beta: hit.beta,
-                        edges: hit.edges,
-                    };
-                    if hit.caustic {
-                        cp.push(p);
-                        cs.push(s);
+                |[global, caustic, volume]: &mut Acc, hit: &PhotonHit| {
+                    if hit.si.is_none() {
+                        volume.push(hit);
+                        return;
+                    }
+                    if hit.caustic && !with_media {
+                        caustic.push(hit);
                     }
                     if gather || (hit.edges > 1 && !hit.caustic) {
-                        gp.push(p);
-                        gs.push(s);
+                        global.push(hit);
                     }
                 },
             )
         } else {
             Vec::new()
         };
-        let (mut gp, mut gs, mut cp, mut cs) = Acc::default();
-        for (a, b, c, d) in chunks {
-            gp.extend(a);
-            gs.extend(b);
-            cp.extend(c);
-            cs.extend(d);
+        let [mut global, mut caustic, mut volume] = Acc::default();
+        for [g, c, v] in chunks {
+            global.append(g);
+            caustic.append(c);
+            volume.append(v);
         }
         PhotonMaps {
-            global: PhotonMap::new(gp, gs),
-            caustic: PhotonMap::new(cp, cs),
+            global: global.build(),
+            caustic: caustic.build(),
+            volume: volume.build(),
             emitted: cfg.photons.max(1),
+            with_media,
         }
     }
 }
@@ -296,7 +354,125 @@ pub struct PhotonMapper<'a> {
 impl PhotonMapper<'_> {
     /// The radiance along a camera ray.
     pub fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        if self.maps.with_media {
+            return self.trace_with_media(scene, cray, sampler);
+        }
         self.trace(scene, cray.ray, cray.t_max, Vec3::ONE, 0, true, sampler)
+    }
+
+    /// In a scene with media: the camera path follows delta bounces and free flights (a
+    /// hero channel per path with spectral MIS, as `volpath`) to its first scattering
+    /// event, and every estimate there comes from the photons: the volume map's at a
+    /// collision in a medium (divided by σs, which the collision's weight holds), the
+    /// surface map's at a surface with a non-delta lobe.
+    fn trace_with_media(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        let cfg = self.cfg;
+        let m = &RgbMode;
+        let len = cray.ray.d.length();
+        let mut ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
+        let mut t_far = cray.t_max * len;
+        let mut medium = scene.camera_medium;
+        let hero = m.hero(sampler.next_1d());
+        let mut beta = Vec3::ONE;
+        let mut ratio = Vec3::ONE;
+        let power = |beta: Vec3, ratio: Vec3| beta * m.hero_weight(ratio);
+        let inv_n = 1.0 / self.maps.emitted as f32;
+        let mut l = Vec3::ZERO;
+        let mut depth = 0u32;
+        // Bounded: null crossings do not count as depth.
+        for _ in 0..(1 << 16) {
+            let b = power(beta, ratio);
+            if b.is_black() || !b.is_finite() {
+                break;
+            }
+            let budget = |depth: u32| {
+                (cfg.max_depth >= 0).then(|| (cfg.max_depth as u32).saturating_sub(depth))
+            };
+            let closest = scene.closest(&ray, t_far);
+            if let Some(mi) = medium {
+                let med = &scene.media[mi as usize];
+                let d_surface = closest.t(&ray, t_far);
+                match med.sample_in(&ray, d_surface, hero, sampler, m) {
+                    Flight::Scatter {
+                        d,
+                        weight,
+                        ratio: r,
+                        ..
+                    } => {
+                        depth += 1;
+                        beta *= weight;
+                        ratio *= r;
+                        let p = ray.at(d);
+                        if let Some(map) = &self.maps.volume
+                            && cfg.allows(depth + 1)
+                        {
+                            let sigma_s = med.sigma_s(p);
+                            let inv_s = Vec3::select(
+                                sigma_s.cmpgt(Vec3::ZERO),
+                                Vec3::ONE / sigma_s,
+                                Vec3::ZERO,
+                            );
+                            let est = map.volume(cfg.global, p, &med.phase, -ray.d, budget(depth));
+                            l += power(beta, ratio) * inv_s * est * inv_n;
+                        }
+                        break;
+                    }
+                    Flight::Pass { weight, ratio: r } => {
+                        beta *= weight;
+                        ratio *= r;
+                    }
+                }
+            }
+            let Some(si) = closest.surface(scene, &ray, t_far) else {
+                for &i in &scene.infinite_lights {
+                    l += power(beta, ratio) * scene.lights[i as usize].environment(ray.d, m);
+                }
+                break;
+            };
+            depth += 1;
+            if let Some(li) = scene.shape_light(&si) {
+                l += power(beta, ratio) * scene.lights[li as usize].le(scene, &si, m);
+            }
+            let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
+                medium = scene.medium_after(&si, ray.d, medium);
+                ray = si.spawn_ray(ray.d);
+                t_far = f32::INFINITY;
+                depth -= 1;
+                continue;
+            };
+            let wo = frame.to_local(si.wo);
+            if bsdf.has_smooth()
+                && let Some(map) = &self.maps.global
+                && cfg.allows(depth + 1)
+            {
+                let est = map.surface(
+                    cfg.global,
+                    cfg.kernel,
+                    si.p,
+                    &bsdf,
+                    &frame,
+                    wo,
+                    budget(depth),
+                );
+                l += power(beta, ratio) * est * inv_n;
+            }
+            if !cfg.allows(depth + 1) {
+                break;
+            }
+            let u1 = sampler.next_1d();
+            let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance) else {
+                break;
+            };
+            if !bs.delta {
+                break;
+            }
+            beta *= bs.weight;
+            let wi = frame.to_world(bs.wi);
+            medium = scene.medium_after(&si, wi, medium);
+            ray = si.spawn_ray(wi);
+            t_far = f32::INFINITY;
+        }
+        l
     }
 
     /// Follow `ray` through delta bounces to non-delta vertices and add their estimates.
@@ -381,7 +557,7 @@ impl PhotonMapper<'_> {
         let inv_n = 1.0 / self.maps.emitted as f32;
         let estimate = |map: &Option<PhotonMap>, lookup| {
             map.as_ref().map_or(Vec3::ZERO, |m| {
-                m.estimate(lookup, cfg.kernel, si.p, bsdf, frame, wo, budget) * inv_n
+                m.surface(lookup, cfg.kernel, si.p, bsdf, frame, wo, budget) * inv_n
             })
         };
         if !camera {

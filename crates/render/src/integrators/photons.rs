@@ -10,10 +10,12 @@
 use rayon::prelude::*;
 
 use crate::bsdf::TransportMode;
+use crate::geometry::Ray;
 use crate::math::{UVec2, Vec3};
+use crate::media::Flight;
 use crate::sampling::{Distribution1D, Sampler};
 use crate::shapes::SurfaceInteraction;
-use crate::spectral::lanes::{Color, RgbMode};
+use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
 /// Photons per chunk: the unit of parallel work.
@@ -40,11 +42,16 @@ impl PhotonLights {
     }
 }
 
-/// A photon arriving at a surface with a non-delta lobe.
+/// A photon arriving at a surface with a non-delta lobe, or scattering in a medium.
 pub struct PhotonHit<'a> {
-    pub si: &'a SurfaceInteraction,
+    /// Where: the surface (`None` for a scattering event in a medium).
+    pub si: Option<&'a SurfaceInteraction>,
+    pub p: Vec3,
+    /// The medium of a scattering event.
+    pub medium: Option<u32>,
     /// Its power: Φ of the emitted sample times the path's throughput (divide by the number
-    /// of photons emitted for the flux it stands for).
+    /// of photons emitted for the flux it stands for). In a medium, the power after the
+    /// collision's σs/σt (the event is a scattering one).
     pub beta: Vec3,
     /// Unit direction towards where it came from (world space).
     pub wi: Vec3,
@@ -55,9 +62,11 @@ pub struct PhotonHit<'a> {
     pub caustic: bool,
 }
 
-/// Trace one photon path, reporting each surface hit with a non-delta lobe. `max_depth`
-/// (−1: unbounded) is the longest camera-to-light path the photons serve: a photon stops once
-/// a camera path of one edge could no longer reach it.
+/// Trace one photon path, reporting each surface hit with a non-delta lobe and each
+/// scattering event in a medium. `max_depth` (−1: unbounded) is the longest camera-to-light
+/// path the photons serve: a photon stops once a camera path of one edge could no longer
+/// reach it. In media, free flights are sampled with a hero channel drawn per photon and the
+/// photon's power carries the spectral MIS weight over that choice (as `volpath`'s paths).
 pub fn trace(
     scene: &Scene,
     lights: &PhotonLights,
@@ -75,25 +84,90 @@ pub fn trace(
     let Some(e) = scene.lights[li].sample_le(scene, u_pos, u_dir, m) else {
         return;
     };
+    let mut medium = scene.light_media.get(li).copied().flatten();
+    let hero = if scene.media.is_empty() {
+        0
+    } else {
+        m.hero(sampler.next_1d())
+    };
+    // The path's throughput and channel density ratios (its power is β / mean ratio).
     let mut beta = e.weight / pmf;
+    let mut ratio = Vec3::ONE;
+    let power = |beta: Vec3, ratio: Vec3| beta * m.hero_weight(ratio);
     let mut ray = e.ray;
     let mut edges = 0u32;
     let mut specular_only = true;
-    while !beta.is_black() && beta.is_finite() {
-        edges += 1;
-        let Some(si) = scene.intersect(&ray, f32::INFINITY) else {
+    // Bounded: null crossings do not count as edges.
+    for _ in 0..(1 << 16) {
+        let b = power(beta, ratio);
+        if b.is_black() || !b.is_finite() {
+            break;
+        }
+        let closest = scene.closest(&ray, f32::INFINITY);
+        if let Some(mi) = medium {
+            let med = &scene.media[mi as usize];
+            let d_surface = closest.t(&ray, f32::INFINITY);
+            match med.sample_in(&ray, d_surface, hero, sampler, m) {
+                Flight::Scatter {
+                    d,
+                    weight,
+                    ratio: r,
+                    ..
+                } => {
+                    edges += 1;
+                    let before = power(beta, ratio);
+                    beta *= weight;
+                    ratio *= r;
+                    let p = ray.at(d);
+                    let wo = -ray.d;
+                    deposit(&PhotonHit {
+                        si: None,
+                        p,
+                        medium,
+                        beta: power(beta, ratio),
+                        wi: wo,
+                        edges,
+                        caustic: false,
+                    });
+                    if !allows(edges + 2) {
+                        break;
+                    }
+                    specular_only = false;
+                    let (wi, _) = med.phase.sample(wo, sampler.next_2d());
+                    // pbrt-v4's roulette on the change of power at the event.
+                    let after = power(beta, ratio);
+                    let q = (1.0 - after.max_element() / before.max_element()).max(0.0);
+                    if sampler.next_1d() < q {
+                        break;
+                    }
+                    beta /= 1.0 - q;
+                    ray = Ray::new(p, wi);
+                    continue;
+                }
+                Flight::Pass { weight, ratio: r } => {
+                    beta *= weight;
+                    ratio *= r;
+                }
+            }
+        }
+        let Some(si) = closest.surface(scene, &ray, f32::INFINITY) else {
             break;
         };
+        edges += 1;
         let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
-            // No surface (an index-matched boundary): straight on.
+            // No surface (an index-matched boundary): straight on, into the medium beyond.
+            medium = scene.medium_after(&si, ray.d, medium);
             ray = si.spawn_ray(ray.d);
             edges -= 1;
             continue;
         };
+        let before = power(beta, ratio);
         if bsdf.has_smooth() {
             deposit(&PhotonHit {
-                si: &si,
-                beta,
+                si: Some(&si),
+                p: si.p,
+                medium: None,
+                beta: before,
                 wi: -ray.d,
                 edges,
                 caustic: specular_only && edges > 1,
@@ -108,13 +182,16 @@ pub fn trace(
             break;
         };
         specular_only &= bs.delta;
-        let next = beta * bs.weight;
-        let q = (1.0 - next.max_element() / beta.max_element()).max(0.0);
+        beta *= bs.weight;
+        let after = power(beta, ratio);
+        let q = (1.0 - after.max_element() / before.max_element()).max(0.0);
         if sampler.next_1d() < q {
             break;
         }
-        beta = next / (1.0 - q);
-        ray = si.spawn_ray(frame.to_world(bs.wi));
+        beta /= 1.0 - q;
+        let wi = frame.to_world(bs.wi);
+        medium = scene.medium_after(&si, wi, medium);
+        ray = si.spawn_ray(wi);
     }
 }
 

@@ -348,10 +348,10 @@ fn gather(
     hit: &PhotonHit,
     out: &mut Vec<(u32, Vec3)>,
 ) {
-    if hit.edges < first {
+    if hit.edges < first || hit.si.is_none() {
         return;
     }
-    let p = hit.si.p;
+    let p = hit.p;
     for &v in grid.near(p) {
         let vp = &vps[v as usize];
         let r = radii[vp.slot as usize];

@@ -284,6 +284,17 @@ impl Medium {
         }
     }
 
+    /// The scattering coefficient σs at the world point `p` (RGB).
+    pub fn sigma_s(&self, p: Vec3) -> Vec3 {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => h.sigma_s,
+            MediumKind::Heterogeneous(h) => {
+                let sigma_t = h.sigma_t_along(&Ray::new(p, Vec3::Z), 0.0);
+                (Vec3::splat(sigma_t) - h.sigma_a(p)).max(Vec3::ZERO)
+            }
+        }
+    }
+
     /// σt and σs of a homogeneous medium whose coefficients are the same in every channel.
     pub fn grey_homogeneous(&self) -> Option<(f32, f32)> {
         match &self.kind {
