@@ -125,9 +125,8 @@ impl EnvMap {
     }
 
     /// A direction towards the environment, its radiance and its solid-angle density (what
-    /// `sample_li` and `sample_le` draw). Always inlined: a second caller must not change the
-    /// code of `sample_li`.
-    #[inline(always)]
+    /// `sample_li` and `sample_le` draw). Left to the compiler, which keeps it out of line
+    /// (`sample_li` calls it, as it did before `sample_le` was a second caller).
     fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
         if self.mapping == EnvMapping::Probe {
             // Probe maps are sampled uniformly over the sphere.

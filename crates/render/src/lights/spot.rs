@@ -16,10 +16,7 @@ use std::sync::Arc;
 #[derive(Clone, Debug)]
 pub struct SpotLight {
     pub position: Vec3,
-    /// World directions to the light's frame (its axis is +z).
     pub to_local: Mat3,
-    /// The light's frame to the world: the linear part of its `to_world` (photon emission).
-    pub to_world: Mat3,
     pub intensity: Vec3,
     /// The spectrum it was declared as (spectral mode only; RGB mode renders the RGB value).
     pub spectrum: Option<Arc<DeclaredSpectrum>>,
@@ -46,7 +43,6 @@ impl SpotLight {
             spectrum: None,
             position: to_world.w_axis.truncate().into(),
             to_local: rot.inverse(),
-            to_world: rot,
             intensity,
             cos_cutoff: cutoff.cos(),
             cos_beam: beam.cos(),
@@ -110,9 +106,11 @@ impl LightModel for SpotLight {
 
     /// A direction uniform in the cone of the cutoff angle (Mitsuba's and pbrt-v4's
     /// `sample_ray`/`SampleLe`): weight I·falloff / pdf. The light's frame is carried to the
-    /// world by `to_world`; when that is not a rotation, the density picks up the Jacobian of
-    /// the normalised linear map on directions, dω_local/dω = |det A| / |A ω|³ (A = `to_local`),
-    /// so that the mean weight is still ∫ I·falloff(A ω / |A ω|) dω, what `sample_li` emits.
+    /// world by the inverse of `to_local` (computed here rather than stored: a larger
+    /// `SpotLight` would change the layout `sample_li` reads); when that is not a rotation,
+    /// the density picks up the Jacobian of the normalised linear map on directions,
+    /// dω_local/dω = |det A| / |A ω|³ (A = `to_local`), so that the mean weight is still
+    /// ∫ I·falloff(A ω / |A ω|) dω, what `sample_li` emits.
     fn sample_le<M: ColorMode>(
         &self,
         _scene: &impl LightScene,
@@ -125,7 +123,7 @@ impl LightModel for SpotLight {
         if f <= 0.0 {
             return None;
         }
-        let w = (self.to_world * local).normalize_or_zero();
+        let w = (self.to_local.inverse() * local).normalize_or_zero();
         let aw = (self.to_local * w).length();
         let pdf_dir = warp::uniform_cone_pdf(self.cos_cutoff) * self.to_local.determinant().abs()
             / (aw * aw * aw);
