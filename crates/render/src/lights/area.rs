@@ -216,7 +216,10 @@ impl LightModel for AreaLight {
 
     /// A point uniform by area (spheres too: photons leave every part of them), a direction
     /// cosine-weighted about its normal (a two-sided light picks a side with `u_dir.x`
-    /// first). Ellipsoids: not yet.
+    /// first). Ellipsoids: a point uniform on the object sphere carried to the world, of area
+    /// density 1/(4π·s) with s the map's local area scale there (exact uniform-by-area
+    /// sampling would need rejection, an unbounded number of random numbers); its photons
+    /// carry power in proportion to s.
     fn sample_le<M: ColorMode>(
         &self,
         scene: &impl LightScene,
@@ -234,6 +237,18 @@ impl LightModel for AreaLight {
                 let uv = if textured { sphere_uv(d) } else { Vec2::ZERO };
                 let err = gamma(5) * (p.abs() + center.abs());
                 (p, err, d * flip, uv, 1.0 / self.area)
+            }
+            ShapeGeom::Ellipsoid(e) => {
+                let q = warp::square_to_uniform_sphere(u_pos);
+                let (p, err) = e.point(q);
+                let uv = if textured { sphere_uv(q) } else { Vec2::ZERO };
+                (
+                    p,
+                    err,
+                    e.normal(q) * flip,
+                    uv,
+                    1.0 / (4.0 * PI * e.area_scale(q)),
+                )
             }
             geom => self.sample_point(geom, flip, textured, u_pos)?,
         };

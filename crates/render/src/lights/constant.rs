@@ -2,8 +2,9 @@
 //! the sphere.
 
 use super::LightScene;
-use super::select::{mean, scene_radius};
-use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use super::select::{disk_before_scene, mean, scene_radius};
+use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
+use crate::geometry::Ray;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
@@ -55,6 +56,29 @@ impl LightModel for ConstantLight {
         _: Option<&SurfaceInteraction>,
     ) -> f32 {
         warp::uniform_sphere_pdf()
+    }
+
+    /// A direction towards the environment uniform on the sphere (the ray travels the other
+    /// way), from a point uniform on the disk of the scene's bounding sphere across that
+    /// direction: weight L·4π·π r², the power.
+    fn sample_le<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        let d = -warp::square_to_uniform_sphere(u_dir);
+        let pdf_dir = warp::uniform_sphere_pdf();
+        let (o, pdf_pos) = disk_before_scene(scene, d, u_pos);
+        Some(EmissionSample {
+            ray: Ray::new(o, d),
+            weight: m.illuminant_declared(self.radiance, self.spectrum.as_deref())
+                / (pdf_pos * pdf_dir),
+            pdf_pos,
+            pdf_dir,
+            n: Vec3::ZERO,
+        })
     }
 
     /// The power through a disk of the scene's bounding radius r: 4π·π r²·L.

@@ -2,8 +2,9 @@
 //! light.
 
 use super::LightScene;
-use super::select::{mean, scene_radius};
-use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use super::select::{disk_before_scene, mean, scene_radius};
+use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
+use crate::geometry::Ray;
 use crate::math::{PI, Vec2, Vec3};
 use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
@@ -40,6 +41,28 @@ impl LightModel for DirectionalLight {
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Infinite,
+        })
+    }
+
+    /// The one direction, from a point uniform on the disk of the scene's bounding sphere
+    /// across it: weight E·π r², the power.
+    fn sample_le<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        u_pos: Vec2,
+        _u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        if self.direction == Vec3::ZERO {
+            return None;
+        }
+        let (o, pdf_pos) = disk_before_scene(scene, self.direction, u_pos);
+        Some(EmissionSample {
+            ray: Ray::new(o, self.direction),
+            weight: m.illuminant_declared(self.irradiance, self.spectrum.as_deref()) / pdf_pos,
+            pdf_pos,
+            pdf_dir: 1.0,
+            n: Vec3::ZERO,
         })
     }
 

@@ -6,9 +6,10 @@
 use base::EnvMapping;
 
 use super::LightScene;
-use super::select::{mean, scene_radius};
-use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use super::select::{disk_before_scene, mean, scene_radius};
+use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
 use crate::film::Image;
+use crate::geometry::Ray;
 use crate::math::{INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
 use crate::sampling::distrib::Distribution2D;
 use crate::sampling::warp;
@@ -123,6 +124,9 @@ impl EnvMap {
         self.lookup(self.dir_to_uv(d_world))
     }
 
+    /// A direction towards the environment, its radiance and its solid-angle density (what
+    /// `sample_li` and `sample_le` draw). Left to the compiler, which keeps it out of line
+    /// (`sample_li` calls it, as it did before `sample_le` was a second caller).
     fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
         if self.mapping == EnvMapping::Probe {
             // Probe maps are sampled uniformly over the sphere.
@@ -188,6 +192,30 @@ impl LightModel for EnvMap {
         _: Option<&SurfaceInteraction>,
     ) -> f32 {
         self.pdf(wi)
+    }
+
+    /// A direction towards the environment drawn as `sample_li` draws it (the ray travels
+    /// the other way), from a point uniform on the disk of the scene's bounding sphere across
+    /// that direction: weight L(ω)·π r² / pdf(ω), of mean ∫L dω·π r².
+    fn sample_le<M: ColorMode>(
+        &self,
+        scene: &impl LightScene,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        let (wi, li, pdf_dir) = self.sample(u_dir)?;
+        if !(pdf_dir > 0.0 && pdf_dir.is_finite()) {
+            return None;
+        }
+        let (o, pdf_pos) = disk_before_scene(scene, -wi, u_pos);
+        Some(EmissionSample {
+            ray: Ray::new(o, -wi),
+            weight: m.illuminant(li) / (pdf_pos * pdf_dir),
+            pdf_pos,
+            pdf_dir,
+            n: Vec3::ZERO,
+        })
     }
 
     /// The power through a disk of the scene's bounding radius r: 4π·π r²·L̄, L̄ the

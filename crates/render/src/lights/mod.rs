@@ -87,7 +87,8 @@ pub struct EmissionSample<C = Vec3> {
     /// samples is the light's emitted power Φ.
     pub weight: C,
     /// Density of the origin per unit area: of the emitting surface, of the disk an
-    /// infinite light's rays start from (its normal is the direction); 1 for a point light.
+    /// infinite light's rays start from (its normal is the direction); 1 for point and spot
+    /// lights.
     pub pdf_pos: f32,
     /// Density of the direction per unit solid angle; 1 for a directional light.
     pub pdf_dir: f32,
@@ -171,16 +172,16 @@ pub(crate) trait LightModel {
     fn power(&self, scene: &impl LightScene) -> f32;
 
     /// A ray leaving the light (photon emission): `u_pos` places its origin, `u_dir` its
-    /// direction. `None` for a degenerate sample.
+    /// direction; colours as `sample_li` of the same light gives them. `None` for a
+    /// degenerate sample. Every kind implements it (no default: a light that could not emit
+    /// photons would silently darken photon-mapped images).
     fn sample_le<M: ColorMode>(
         &self,
-        _scene: &impl LightScene,
-        _u_pos: Vec2,
-        _u_dir: Vec2,
-        _m: &M,
-    ) -> Option<EmissionSample<M::C>> {
-        None
-    }
+        scene: &impl LightScene,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>>;
 
     /// Bounds for the light BVH of a bounded light of power `phi` (`None`: infinite).
     fn bounds(&self, _scene: &impl LightScene, _phi: f32) -> Option<LightBounds> {

@@ -3,8 +3,10 @@
 use super::LightScene;
 use super::bvh::LightBounds;
 use super::select::{mean, omni};
-use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
+use crate::geometry::Ray;
 use crate::math::{PI, Vec2, Vec3};
+use crate::sampling::warp;
 use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
 use std::sync::Arc;
@@ -41,6 +43,25 @@ impl LightModel for PointLight {
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Point(self.position),
+        })
+    }
+
+    /// A direction uniform on the sphere: weight I / (1/4π) = 4π·I, the power.
+    fn sample_le<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        _u_pos: Vec2,
+        u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        let w = warp::square_to_uniform_sphere(u_dir);
+        let pdf_dir = warp::uniform_sphere_pdf();
+        Some(EmissionSample {
+            ray: Ray::new(self.position, w),
+            weight: m.illuminant_declared(self.intensity, self.spectrum.as_deref()) / pdf_dir,
+            pdf_pos: 1.0,
+            pdf_dir,
+            n: Vec3::ZERO,
         })
     }
 

@@ -7,12 +7,14 @@
 //! cos θcutoff)/2) for spots, and for infinite lights the power through a disk of the scene's
 //! bounding radius r: π r²·E (directional), 4π·π r²·L̄ (constant and environment maps, L̄ the
 //! solid-angle mean). Textured emitters use the mean of an 8×8 grid of texture lookups.
+//! That disk is also where infinite lights' photons start ([`disk_before_scene`]).
 
 use base::LightSelection;
 
 use super::LightScene;
-use crate::math::{Vec2, Vec3};
+use crate::math::{Frame, PI, Vec2, Vec3};
 use crate::sampling::distrib::AliasTable;
+use crate::sampling::warp;
 use crate::textures::{ColorRef, TexCoord, TexRef};
 
 use super::bvh::{LightBounds, LightBvh};
@@ -55,6 +57,24 @@ pub(super) fn scene_radius(scene: &impl LightScene) -> f32 {
     let (lo, hi) = scene.bounds();
     let r = 0.5 * (hi - lo).length();
     if r.is_finite() && r > 0.0 { r } else { 1.0 }
+}
+
+/// Where a ray of an infinite light travelling along the unit direction `d` starts (photon
+/// emission, pbrt-v4's `SampleLe`): a point uniform on the disk of the scene's bounding
+/// sphere ([`scene_radius`] r, about the bounds' centre) perpendicular to `d`, placed r before
+/// the centre, so that every ray along `d` through the scene starts on it. The origin and its
+/// density per unit area, 1/(π r²).
+pub(super) fn disk_before_scene(scene: &impl LightScene, d: Vec3, u: Vec2) -> (Vec3, f32) {
+    let r = scene_radius(scene);
+    let (lo, hi) = scene.bounds();
+    let c = 0.5 * (lo + hi);
+    let c = if c.is_finite() { c } else { Vec3::ZERO };
+    let p = warp::square_to_uniform_disk_concentric(u);
+    let f = Frame::from_normal(d);
+    (
+        c + r * (f.to_world(Vec3::new(p.x, p.y, -1.0))),
+        1.0 / (PI * r * r),
+    )
 }
 
 /// A light bounds box with no preferred direction (emission to every side) of power `phi`.

@@ -5,8 +5,10 @@
 use super::LightScene;
 use super::bvh::LightBounds;
 use super::select::{mean, omni};
-use super::{LightModel, LightSample, Receiver, ShadowTarget};
+use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
+use crate::geometry::Ray;
 use crate::math::{Mat3, Mat4, PI, Vec2, Vec3};
+use crate::sampling::warp;
 use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
 use std::sync::Arc;
@@ -54,7 +56,9 @@ impl SpotLight {
         }
     }
 
-    /// The falloff for a local direction of cosine `cos_t` about the axis.
+    /// The falloff for a local direction of cosine `cos_t` about the axis. Always inlined: a
+    /// second caller (`sample_le`) must not change the code of `sample_li`.
+    #[inline(always)]
     fn falloff(&self, cos_t: f32) -> f32 {
         spot_falloff(
             cos_t,
@@ -100,6 +104,41 @@ impl LightModel for SpotLight {
         })
     }
 
+    /// A direction uniform in the cone of the cutoff angle (Mitsuba's and pbrt-v4's
+    /// `sample_ray`/`SampleLe`): weight I·falloff / pdf. The light's frame is carried to the
+    /// world by the inverse of `to_local` (computed here rather than stored: a larger
+    /// `SpotLight` would change the layout `sample_li` reads); when that is not a rotation,
+    /// the density picks up the Jacobian of the normalised linear map on directions,
+    /// dω_local/dω = |det A| / |A ω|³ (A = `to_local`), so that the mean weight is still
+    /// ∫ I·falloff(A ω / |A ω|) dω, what `sample_li` emits.
+    fn sample_le<M: ColorMode>(
+        &self,
+        _scene: &impl LightScene,
+        _u_pos: Vec2,
+        u_dir: Vec2,
+        m: &M,
+    ) -> Option<EmissionSample<M::C>> {
+        let local = warp::square_to_uniform_cone(u_dir, self.cos_cutoff);
+        let f = self.falloff(local.z);
+        if f <= 0.0 {
+            return None;
+        }
+        let w = (self.to_local.inverse() * local).normalize_or_zero();
+        let aw = (self.to_local * w).length();
+        let pdf_dir = warp::uniform_cone_pdf(self.cos_cutoff) * self.to_local.determinant().abs()
+            / (aw * aw * aw);
+        if !(pdf_dir > 0.0 && pdf_dir.is_finite()) || w == Vec3::ZERO {
+            return None;
+        }
+        Some(EmissionSample {
+            ray: Ray::new(self.position, w),
+            weight: m.illuminant_declared(self.intensity, self.spectrum.as_deref()) * (f / pdf_dir),
+            pdf_pos: 1.0,
+            pdf_dir,
+            n: Vec3::ZERO,
+        })
+    }
+
     /// 2π·I·((1 − cos θbeam) + (cos θbeam − cos θcutoff)/2).
     fn power(&self, _scene: &impl LightScene) -> f32 {
         2.0 * PI
@@ -125,7 +164,9 @@ impl LightModel for SpotLight {
     }
 }
 
-/// Spot falloff of Mitsuba 3 for a local direction (cos θ = z).
+/// Spot falloff of Mitsuba 3 for a local direction (cos θ = z). Always inlined, as
+/// [`SpotLight::falloff`].
+#[inline(always)]
 fn spot_falloff(
     cos_t: f32,
     cos_cutoff: f32,
