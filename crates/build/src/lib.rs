@@ -113,7 +113,11 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
 
     let selection = opts.light_selection.unwrap_or(desc.light_selection);
     let split = selection != LightSelection::Uniform;
-    let (lights, shape_lights, light_media) = lights::lights(desc, &shapes, split, &declared)?;
+    let lights::BuiltLights {
+        lights,
+        shape_lights,
+        media: light_media,
+    } = lights::lights(desc, &shapes, split, &declared)?;
     let infinite_lights = (0..lights.len() as u32)
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();

@@ -15,6 +15,15 @@ use scene::SceneDesc;
 use crate::BuildError;
 use crate::materials::Declared;
 
+/// What [`lights`] makes.
+pub(crate) struct BuiltLights {
+    pub lights: Vec<Light>,
+    /// The light(s) of each shape.
+    pub shape_lights: Vec<ShapeLights>,
+    /// The medium each light emits into.
+    pub media: Vec<Option<u32>>,
+}
+
 /// Every emitter of the scene: area lights (one per emitting shape, or with `split` one per
 /// triangle of an emitting mesh) first, then the others; with the light of each shape and
 /// the medium each light emits into (an emitting shape's exterior, a point-like emitter's
@@ -24,7 +33,7 @@ pub(crate) fn lights(
     shapes: &[ShapeInfo],
     split: bool,
     declared: &Declared,
-) -> Result<(Vec<Light>, Vec<ShapeLights>, Vec<Option<u32>>), BuildError> {
+) -> Result<BuiltLights, BuildError> {
     // In spectral mode, the spectrum a light's constant was declared as.
     let spectrum = |v: &scene::ColorValue| declared.value(v).map(Arc::new);
     let mut lights = Vec::new();
@@ -154,5 +163,9 @@ pub(crate) fn lights(
             }
         });
     }
-    Ok((lights, shape_light, media))
+    Ok(BuiltLights {
+        lights,
+        shape_lights: shape_light,
+        media,
+    })
 }
