@@ -200,6 +200,19 @@ impl PhotonMap {
         sum
     }
 
+    /// Σ K·β and Σ (K·β)² over the photons `lookup` finds around `p`: N times the
+    /// irradiance estimate there (of photons of every depth) and what its variance is
+    /// estimated from (tests of the density estimation).
+    pub fn irradiance_sums(&self, lookup: Lookup, kernel: Kernel, p: Vec3) -> (Vec3, Vec3) {
+        let sq = std::cell::Cell::new(Vec3::ZERO);
+        let sum = self.sum(lookup, p, None, |ph, d2, r2| {
+            let c = ph.beta * kernel_weight(kernel, d2, r2);
+            sq.set(sq.get() + c * c);
+            c
+        });
+        (sum, sq.get())
+    }
+
     /// Σ K·f·β over the photons around a surface point (f without its cosine: the photon's
     /// power holds it), not yet divided by the number of photons emitted.
     #[allow(clippy::too_many_arguments)]
