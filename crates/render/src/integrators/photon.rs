@@ -32,7 +32,6 @@ use super::photons::{self, PhotonHit, PhotonLights};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
-use crate::lights::Receiver;
 use crate::math::{Frame, PI, Vec3};
 use crate::media::{Flight, Phase};
 use crate::sampling::Sampler;
@@ -579,7 +578,8 @@ impl PhotonMapper<'_> {
         let mut l = Vec3::ZERO;
         if cfg.allows(depth + 1) {
             for _ in 0..cfg.direct_samples {
-                l += next_event(scene, si, bsdf, frame, wo, sampler) / cfg.direct_samples as f32;
+                l += photons::next_event(scene, si, bsdf, frame, wo, sampler)
+                    / cfg.direct_samples as f32;
             }
         }
         l += estimate(&self.maps.caustic, cfg.caustic);
@@ -604,36 +604,4 @@ impl PhotonMapper<'_> {
         }
         l + gathered / cfg.final_gather as f32
     }
-}
-
-/// One light sample at a vertex (light sampling only).
-pub(super) fn next_event(
-    scene: &Scene,
-    si: &SurfaceInteraction,
-    bsdf: &Bsdf,
-    frame: &Frame,
-    wo: Vec3,
-    sampler: &mut Sampler,
-) -> Vec3 {
-    let receiver = Receiver::from(si);
-    let u = sampler.next_1d();
-    let u2 = sampler.next_2d();
-    let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
-        return Vec3::ZERO;
-    };
-    let Some(ls) = light.sample_li(scene, &receiver, u2, &RgbMode) else {
-        return Vec3::ZERO;
-    };
-    if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
-        return Vec3::ZERO;
-    }
-    let f = bsdf.eval(wo, frame.to_local(ls.wi), TransportMode::Radiance);
-    if f.is_black() {
-        return Vec3::ZERO;
-    }
-    let (ray, t_max) = ls.target.ray_from(si, ls.wi);
-    if scene.occluded(&ray, t_max) {
-        return Vec3::ZERO;
-    }
-    f * ls.li / (ls.pdf * pmf)
 }

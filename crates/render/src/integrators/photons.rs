@@ -9,9 +9,10 @@
 
 use rayon::prelude::*;
 
-use crate::bsdf::TransportMode;
+use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::Ray;
-use crate::math::{UVec2, Vec3};
+use crate::lights::Receiver;
+use crate::math::{Frame, UVec2, Vec3};
 use crate::media::Flight;
 use crate::sampling::{Distribution1D, Sampler};
 use crate::shapes::SurfaceInteraction;
@@ -227,4 +228,37 @@ pub fn trace_all<T: Send>(
             acc
         })
         .collect()
+}
+
+/// One light sample at a camera vertex with a non-delta lobe (light sampling only, as
+/// pbrt-v4's SPPM; the photon maps hold the rest).
+pub fn next_event(
+    scene: &Scene,
+    si: &SurfaceInteraction,
+    bsdf: &Bsdf,
+    frame: &Frame,
+    wo: Vec3,
+    sampler: &mut Sampler,
+) -> Vec3 {
+    let receiver = Receiver::from(si);
+    let u = sampler.next_1d();
+    let u2 = sampler.next_2d();
+    let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
+        return Vec3::ZERO;
+    };
+    let Some(ls) = light.sample_li(scene, &receiver, u2, &RgbMode) else {
+        return Vec3::ZERO;
+    };
+    if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
+        return Vec3::ZERO;
+    }
+    let f = bsdf.eval(wo, frame.to_local(ls.wi), TransportMode::Radiance);
+    if f.is_black() {
+        return Vec3::ZERO;
+    }
+    let (ray, t_max) = ls.target.ray_from(si, ls.wi);
+    if scene.occluded(&ray, t_max) {
+        return Vec3::ZERO;
+    }
+    f * ls.li / (ls.pdf * pmf)
 }

@@ -36,7 +36,6 @@ use rayon::prelude::*;
 use super::photons::{self, PhotonHit, PhotonLights};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::{Film, Filter};
-use crate::lights::Receiver;
 use crate::math::{Frame, PI, UVec2, Vec2, Vec3};
 use crate::render::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
 use crate::sampling::Sampler;
@@ -258,7 +257,7 @@ fn camera_path(
         let wo = frame.to_local(si.wo);
         if bsdf.has_smooth() {
             if nee && cfg.allows(depth + 1) {
-                ld += beta * next_event(scene, &si, &bsdf, &frame, wo, sampler);
+                ld += beta * photons::next_event(scene, &si, &bsdf, &frame, wo, sampler);
             }
             // The shortest photon path that can reach it: 2 edges when next-event estimation
             // has the direct light, else 1.
@@ -303,38 +302,6 @@ fn camera_path(
         specular = true;
     }
     ld
-}
-
-/// One light sample at a visible point (light sampling only, as pbrt-v4's SPPM).
-fn next_event(
-    scene: &Scene,
-    si: &crate::shapes::SurfaceInteraction,
-    bsdf: &Bsdf,
-    frame: &Frame,
-    wo: Vec3,
-    sampler: &mut Sampler,
-) -> Vec3 {
-    let receiver = Receiver::from(si);
-    let u = sampler.next_1d();
-    let u2 = sampler.next_2d();
-    let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
-        return Vec3::ZERO;
-    };
-    let Some(ls) = light.sample_li(scene, &receiver, u2, &RgbMode) else {
-        return Vec3::ZERO;
-    };
-    if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
-        return Vec3::ZERO;
-    }
-    let f = bsdf.eval(wo, frame.to_local(ls.wi), TransportMode::Radiance);
-    if f.is_black() {
-        return Vec3::ZERO;
-    }
-    let (ray, t_max) = ls.target.ray_from(si, ls.wi);
-    if scene.occluded(&ray, t_max) {
-        return Vec3::ZERO;
-    }
-    f * ls.li / (ls.pdf * pmf)
 }
 
 /// Add photon `hit` to every visible point within its slot's radius whose camera path leaves
