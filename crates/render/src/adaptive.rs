@@ -21,8 +21,8 @@ use crate::film::image::Image;
 use crate::film::{Film, FilmTile};
 use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec3};
-use crate::render::{Progress, RenderObserver, RenderOptions, camera_sample};
 use crate::sampling::Sampler;
+use crate::session::{Progress, RenderObserver, RenderOptions, camera_sample};
 use crate::world::Scene;
 
 /// Confidence-interval factor: 95 % two-sided for a normal mean.

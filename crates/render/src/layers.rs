@@ -20,8 +20,8 @@ use rayon::prelude::*;
 use crate::film::{Film, FilmTile};
 use crate::integrators::path::{Contribution, PathConfig, PathRecorder, li_recorded};
 use crate::math::{UVec2, Vec3};
-use crate::render::camera_sample;
 use crate::sampling::Sampler;
+use crate::session::camera_sample;
 use crate::world::Scene;
 
 /// The layers besides beauty; they sum to it.

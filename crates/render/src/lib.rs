@@ -22,6 +22,7 @@ pub mod media;
 pub mod post;
 pub mod render;
 pub mod sampling;
+pub mod session;
 pub mod shapes;
 pub mod spectral;
 pub mod stats;

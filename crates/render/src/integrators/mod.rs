@@ -45,10 +45,10 @@ pub enum Integrator {
         bsdf_samples: u32,
     },
     /// Stochastic progressive photon mapping: not an estimator per camera sample, so
-    /// [`crate::render::render`] runs it as a whole ([`sppm::render`]).
+    /// the render driver (`render.rs`) runs it as a whole ([`sppm::render`]).
     Sppm(sppm::SppmConfig),
     /// Photon mapping: its maps are traced when the render starts, so
-    /// [`crate::render::render`] runs it ([`photon::PhotonMapper`]).
+    /// the render driver (`render.rs`) runs it ([`photon::PhotonMapper`]).
     Photon(photon::PhotonConfig),
 }
 
@@ -76,7 +76,7 @@ impl Integrator {
     }
 
     /// Whether [`Self::li`] estimates the radiance of one camera sample (every integrator
-    /// but the photon-mapping family, which [`crate::render::render`] runs as a whole).
+    /// but the photon-mapping family, which the render driver, `render.rs`, runs as a whole).
     pub fn per_sample(&self) -> bool {
         !matches!(self, Integrator::Sppm(_) | Integrator::Photon(_))
     }

@@ -1,0 +1,99 @@
+//! What a render is asked and what it reports, shared by every driver (the tile loop of
+//! `render.rs` and the whole-render integrators, SPPM): [`RenderOptions`], [`Progress`],
+//! [`RenderObserver`], [`RenderOutcome`], and how a camera sample starts
+//! ([`camera_sample`]). Here rather than in `render.rs` so that integrators that drive a
+//! render themselves do not import the driver that imports them.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use crate::camera::CameraRay;
+use crate::film::Film;
+use crate::math::{UVec2, Vec2};
+use crate::sampling::Sampler;
+use crate::world::Scene;
+
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// Samples per pixel to reach (upper bound when a time budget is set).
+    pub spp: u32,
+    /// Stop after the pass during which this much time has elapsed (passes are planned to fit).
+    pub time_budget: Option<Duration>,
+    pub tile_size: u32,
+    /// Set it (e.g. from a Ctrl-C handler) to stop after the current pass.
+    pub cancel: Arc<AtomicBool>,
+    /// Target duration of one pass.
+    pub pass_duration: Duration,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            spp: 16,
+            time_budget: None,
+            tile_size: 16,
+            cancel: Arc::new(AtomicBool::new(false)),
+            pass_duration: Duration::from_secs(1),
+        }
+    }
+}
+
+/// What the progress callback is told.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Pixel samples finished so far.
+    pub samples_done: u64,
+    /// Pixel samples planned in all (spp × pixels); with a time budget, an estimate.
+    pub samples_total: u64,
+    pub elapsed: Duration,
+    /// Samples per pixel completed in whole passes.
+    pub spp_done: u32,
+}
+
+pub struct RenderOutcome {
+    pub film: Film,
+    pub spp: u32,
+    pub passes: u32,
+    pub elapsed: Duration,
+    pub cancelled: bool,
+}
+
+/// Events reported while rendering.
+pub trait RenderObserver: Sync {
+    /// Called often (after every tile) from worker threads.
+    fn progress(&self, _p: &Progress) {}
+    /// Called after every pass with the film so far (e.g. progressive output).
+    fn pass_done(&self, _film: &Film, _spp: u32) {}
+}
+
+/// An observer that ignores everything.
+pub struct Silent;
+impl RenderObserver for Silent {}
+
+/// Sets `sampler` up for sample `index` of `pixel` and draws its film position (uniform in
+/// the pixel) and camera ray.
+#[inline]
+pub fn camera_sample(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    pixel: UVec2,
+    index: u32,
+) -> (Vec2, CameraRay) {
+    sampler.start_pixel_sample(pixel, index);
+    let p_film = pixel.as_vec2() + sampler.next_2d();
+    let u_lens = sampler.next_2d();
+    let mut cray = scene.camera.generate_ray(p_film, u_lens);
+    if scene.has_motion {
+        // Motion blur: one time per camera sample, uniform over the shutter. Only scenes
+        // with moving shapes draw it, so static ones keep their random number streams.
+        cray.ray.time = shutter_time(sampler);
+    }
+    (p_film, cray)
+}
+
+/// The time of a camera sample (motion blur), out of line: static scenes never call it.
+#[inline(never)]
+fn shutter_time(sampler: &mut Sampler) -> f32 {
+    sampler.next_1d()
+}
