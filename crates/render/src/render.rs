@@ -107,7 +107,7 @@ pub fn render(
         Integrator::Photon(cfg) => {
             let start = Instant::now();
             let maps = PhotonMaps::build(scene, cfg, scene.sampler.seed);
-            let mapper = PhotonMapper { cfg, maps };
+            let mapper = PhotonMapper::new(scene, cfg, maps);
             let mut out = render_samples(scene, &mapper, opts, observer);
             out.elapsed = start.elapsed();
             out

@@ -33,7 +33,8 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
 use crate::math::{Frame, PI, Vec3};
-use crate::media::{Flight, Phase};
+use crate::media::{Flight, MediumKind, Phase};
+use crate::sampling::Equiangular;
 use crate::sampling::Sampler;
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
@@ -361,6 +362,85 @@ pub fn memory_needed(cfg: &PhotonConfig) -> u64 {
 pub struct PhotonMapper<'a> {
     pub cfg: &'a PhotonConfig,
     pub maps: PhotonMaps,
+    /// Where the point and spot lights are (equiangular sampling in media).
+    points: Vec<Vec3>,
+}
+
+impl<'a> PhotonMapper<'a> {
+    pub fn new(scene: &Scene, cfg: &'a PhotonConfig, maps: PhotonMaps) -> PhotonMapper<'a> {
+        PhotonMapper {
+            cfg,
+            maps,
+            points: scene.lights.iter().filter_map(|l| l.position()).collect(),
+        }
+    }
+}
+
+/// The in-scattered light along a segment of a homogeneous medium without emission, towards
+/// point lights: one distance from a mixture of free-flight sampling (σt averaged over the
+/// channels, truncated to the segment) and equiangular sampling towards each point light
+/// (Kulla & Fajardo 2012), so that collisions land where a point light's singular
+/// single scattering is, which free flights alone almost never do (in `media-fog` a
+/// quarter of the light sat in the few pixels around the spot light, found by rare
+/// collisions). Returns the distance and its mixture density.
+fn segment_distance(
+    points: &[Vec3],
+    o: Vec3,
+    d: Vec3,
+    end: f32,
+    sigma_bar: f32,
+    u: f32,
+    v: f32,
+) -> Option<(f32, f32)> {
+    let eqs = || {
+        points
+            .iter()
+            .filter_map(move |&q| Equiangular::new(o, d, end, q))
+    };
+    let n_eq = eqs().count();
+    let p_ff = if n_eq > 0 { 0.5 } else { 1.0 };
+    // Free flights truncated to [0, end): F(t) = (1 − e^{−σt})/(1 − e^{−σ·end}).
+    let mass = if end.is_finite() {
+        -(-sigma_bar * end).exp_m1()
+    } else {
+        1.0
+    };
+    let t = if u < p_ff {
+        let u = u / p_ff;
+        -(-(u * mass)).ln_1p() / sigma_bar
+    } else {
+        let k = (((u - p_ff) / (1.0 - p_ff) * n_eq as f32) as usize).min(n_eq - 1);
+        eqs().nth(k)?.sample(v)
+    };
+    if !(t >= 0.0 && t < end) {
+        return None;
+    }
+    let pdf = segment_pdf(points, o, d, end, sigma_bar, t);
+    (pdf > 0.0 && pdf.is_finite()).then_some((t, pdf))
+}
+
+/// The density with which [`segment_distance`] picks `t`.
+fn segment_pdf(points: &[Vec3], o: Vec3, d: Vec3, end: f32, sigma_bar: f32, t: f32) -> f32 {
+    if !(t >= 0.0 && t < end) {
+        return 0.0;
+    }
+    let eqs = || {
+        points
+            .iter()
+            .filter_map(move |&q| Equiangular::new(o, d, end, q))
+    };
+    let n_eq = eqs().count();
+    let p_ff = if n_eq > 0 { 0.5 } else { 1.0 };
+    let mass = if end.is_finite() {
+        -(-sigma_bar * end).exp_m1()
+    } else {
+        1.0
+    };
+    let mut pdf = p_ff * sigma_bar * (-sigma_bar * t).exp() / mass;
+    if n_eq > 0 {
+        pdf += (1.0 - p_ff) / n_eq as f32 * eqs().map(|e| e.pdf(t)).sum::<f32>();
+    }
+    pdf
 }
 
 impl PhotonMapper<'_> {
@@ -404,34 +484,57 @@ impl PhotonMapper<'_> {
             if let Some(mi) = medium {
                 let med = &scene.media[mi as usize];
                 let d_surface = closest.t(&ray, t_far);
-                match med.sample_in(&ray, d_surface, hero, sampler, m) {
-                    Flight::Scatter {
-                        d,
-                        weight,
-                        ratio: r,
-                        ..
-                    } => {
-                        depth += 1;
-                        beta *= weight;
-                        ratio *= r;
-                        let p = ray.at(d);
-                        if let Some(map) = &self.maps.volume
-                            && cfg.allows(depth + 1)
-                        {
-                            let sigma_s = med.sigma_s(p);
-                            let inv_s = Vec3::select(
-                                sigma_s.cmpgt(Vec3::ZERO),
-                                Vec3::ONE / sigma_s,
-                                Vec3::ZERO,
-                            );
-                            let est = map.volume(cfg.global, p, &med.phase, -ray.d, budget(depth));
-                            l += power(beta, ratio) * inv_s * est * inv_n;
-                        }
-                        break;
+                if let MediumKind::Homogeneous(h) = &med.kind
+                    && !self.points.is_empty()
+                    && med.emission.is_none()
+                {
+                    // The segment's in-scattering by one distance (see `segment_distance`),
+                    // then on to the surface attenuated by the exact transmittance.
+                    let sigma_bar = h.sigma_t.element_sum() / 3.0;
+                    let (u, v) = (sampler.next_1d(), sampler.next_1d());
+                    if sigma_bar > 0.0
+                        && cfg.allows(depth + 1)
+                        && let Some(map) = &self.maps.volume
+                        && let Some((t, pdf)) =
+                            segment_distance(&self.points, ray.o, ray.d, d_surface, sigma_bar, u, v)
+                    {
+                        let p = ray.at(t);
+                        let tr = (-h.sigma_t * t).exp();
+                        let est = map.volume(cfg.global, p, &med.phase, -ray.d, budget(depth + 1));
+                        l += power(beta, ratio) * tr * est * (inv_n / pdf);
                     }
-                    Flight::Pass { weight, ratio: r } => {
-                        beta *= weight;
-                        ratio *= r;
+                    beta *= (-h.sigma_t * d_surface).exp();
+                } else {
+                    match med.sample_in(&ray, d_surface, hero, sampler, m) {
+                        Flight::Scatter {
+                            d,
+                            weight,
+                            ratio: r,
+                            ..
+                        } => {
+                            depth += 1;
+                            beta *= weight;
+                            ratio *= r;
+                            let p = ray.at(d);
+                            if let Some(map) = &self.maps.volume
+                                && cfg.allows(depth + 1)
+                            {
+                                let sigma_s = med.sigma_s(p);
+                                let inv_s = Vec3::select(
+                                    sigma_s.cmpgt(Vec3::ZERO),
+                                    Vec3::ONE / sigma_s,
+                                    Vec3::ZERO,
+                                );
+                                let est =
+                                    map.volume(cfg.global, p, &med.phase, -ray.d, budget(depth));
+                                l += power(beta, ratio) * inv_s * est * inv_n;
+                            }
+                            break;
+                        }
+                        Flight::Pass { weight, ratio: r } => {
+                            beta *= weight;
+                            ratio *= r;
+                        }
                     }
                 }
             }
@@ -603,5 +706,72 @@ impl PhotonMapper<'_> {
             gathered += self.trace(scene, ray, f32::INFINITY, bs.weight, depth, false, sampler);
         }
         l + gathered / cfg.final_gather as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec2;
+    use crate::stats::{Chi2Config, chi2_test_2d, sidak};
+
+    /// `segment_distance` draws distances by the density `segment_pdf` says: the density
+    /// integrates to 1 over a finite segment, and a χ² test (t mapped to s = 1 − e^{−t/2} on
+    /// [0, 1), a uniform second coordinate; 32 × 32 cells, 10⁶ samples) does not reject it,
+    /// α = 0.01 Šidák-corrected over the 3 cases: two point lights near the ray, one very
+    /// near on a short segment, one on an infinite segment.
+    #[test]
+    fn segment_distances_follow_their_density() {
+        let o = Vec3::ZERO;
+        let d = Vec3::X;
+        let sigma = 0.35;
+        let cases: [(Vec<Vec3>, f32); 3] = [
+            (
+                vec![Vec3::new(2.0, 0.1, 0.0), Vec3::new(4.0, -0.5, 0.3)],
+                6.0,
+            ),
+            (vec![Vec3::new(1.0, 0.05, 0.0)], 3.0),
+            (vec![Vec3::new(1.0, 0.2, 0.0)], f32::INFINITY),
+        ];
+        let level = sidak(0.01, cases.len());
+        for (points, end) in cases {
+            if end.is_finite() {
+                let n = 200_000;
+                let h = end / n as f32;
+                let total: f64 = (0..n)
+                    .map(|k| segment_pdf(&points, o, d, end, sigma, (k as f32 + 0.5) * h) as f64)
+                    .sum::<f64>()
+                    * h as f64;
+                assert!((total - 1.0).abs() < 1e-3, "∫pdf = {total}");
+            }
+            let scale = 2.0f32;
+            let cfg = Chi2Config {
+                res: 32,
+                sample_count: 1_000_000,
+                significance: level,
+                seed: 3,
+                ..Chi2Config::default()
+            };
+            let r = chi2_test_2d(
+                |u2, u1| {
+                    let (t, pdf) = segment_distance(&points, o, d, end, sigma, u2.x, u2.y)?;
+                    assert!((pdf - segment_pdf(&points, o, d, end, sigma, t)).abs() <= 1e-5 * pdf);
+                    Some(Vec2::new(-(-t / scale).exp_m1(), u1))
+                },
+                |p| {
+                    let t = -scale * (-p.x).ln_1p();
+                    let pdf = segment_pdf(&points, o, d, end, sigma, t);
+                    if pdf > 0.0 {
+                        pdf * scale / (1.0 - p.x)
+                    } else {
+                        0.0
+                    }
+                },
+                Vec2::ZERO,
+                Vec2::ONE,
+                &cfg,
+            );
+            assert!(r.passed, "{points:?}, end {end}: {}", r.message);
+        }
     }
 }
