@@ -87,9 +87,15 @@ impl Integrator {
         if self.per_sample() {
             return None;
         }
-        if scene.mode != RenderMode::Rgb {
+        // SPPM draws new wavelengths every iteration; PPM's visible points are traced once
+        // and the photon maps once, so neither would see more than one set of wavelengths.
+        let spectral_ok = matches!(
+            self,
+            Integrator::Sppm(c) if c.kind == sppm::Progressive::Stochastic
+        );
+        if scene.mode != RenderMode::Rgb && !spectral_ok {
             return Some(format!(
-                "{}: spectral mode is not implemented yet (use --mode rgb)",
+                "{}: spectral mode is not implemented yet (use --mode rgb, or sppm)",
                 self.name()
             ));
         }

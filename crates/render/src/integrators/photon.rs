@@ -312,8 +312,9 @@ impl PhotonMaps {
                 seed,
                 0,
                 cfg.photons,
+                || RgbMode,
                 Acc::default,
-                |[global, caustic, volume]: &mut Acc, hit: &PhotonHit| {
+                |[global, caustic, volume]: &mut Acc, hit: &PhotonHit, _: &RgbMode| {
                     if hit.si.is_none() {
                         volume.push(hit);
                         return;
@@ -681,7 +682,7 @@ impl PhotonMapper<'_> {
         let mut l = Vec3::ZERO;
         if cfg.allows(depth + 1) {
             for _ in 0..cfg.direct_samples {
-                l += photons::next_event(scene, si, bsdf, frame, wo, sampler)
+                l += photons::next_event(scene, si, bsdf, frame, wo, sampler, &RgbMode)
                     / cfg.direct_samples as f32;
             }
         }

@@ -16,7 +16,7 @@ use crate::math::{Frame, UVec2, Vec3};
 use crate::media::Flight;
 use crate::sampling::{Distribution1D, Sampler};
 use crate::shapes::SurfaceInteraction;
-use crate::spectral::lanes::{Color, PathMode, RgbMode};
+use crate::spectral::lanes::{Color, ColorMode, PathMode};
 use crate::world::Scene;
 
 /// Photons per chunk: the unit of parallel work.
@@ -43,8 +43,9 @@ impl PhotonLights {
     }
 }
 
-/// A photon arriving at a surface with a non-delta lobe, or scattering in a medium.
-pub struct PhotonHit<'a> {
+/// A photon arriving at a surface with a non-delta lobe, or scattering in a medium, in the
+/// colour type `C` of its mode.
+pub struct PhotonHit<'a, C = Vec3> {
     /// Where: the surface (`None` for a scattering event in a medium).
     pub si: Option<&'a SurfaceInteraction>,
     pub p: Vec3,
@@ -53,7 +54,7 @@ pub struct PhotonHit<'a> {
     /// Its power: Φ of the emitted sample times the path's throughput (divide by the number
     /// of photons emitted for the flux it stands for). In a medium, the power after the
     /// collision's σs/σt (the event is a scattering one).
-    pub beta: Vec3,
+    pub beta: C,
     /// Unit direction towards where it came from (world space).
     pub wi: Vec3,
     /// Edges from the light to this hit (1: direct light).
@@ -68,15 +69,15 @@ pub struct PhotonHit<'a> {
 /// path the photons serve: a photon stops once a camera path of one edge could no longer
 /// reach it. In media, free flights are sampled with a hero channel drawn per photon and the
 /// photon's power carries the spectral MIS weight over that choice (as `volpath`'s paths).
-pub fn trace(
+pub fn trace<M: PathMode>(
     scene: &Scene,
     lights: &PhotonLights,
     max_depth: i32,
     sampler: &mut Sampler,
-    mut deposit: impl FnMut(&PhotonHit),
+    m: &M,
+    mut deposit: impl FnMut(&PhotonHit<M::C>),
 ) {
     let allows = |edges: u32| max_depth < 0 || edges <= max_depth as u32;
-    let m = &RgbMode;
     let (li, pmf, _) = lights.dist.sample_discrete(sampler.next_1d());
     let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
     if pmf.is_nan() || pmf <= 0.0 {
@@ -93,15 +94,15 @@ pub fn trace(
     };
     // The path's throughput and channel density ratios (its power is β / mean ratio).
     let mut beta = e.weight / pmf;
-    let mut ratio = Vec3::ONE;
-    let power = |beta: Vec3, ratio: Vec3| beta * m.hero_weight(ratio);
+    let mut ratio = M::C::ONE;
+    let power = |beta: M::C, ratio: M::C| beta * m.hero_weight(ratio);
     let mut ray = e.ray;
     let mut edges = 0u32;
     let mut specular_only = true;
     // Bounded: null crossings do not count as edges.
     for _ in 0..(1 << 16) {
-        let b = power(beta, ratio);
-        if b.is_black() || !b.is_finite() {
+        let b = m.live_max(power(beta, ratio));
+        if b <= 0.0 || !b.is_finite() {
             break;
         }
         let closest = scene.closest(&ray, f32::INFINITY);
@@ -116,7 +117,7 @@ pub fn trace(
                     ..
                 } => {
                     edges += 1;
-                    let before = power(beta, ratio);
+                    let before = m.live_max(power(beta, ratio));
                     beta *= weight;
                     ratio *= r;
                     let p = ray.at(d);
@@ -136,8 +137,8 @@ pub fn trace(
                     specular_only = false;
                     let (wi, _) = med.phase.sample(wo, sampler.next_2d());
                     // pbrt-v4's roulette on the change of power at the event.
-                    let after = power(beta, ratio);
-                    let q = (1.0 - after.max_element() / before.max_element()).max(0.0);
+                    let after = m.live_max(power(beta, ratio));
+                    let q = (1.0 - after / before).max(0.0);
                     if sampler.next_1d() < q {
                         break;
                     }
@@ -162,13 +163,14 @@ pub fn trace(
             edges -= 1;
             continue;
         };
-        let before = power(beta, ratio);
+        let here = power(beta, ratio);
+        let before = m.live_max(here);
         if bsdf.has_smooth() {
             deposit(&PhotonHit {
                 si: Some(&si),
                 p: si.p,
                 medium: None,
-                beta: before,
+                beta: here,
                 wi: -ray.d,
                 edges,
                 caustic: specular_only && edges > 1,
@@ -184,8 +186,8 @@ pub fn trace(
         };
         specular_only &= bs.delta;
         beta *= bs.weight;
-        let after = power(beta, ratio);
-        let q = (1.0 - after.max_element() / before.max_element()).max(0.0);
+        let after = m.live_max(power(beta, ratio));
+        let q = (1.0 - after / before).max(0.0);
         if sampler.next_1d() < q {
             break;
         }
@@ -196,18 +198,21 @@ pub fn trace(
     }
 }
 
-/// Trace photons `0..count` of pass `pass` in parallel chunks: `start` makes each chunk's
-/// accumulator, `deposit` adds a hit to it; the accumulators come back in chunk order.
+/// Trace photons `0..count` of pass `pass` in parallel chunks, each photon in a fresh colour
+/// mode from `mode` (its wavelengths may be terminated on the way): `start` makes each
+/// chunk's accumulator, `deposit` adds a hit to it (with the photon's mode as it is then);
+/// the accumulators come back in chunk order.
 #[allow(clippy::too_many_arguments)]
-pub fn trace_all<T: Send>(
+pub fn trace_all<T: Send, M: PathMode>(
     scene: &Scene,
     lights: &PhotonLights,
     max_depth: i32,
     seed: u64,
     pass: u32,
     count: u64,
+    mode: impl Fn() -> M + Sync,
     start: impl Fn() -> T + Sync,
-    deposit: impl Fn(&mut T, &PhotonHit) + Sync,
+    deposit: impl Fn(&mut T, &PhotonHit<M::C>, &M) + Sync,
 ) -> Vec<T> {
     let template = Sampler::new(
         base::SamplerKind::Independent,
@@ -221,8 +226,9 @@ pub fn trace_all<T: Send>(
             let mut acc = start();
             for j in c * CHUNK..((c + 1) * CHUNK).min(count) {
                 sampler.start_pixel_sample(UVec2::new(j as u32, (j >> 32) as u32), pass);
-                trace(scene, lights, max_depth, &mut sampler, |hit| {
-                    deposit(&mut acc, hit)
+                let m = mode();
+                trace(scene, lights, max_depth, &mut sampler, &m, |hit| {
+                    deposit(&mut acc, hit, &m)
                 });
             }
             acc
@@ -232,33 +238,34 @@ pub fn trace_all<T: Send>(
 
 /// One light sample at a camera vertex with a non-delta lobe (light sampling only, as
 /// pbrt-v4's SPPM; the photon maps hold the rest).
-pub fn next_event(
+pub fn next_event<M: ColorMode>(
     scene: &Scene,
     si: &SurfaceInteraction,
-    bsdf: &Bsdf,
+    bsdf: &Bsdf<M::C>,
     frame: &Frame,
     wo: Vec3,
     sampler: &mut Sampler,
-) -> Vec3 {
+    m: &M,
+) -> M::C {
     let receiver = Receiver::from(si);
     let u = sampler.next_1d();
     let u2 = sampler.next_2d();
     let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
-        return Vec3::ZERO;
+        return M::C::ZERO;
     };
-    let Some(ls) = light.sample_li(scene, &receiver, u2, &RgbMode) else {
-        return Vec3::ZERO;
+    let Some(ls) = light.sample_li(scene, &receiver, u2, m) else {
+        return M::C::ZERO;
     };
     if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
-        return Vec3::ZERO;
+        return M::C::ZERO;
     }
     let f = bsdf.eval(wo, frame.to_local(ls.wi), TransportMode::Radiance);
     if f.is_black() {
-        return Vec3::ZERO;
+        return M::C::ZERO;
     }
     let (ray, t_max) = ls.target.ray_from(si, ls.wi);
     if scene.occluded(&ray, t_max) {
-        return Vec3::ZERO;
+        return M::C::ZERO;
     }
     f * ls.li / (ls.pdf * pmf)
 }

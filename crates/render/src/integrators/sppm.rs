@@ -27,7 +27,9 @@
 //! contributions are added to the pixels in chunk order: the image is a function of the seed
 //! and never of the thread count.
 //!
-//! Not yet: media (volumetric photon mapping), spectral mode.
+//! Spectral mode (SPPM): all the paths of an iteration carry one set of wavelengths, which
+//! follows a rank-1 lattice over the iterations ([`render`]). Not yet: media, and PPM in
+//! spectral mode (its visible points are traced once, so they would see one set only).
 
 use std::time::Instant;
 
@@ -38,8 +40,9 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::{Film, Filter};
 use crate::math::{Frame, PI, UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
+use crate::sampling::sampler::{hash2, u64_to_unit};
 use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
-use crate::spectral::lanes::{Color, RgbMode};
+use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
 use crate::world::Scene;
 use base::FilterDesc;
 use std::sync::atomic::Ordering;
@@ -95,7 +98,7 @@ impl SppmConfig {
 }
 
 /// A camera path's first vertex with a non-delta BSDF lobe.
-struct VisiblePoint {
+struct VisiblePoint<C: Color> {
     /// The measurement it adds to: the pixel (row-major within the crop window) in SPPM,
     /// the pixel's eye sample in PPM.
     slot: u32,
@@ -105,10 +108,15 @@ struct VisiblePoint {
     /// Towards the camera, in the BSDF's frame.
     wo: Vec3,
     frame: Frame,
-    bsdf: Bsdf,
+    bsdf: Bsdf<C>,
     /// Camera path throughput up to here.
-    beta: Vec3,
+    beta: C,
+    /// Whether the camera path's secondary wavelengths were terminated (spectral mode).
+    terminated: bool,
 }
+
+/// One row's camera pass: each slot's `ld` (linear sRGB) and the row's visible points.
+type CameraRow<C> = (Vec<Vec3>, Vec<VisiblePoint<C>>);
 
 /// A measurement's statistics across iterations.
 #[derive(Clone, Copy)]
@@ -141,7 +149,10 @@ fn hash_cell(c: [i64; 3], slots: usize) -> usize {
 }
 
 impl Grid {
-    fn build(vps: &[VisiblePoint], radius: impl Fn(&VisiblePoint) -> f32) -> Option<Grid> {
+    fn build<C: Color>(
+        vps: &[VisiblePoint<C>],
+        radius: impl Fn(&VisiblePoint<C>) -> f32,
+    ) -> Option<Grid> {
         let max_r = vps.iter().map(&radius).fold(0.0f32, f32::max);
         if vps.is_empty() || !(max_r > 0.0 && max_r.is_finite()) {
             return None;
@@ -217,7 +228,7 @@ impl Grid {
 
 /// Camera pass for one pixel: the estimate `ld` and the visible points.
 #[allow(clippy::too_many_arguments)]
-fn camera_path(
+fn camera_path<M: PathMode>(
     scene: &Scene,
     cfg: &SppmConfig,
     sampler: &mut Sampler,
@@ -225,13 +236,13 @@ fn camera_path(
     sample: u32,
     slot: u32,
     nee: bool,
-    vps: &mut Vec<VisiblePoint>,
+    m: &M,
+    vps: &mut Vec<VisiblePoint<M::C>>,
 ) -> Vec3 {
-    let m = &RgbMode;
     let (_, cray) = camera_sample(scene, sampler, pixel, sample);
     let (mut ray, mut t_max) = (cray.ray, cray.t_max);
-    let mut beta = Vec3::ONE;
-    let mut ld = Vec3::ZERO;
+    let mut beta = M::C::ONE;
+    let mut ld = M::C::ZERO;
     let mut specular = true; // the camera ray counts as a delta bounce
     let mut depth = 0u32; // edges traced so far
     loop {
@@ -257,7 +268,7 @@ fn camera_path(
         let wo = frame.to_local(si.wo);
         if bsdf.has_smooth() {
             if nee && cfg.allows(depth + 1) {
-                ld += beta * photons::next_event(scene, &si, &bsdf, &frame, wo, sampler);
+                ld += beta * photons::next_event(scene, &si, &bsdf, &frame, wo, sampler, m);
             }
             // The shortest photon path that can reach it: 2 edges when next-event estimation
             // has the direct light, else 1.
@@ -271,6 +282,7 @@ fn camera_path(
                     frame,
                     bsdf: bsdf.clone(),
                     beta,
+                    terminated: m.terminated(),
                 });
             }
         }
@@ -288,7 +300,7 @@ fn camera_path(
         }
         beta *= bs.weight;
         if depth >= cfg.rr_depth {
-            let q = beta.max_element().min(0.95);
+            let q = m.live_max(beta).min(0.95);
             if sampler.next_1d() >= q || q.is_nan() {
                 break;
             }
@@ -301,18 +313,23 @@ fn camera_path(
         t_max = f32::INFINITY;
         specular = true;
     }
-    ld
+    m.to_rgb(ld)
 }
 
 /// Add photon `hit` to every visible point within its slot's radius whose camera path leaves
-/// room for it: (visible point, β·f) pairs.
-fn gather(
+/// room for it: (visible point, β_vp·f·β_photon as linear sRGB). Both paths carry the
+/// iteration's wavelengths; `modes` converts with all of them or, when either path has
+/// terminated its secondary wavelengths, the hero's alone.
+#[allow(clippy::too_many_arguments)]
+fn gather<M: PathMode>(
     cfg: &SppmConfig,
     grid: &Grid,
-    vps: &[VisiblePoint],
+    vps: &[VisiblePoint<M::C>],
     radii: &[f32],
     first: u32,
-    hit: &PhotonHit,
+    hit: &PhotonHit<M::C>,
+    photon: &M,
+    modes: &(M, M),
     out: &mut Vec<(u32, Vec3)>,
 ) {
     if hit.edges < first || hit.si.is_none() {
@@ -331,15 +348,39 @@ fn gather(
         }
         // eval is f·|cos θi|; the photon's flux already holds the cosine.
         let f = vp.bsdf.eval(vp.wo, wl, TransportMode::Radiance) / wl.z.abs();
-        if !f.is_black() {
-            out.push((v, hit.beta * f));
+        if f.is_black() {
+            continue;
         }
+        let mode = if vp.terminated || photon.terminated() {
+            &modes.1
+        } else {
+            &modes.0
+        };
+        out.push((v, mode.to_rgb(vp.beta * f * hit.beta)));
     }
 }
 
 /// Render `scene` with SPPM: `opts.spp` iterations (a time budget or cancellation stops
 /// after a whole iteration).
 pub fn render(
+    scene: &Scene,
+    cfg: &SppmConfig,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
+    match scene.mode {
+        base::RenderMode::Rgb => render_in::<RgbMode>(scene, cfg, opts, observer),
+        base::RenderMode::Spectral => {
+            render_in::<SpectralMode<'static>>(scene, cfg, opts, observer)
+        }
+    }
+}
+
+/// [`render`] in the colour mode `M`: every path of an iteration (camera and photon) carries
+/// the same wavelengths, drawn per iteration from the seed (pbrt-v4 draws them per pixel
+/// and per photon; a shared set is what lets a photon's flux be weighed by a visible point's
+/// BSDF at the same wavelengths — the extended-Nori write-up's one map per wavelength set).
+fn render_in<M: PathMode + Send>(
     scene: &Scene,
     cfg: &SppmConfig,
     opts: &RenderOptions,
@@ -381,7 +422,7 @@ pub fn render(
     let target = opts.spp.max(1);
     let mut done = 0u32;
     let mut cancelled = false;
-    let mut vps: Vec<VisiblePoint> = Vec::new();
+    let mut vps: Vec<VisiblePoint<M::C>> = Vec::new();
     while done < target {
         if opts.cancel.load(Ordering::Relaxed) {
             cancelled = true;
@@ -394,9 +435,15 @@ pub fn render(
             break;
         }
         let iteration = done;
+        // The iteration's wavelengths (RGB mode draws nothing): they tint the whole image
+        // alike, so they follow a rank-1 lattice over the iterations (a random start, then
+        // steps of the golden ratio's fraction) rather than independent draws — the colour
+        // of the mean image converges as 1/k instead of 1/√k.
+        let u0 = u64_to_unit(hash2(scene.sampler.seed, 0x5350_504D_4C41_4D42));
+        let u_lambda = (u0 as f64 + iteration as f64 * 0.618_033_988_749_894_9).fract() as f32;
         // 1. Camera pass, one row per task: every iteration (SPPM) or once (PPM).
         if nee || iteration == 0 {
-            let rows: Vec<(Vec<Vec3>, Vec<VisiblePoint>)> = (0..size.y)
+            let rows: Vec<CameraRow<M::C>> = (0..size.y)
                 .into_par_iter()
                 .map(|y| {
                     let mut sampler = camera_template.clone();
@@ -416,6 +463,7 @@ pub fn render(
                                 sample,
                                 slot,
                                 nee,
+                                &M::from_u(u_lambda),
                                 &mut vps,
                             ));
                         }
@@ -446,10 +494,19 @@ pub fn render(
                 scene.sampler.seed,
                 iteration,
                 photons,
-                Vec::new,
-                |out, hit| gather(cfg, &grid, &vps, &radii, first, hit, out),
+                || M::from_u(u_lambda),
+                // Each chunk converts with its own pair of modes (a spectral mode is not Sync).
+                || {
+                    (
+                        Vec::new(),
+                        (M::from_u(u_lambda), M::from_u(u_lambda).terminate()),
+                    )
+                },
+                |(out, modes), hit, photon: &M| {
+                    gather(cfg, &grid, &vps, &radii, first, hit, photon, modes, out)
+                },
             );
-            for list in lists {
+            for (list, _) in lists {
                 for (v, c) in list {
                     phi[v as usize] += c;
                     found[v as usize] += 1;
@@ -460,7 +517,7 @@ pub fn render(
         let mut slot_phi = vec![Vec3::ZERO; slot_count];
         let mut slot_m = vec![0u32; slot_count];
         for (i, vp) in vps.iter().enumerate() {
-            slot_phi[vp.slot as usize] += vp.beta * phi[i];
+            slot_phi[vp.slot as usize] += phi[i];
             slot_m[vp.slot as usize] += found[i];
         }
         for ((p, &dphi), &m) in slots.iter_mut().zip(&slot_phi).zip(&slot_m) {

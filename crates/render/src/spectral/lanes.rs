@@ -356,6 +356,13 @@ impl ColorMode for SpectralMode<'_> {
 /// path's estimate into linear sRGB for the film.
 pub trait PathMode: ColorMode + Sized {
     fn start(sampler: &mut Sampler) -> Self;
+    /// The mode `start` makes when the sampler's next number is `u` (the photon-mapping
+    /// family shares one set of wavelengths across an iteration's paths).
+    fn from_u(u: f32) -> Self;
+    /// Whether the secondary wavelengths are terminated (only the hero still counts).
+    fn terminated(&self) -> bool;
+    /// This mode with the secondary wavelengths terminated.
+    fn terminate(&self) -> Self;
     /// The estimate `c` of this path as linear sRGB.
     fn to_rgb(&self, c: Self::C) -> Vec3;
     /// The largest lane of a throughput that still counts (Russian roulette): terminated
@@ -374,6 +381,18 @@ pub trait PathMode: ColorMode + Sized {
 impl PathMode for RgbMode {
     #[inline(always)]
     fn start(_sampler: &mut Sampler) -> Self {
+        RgbMode
+    }
+    #[inline(always)]
+    fn from_u(_u: f32) -> Self {
+        RgbMode
+    }
+    #[inline(always)]
+    fn terminated(&self) -> bool {
+        false
+    }
+    #[inline(always)]
+    fn terminate(&self) -> Self {
         RgbMode
     }
     #[inline(always)]
@@ -397,10 +416,28 @@ impl PathMode for RgbMode {
 impl PathMode for SpectralMode<'static> {
     #[inline]
     fn start(sampler: &mut Sampler) -> Self {
+        Self::from_u(sampler.next_1d())
+    }
+    #[inline]
+    fn from_u(u: f32) -> Self {
         SpectralMode::new(
-            SampledWavelengths::sample_visible(sampler.next_1d()),
+            SampledWavelengths::sample_visible(u),
             RgbToSpectrumTable::srgb(),
         )
+    }
+    #[inline]
+    fn terminated(&self) -> bool {
+        self.wavelengths.get().secondary_terminated()
+    }
+    fn terminate(&self) -> Self {
+        let mut wl = self.wavelengths.get();
+        wl.terminate_secondary();
+        SpectralMode {
+            wavelengths: Cell::new(wl),
+            table: self.table,
+            d65: self.d65,
+            srgb_bar: self.srgb_bar,
+        }
     }
     #[inline]
     fn to_rgb(&self, c: SampledSpectrum) -> Vec3 {
