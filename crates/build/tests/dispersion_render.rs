@@ -68,8 +68,17 @@ impl<const LO: u32, const HI: u32> ColorMode for Band<LO, HI> {
 
 impl<const LO: u32, const HI: u32> PathMode for Band<LO, HI> {
     fn start(sampler: &mut Sampler) -> Self {
-        let wl = SampledWavelengths::sample_uniform(sampler.next_1d(), LO as f32, HI as f32);
+        Self::from_u(sampler.next_1d())
+    }
+    fn from_u(u: f32) -> Self {
+        let wl = SampledWavelengths::sample_uniform(u, LO as f32, HI as f32);
         Band(SpectralMode::new(wl, RgbToSpectrumTable::srgb()))
+    }
+    fn terminated(&self) -> bool {
+        self.0.terminated()
+    }
+    fn terminate(&self) -> Self {
+        Band(self.0.terminate())
     }
     fn to_rgb(&self, c: SampledSpectrum) -> Vec3 {
         // Mean over the lanes of value/pdf (terminated lanes have pdf 0 and count 0).
