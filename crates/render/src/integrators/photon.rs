@@ -591,67 +591,37 @@ impl PhotonMapper<'_> {
         l
     }
 
-    /// Follow `ray` through delta bounces to non-delta vertices and add their estimates.
-    /// `depth`: edges before `ray`; `camera`: a camera path (estimates everything) rather
-    /// than a final gathering ray (reads the global map only).
+    /// Follow `ray` through delta bounces to non-delta vertices and add their estimates
+    /// ([`photons::walk`]). `depth`: edges before `ray`; `camera`: a camera path (sees
+    /// emission, estimates everything) rather than a final gathering ray (reads the global
+    /// map only; what it would see of emitters is next-event estimation's and the caustic
+    /// map's).
     #[allow(clippy::too_many_arguments)]
     fn trace(
         &self,
         scene: &Scene,
-        mut ray: Ray,
-        mut t_max: f32,
-        mut beta: Vec3,
-        mut depth: u32,
+        ray: Ray,
+        t_max: f32,
+        beta: Vec3,
+        depth: u32,
         camera: bool,
         sampler: &mut Sampler,
     ) -> Vec3 {
-        let cfg = self.cfg;
-        let m = &RgbMode;
-        let mut l = Vec3::ZERO;
-        // Emission is seen by camera rays and along delta bounces from them; what gathering
-        // rays find is next-event estimation's and the caustic map's.
-        let see_emission = camera;
-        loop {
-            depth += 1;
-            let Some(si) = scene.intersect(&ray, t_max) else {
-                if see_emission {
-                    for &i in &scene.infinite_lights {
-                        l += beta * scene.lights[i as usize].environment(ray.d, m);
-                    }
-                }
-                break;
-            };
-            if see_emission && let Some(li) = scene.shape_light(&si) {
-                l += beta * scene.lights[li as usize].le(scene, &si, m);
-            }
-            let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
-                ray = si.spawn_ray(ray.d);
-                t_max = f32::INFINITY;
-                depth -= 1;
-                continue;
-            };
-            let wo = frame.to_local(si.wo);
-            if bsdf.has_smooth() {
-                l += beta * self.at_vertex(scene, &si, &bsdf, &frame, wo, depth, camera, sampler);
-            }
-            if !cfg.allows(depth + 1) {
-                break;
-            }
-            let u1 = sampler.next_1d();
-            let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance) else {
-                break;
-            };
-            if !bs.delta {
-                break;
-            }
-            beta *= bs.weight;
-            if beta.is_black() || !beta.is_finite() {
-                break;
-            }
-            ray = si.spawn_ray(frame.to_world(bs.wi));
-            t_max = f32::INFINITY;
-        }
-        l
+        photons::walk(
+            scene,
+            ray,
+            t_max,
+            beta,
+            depth,
+            camera,
+            self.cfg.max_depth,
+            u32::MAX,
+            &RgbMode,
+            sampler,
+            |v, sampler| {
+                self.at_vertex(scene, v.si, v.bsdf, v.frame, v.wo, v.depth, camera, sampler)
+            },
+        )
     }
 
     /// The estimates at a non-delta vertex `depth` edges from the camera.

@@ -269,3 +269,99 @@ pub fn next_event<M: ColorMode>(
     }
     f * ls.li / (ls.pdf * pmf)
 }
+
+/// What a camera-side walk hands its caller at a vertex with a non-delta lobe.
+pub struct Vertex<'a, C: Color> {
+    pub si: &'a SurfaceInteraction,
+    pub bsdf: &'a Bsdf<C>,
+    pub frame: &'a Frame,
+    /// Towards where the walk came from, in the BSDF's frame.
+    pub wo: Vec3,
+    /// Edges from the walk's start (camera or gathering point) counted from `depth`.
+    pub depth: u32,
+    /// The walk's throughput up to here.
+    pub beta: C,
+}
+
+/// Follow `ray` from the camera side through delta bounces, as the photon-mapping family's
+/// camera passes and final gathering do: emission met along the way counts when
+/// `see_emission`; at every vertex with a non-delta lobe `at_vertex` adds its estimates
+/// (times the throughput); the walk goes on only when the BSDF samples a delta lobe there (a
+/// non-delta sample is what the vertex's estimates stand for), with Russian roulette from
+/// `rr_depth` edges on, and within `max_depth` edges (−1: unbounded). `depth` is the number
+/// of edges before `ray`.
+#[allow(clippy::too_many_arguments)]
+pub fn walk<M: PathMode>(
+    scene: &Scene,
+    mut ray: Ray,
+    mut t_max: f32,
+    mut beta: M::C,
+    mut depth: u32,
+    see_emission: bool,
+    max_depth: i32,
+    rr_depth: u32,
+    m: &M,
+    sampler: &mut Sampler,
+    mut at_vertex: impl FnMut(&Vertex<M::C>, &mut Sampler) -> M::C,
+) -> M::C {
+    let allows = |edges: u32| max_depth < 0 || edges <= max_depth as u32;
+    let mut l = M::C::ZERO;
+    loop {
+        depth += 1;
+        let Some(si) = scene.intersect(&ray, t_max) else {
+            if see_emission {
+                for &i in &scene.infinite_lights {
+                    l += beta * scene.lights[i as usize].environment(ray.d, m);
+                }
+            }
+            break;
+        };
+        if see_emission && let Some(li) = scene.shape_light(&si) {
+            l += beta * scene.lights[li as usize].le(scene, &si, m);
+        }
+        let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
+            // No surface (an index-matched boundary): straight on.
+            ray = si.spawn_ray(ray.d);
+            t_max = f32::INFINITY;
+            depth -= 1;
+            continue;
+        };
+        let wo = frame.to_local(si.wo);
+        if bsdf.has_smooth() {
+            let v = Vertex {
+                si: &si,
+                bsdf: &bsdf,
+                frame: &frame,
+                wo,
+                depth,
+                beta,
+            };
+            l += beta * at_vertex(&v, sampler);
+        }
+        if !allows(depth + 1) {
+            break;
+        }
+        let u1 = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance) else {
+            break;
+        };
+        if !bs.delta {
+            break;
+        }
+        beta *= bs.weight;
+        if depth >= rr_depth {
+            let q = m.live_max(beta).min(0.95);
+            if sampler.next_1d() >= q || q.is_nan() {
+                break;
+            }
+            beta /= q;
+        }
+        let b = m.live_max(beta);
+        if b <= 0.0 || !b.is_finite() {
+            break;
+        }
+        ray = si.spawn_ray(frame.to_world(bs.wi));
+        t_max = f32::INFINITY;
+    }
+    l
+}

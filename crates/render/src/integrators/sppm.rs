@@ -240,79 +240,40 @@ fn camera_path<M: PathMode>(
     vps: &mut Vec<VisiblePoint<M::C>>,
 ) -> Vec3 {
     let (_, cray) = camera_sample(scene, sampler, pixel, sample);
-    let (mut ray, mut t_max) = (cray.ray, cray.t_max);
-    let mut beta = M::C::ONE;
-    let mut ld = M::C::ZERO;
-    let mut specular = true; // the camera ray counts as a delta bounce
-    let mut depth = 0u32; // edges traced so far
-    loop {
-        depth += 1;
-        let Some(si) = scene.intersect(&ray, t_max) else {
-            if specular {
-                for &i in &scene.infinite_lights {
-                    ld += beta * scene.lights[i as usize].environment(ray.d, m);
-                }
-            }
-            break;
-        };
-        if specular && let Some(l) = scene.shape_light(&si) {
-            ld += beta * scene.lights[l as usize].le(scene, &si, m);
-        }
-        let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
-            // No surface here (an index-matched boundary): go on through.
-            ray = si.spawn_ray(ray.d);
-            t_max = f32::INFINITY;
-            depth -= 1;
-            continue;
-        };
-        let wo = frame.to_local(si.wo);
-        if bsdf.has_smooth() {
-            if nee && cfg.allows(depth + 1) {
-                ld += beta * photons::next_event(scene, &si, &bsdf, &frame, wo, sampler, m);
-            }
-            // The shortest photon path that can reach it: 2 edges when next-event estimation
-            // has the direct light, else 1.
-            let first = if nee { 2 } else { 1 };
-            if cfg.allows(depth + first) {
+    // The shortest photon path that can reach a visible point: 2 edges when next-event
+    // estimation has the direct light, else 1.
+    let first = if nee { 2 } else { 1 };
+    let ld = photons::walk(
+        scene,
+        cray.ray,
+        cray.t_max,
+        M::C::ONE,
+        0,
+        true,
+        cfg.max_depth,
+        cfg.rr_depth,
+        m,
+        sampler,
+        |v, sampler| {
+            if cfg.allows(v.depth + first) {
                 vps.push(VisiblePoint {
                     slot,
-                    depth,
-                    p: si.p,
-                    wo,
-                    frame,
-                    bsdf: bsdf.clone(),
-                    beta,
+                    depth: v.depth,
+                    p: v.si.p,
+                    wo: v.wo,
+                    frame: *v.frame,
+                    bsdf: v.bsdf.clone(),
+                    beta: v.beta,
                     terminated: m.terminated(),
                 });
             }
-        }
-        if !cfg.allows(depth + 1) {
-            break;
-        }
-        // Delta lobes carry the path on; a non-delta sample ends it (the visible point
-        // stands for that part).
-        let u1 = sampler.next_1d();
-        let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance) else {
-            break;
-        };
-        if !bs.delta {
-            break;
-        }
-        beta *= bs.weight;
-        if depth >= cfg.rr_depth {
-            let q = m.live_max(beta).min(0.95);
-            if sampler.next_1d() >= q || q.is_nan() {
-                break;
+            if nee && cfg.allows(v.depth + 1) {
+                photons::next_event(scene, v.si, v.bsdf, v.frame, v.wo, sampler, m)
+            } else {
+                M::C::ZERO
             }
-            beta /= q;
-        }
-        if beta.is_black() {
-            break;
-        }
-        ray = si.spawn_ray(frame.to_world(bs.wi));
-        t_max = f32::INFINITY;
-        specular = true;
-    }
+        },
+    );
     m.to_rgb(ld)
 }
 
