@@ -1,5 +1,6 @@
 //! Stochastic progressive photon mapping (`render::integrators::sppm`):
-//! - the image is a function of the seed, not of the thread count (bit for bit);
+//! - the image is a function of the seed, not of the thread count (bit for bit), for SPPM and
+//!   for the photon mapper;
 //! - `max_depth` bounds the whole path as the path tracer's does: with 2 (direct light only)
 //!   and 3 (one indirect bounce) SPPM converges to the path tracer's image of the same depth;
 //! - on Mitsuba's Cornell box it converges to Mitsuba's reference: relMSE falls with the
@@ -85,6 +86,24 @@ fn mean(img: &Image) -> [f64; 3] {
         }
     }
     m
+}
+
+/// The photon mapper too: its maps are built from the photons in emission order and its
+/// camera pass is the tile loop's, so 1 and 2 threads give the same bits.
+#[test]
+fn photon_mapper_same_image_for_one_and_two_threads() {
+    let desc = load(&repo_scene("cornell-box.xml"), &[("res", "24")]);
+    let pm = || {
+        IntegratorDesc::Photon(scene::PhotonDesc {
+            photons: 20_000,
+            final_gather: 2,
+            ..scene::PhotonDesc::default()
+        })
+    };
+    let a = render_with(&desc, pm(), 2, 1);
+    let b = render_with(&desc, pm(), 2, 2);
+    assert!(mean(&a)[0] > 0.0);
+    assert_eq!(a.pixels, b.pixels);
 }
 
 #[test]

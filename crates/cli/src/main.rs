@@ -953,6 +953,9 @@ pub(crate) fn render_scene_with(
         &format!("a {}x{} film", scene.film.width, scene.film.height),
         render::render::memory_needed(&scene, &ropts),
     )?;
+    if let Some((what, bytes)) = render::render::integrator_memory(&scene, &integrator) {
+        memory::check(what, bytes)?;
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(job.threads.unwrap_or(0))
         .build()

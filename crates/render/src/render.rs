@@ -95,6 +95,22 @@ pub fn memory_needed(scene: &Scene, opts: &RenderOptions) -> u64 {
     Film::memory_needed(f.width, f.height, f.crop, &f.filter, opts.tile_size)
 }
 
+/// Peak bytes of what `integrator` keeps besides the film (photon maps, SPPM's visible
+/// points), with what it is called, if anything.
+pub fn integrator_memory(scene: &Scene, integrator: &Integrator) -> Option<(&'static str, u64)> {
+    match integrator {
+        Integrator::Photon(cfg) => Some((
+            "storing the photons",
+            crate::integrators::photon::memory_needed(cfg),
+        )),
+        Integrator::Sppm(cfg) => Some((
+            "keeping the visible points and photon contributions",
+            crate::integrators::sppm::memory_needed(scene, cfg),
+        )),
+        _ => None,
+    }
+}
+
 /// Render `scene` with `integrator` on the current rayon pool.
 pub fn render(
     scene: &Scene,

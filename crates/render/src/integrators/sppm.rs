@@ -321,6 +321,28 @@ fn gather<M: PathMode>(
     }
 }
 
+/// Peak bytes of SPPM's state for `scene`: a slot per pixel (per eye sample in PPM), about one
+/// visible point per slot (at the spectral size when spectral), the grid's entries (up to 27
+/// cells a point) and an iteration's photon contributions (about two per photon).
+pub fn memory_needed(scene: &Scene, cfg: &SppmConfig) -> u64 {
+    let f = &scene.film;
+    let pixels = f.width as u64 * f.height as u64;
+    let eye = match cfg.kind {
+        Progressive::Stochastic => 1,
+        Progressive::Fixed { eye_samples } => eye_samples.max(1) as u64,
+    };
+    let vp = match scene.mode {
+        base::RenderMode::Rgb => std::mem::size_of::<VisiblePoint<Vec3>>(),
+        base::RenderMode::Spectral => {
+            std::mem::size_of::<VisiblePoint<crate::spectral::SampledSpectrum>>()
+        }
+    } as u64;
+    let slots = pixels * eye;
+    let photons = cfg.photons.unwrap_or(pixels);
+    slots * (std::mem::size_of::<Slot>() as u64 + vp + 27 * 4 + 8)
+        + photons.saturating_mul(2 * std::mem::size_of::<(u32, Vec3)>() as u64)
+}
+
 /// Render `scene` with SPPM: `opts.spp` iterations (a time budget or cancellation stops
 /// after a whole iteration).
 pub fn render(
