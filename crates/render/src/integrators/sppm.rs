@@ -168,13 +168,10 @@ impl Grid {
         let ext = (hi - lo) * inv_cell;
         let res = [ext.x, ext.y, ext.z].map(|e| (e.ceil() as i64).clamp(1, 1 << 20));
         let slots = vps.len().next_power_of_two().max(1);
-        let cell = |p: Vec3, res: &[i64; 3]| {
+        let cell = |p: Vec3, res: &[i64; 3]| -> [i64; 3] {
             let q = (p - lo) * inv_cell;
-            [q.x, q.y, q.z]
-                .iter()
-                .zip(res)
-                .map(|(&x, &r)| (x.floor() as i64).clamp(0, r - 1))
-                .collect::<Vec<_>>()
+            let q = [q.x, q.y, q.z];
+            std::array::from_fn(|k| (q[k].floor() as i64).clamp(0, res[k] - 1))
         };
         // Count, then fill, in visible point order.
         let mut counts = vec![0u32; slots + 1];
