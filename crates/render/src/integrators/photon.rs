@@ -383,65 +383,78 @@ impl<'a> PhotonMapper<'a> {
 /// (Kulla & Fajardo 2012), so that collisions land where a point light's singular
 /// single scattering is, which free flights alone almost never do (in `media-fog` a
 /// quarter of the light sat in the few pixels around the spot light, found by rare
-/// collisions). Returns the distance and its mixture density.
-fn segment_distance(
-    points: &[Vec3],
+/// collisions).
+struct SegmentMixture<'a> {
+    points: &'a [Vec3],
     o: Vec3,
     d: Vec3,
     end: f32,
-    sigma_bar: f32,
-    u: f32,
-    v: f32,
-) -> Option<(f32, f32)> {
-    let eqs = || {
-        points
-            .iter()
-            .filter_map(move |&q| Equiangular::new(o, d, end, q))
-    };
-    let n_eq = eqs().count();
-    let p_ff = if n_eq > 0 { 0.5 } else { 1.0 };
-    // Free flights truncated to [0, end): F(t) = (1 − e^{−σt})/(1 − e^{−σ·end}).
-    let mass = if end.is_finite() {
-        -(-sigma_bar * end).exp_m1()
-    } else {
-        1.0
-    };
-    let t = if u < p_ff {
-        let u = u / p_ff;
-        -(-(u * mass)).ln_1p() / sigma_bar
-    } else {
-        let k = (((u - p_ff) / (1.0 - p_ff) * n_eq as f32) as usize).min(n_eq - 1);
-        eqs().nth(k)?.sample(v)
-    };
-    if !(t >= 0.0 && t < end) {
-        return None;
-    }
-    let pdf = segment_pdf(points, o, d, end, sigma_bar, t);
-    (pdf > 0.0 && pdf.is_finite()).then_some((t, pdf))
+    /// Point lights off the ray's line (those with an equiangular distribution).
+    n_eq: usize,
+    /// Probability of the free-flight strategy.
+    p_ff: f32,
+    sigma: f32,
+    /// Free-flight mass on the segment, 1 − e^{−σ·end} (1 for an infinite one).
+    mass: f32,
 }
 
-/// The density with which [`segment_distance`] picks `t`.
-fn segment_pdf(points: &[Vec3], o: Vec3, d: Vec3, end: f32, sigma_bar: f32, t: f32) -> f32 {
-    if !(t >= 0.0 && t < end) {
-        return 0.0;
+impl<'a> SegmentMixture<'a> {
+    fn new(points: &'a [Vec3], o: Vec3, d: Vec3, end: f32, sigma: f32) -> SegmentMixture<'a> {
+        let mut m = SegmentMixture {
+            points,
+            o,
+            d,
+            end,
+            n_eq: 0,
+            p_ff: 1.0,
+            sigma,
+            mass: if end.is_finite() {
+                -(-sigma * end).exp_m1()
+            } else {
+                1.0
+            },
+        };
+        m.n_eq = m.eqs().count();
+        if m.n_eq > 0 {
+            m.p_ff = 0.5;
+        }
+        m
     }
-    let eqs = || {
-        points
+
+    /// The equiangular distributions (made on the fly: no allocation per ray).
+    fn eqs(&self) -> impl Iterator<Item = Equiangular> + '_ {
+        self.points
             .iter()
-            .filter_map(move |&q| Equiangular::new(o, d, end, q))
-    };
-    let n_eq = eqs().count();
-    let p_ff = if n_eq > 0 { 0.5 } else { 1.0 };
-    let mass = if end.is_finite() {
-        -(-sigma_bar * end).exp_m1()
-    } else {
-        1.0
-    };
-    let mut pdf = p_ff * sigma_bar * (-sigma_bar * t).exp() / mass;
-    if n_eq > 0 {
-        pdf += (1.0 - p_ff) / n_eq as f32 * eqs().map(|e| e.pdf(t)).sum::<f32>();
+            .filter_map(|&q| Equiangular::new(self.o, self.d, self.end, q))
     }
-    pdf
+
+    /// A distance and its density, from uniform `u` (strategy and free flight) and `v`
+    /// (equiangular).
+    fn sample(&self, u: f32, v: f32) -> Option<(f32, f32)> {
+        let t = if u < self.p_ff {
+            // F(t) = (1 − e^{−σt})/mass, inverted.
+            -(-(u / self.p_ff * self.mass)).ln_1p() / self.sigma
+        } else {
+            let k = (((u - self.p_ff) / (1.0 - self.p_ff) * self.n_eq as f32) as usize)
+                .min(self.n_eq - 1);
+            self.eqs().nth(k)?.sample(v)
+        };
+        let pdf = self.pdf(t);
+        (pdf > 0.0 && pdf.is_finite()).then_some((t, pdf))
+    }
+
+    /// The density of distance `t` (0 outside the segment).
+    fn pdf(&self, t: f32) -> f32 {
+        if !(t >= 0.0 && t < self.end) {
+            return 0.0;
+        }
+        let mut pdf = self.p_ff * self.sigma * (-self.sigma * t).exp() / self.mass;
+        if self.n_eq > 0 {
+            let eq: f32 = self.eqs().map(|e| e.pdf(t)).sum();
+            pdf += (1.0 - self.p_ff) / self.n_eq as f32 * eq;
+        }
+        pdf
+    }
 }
 
 impl PhotonMapper<'_> {
@@ -489,7 +502,7 @@ impl PhotonMapper<'_> {
                     && !self.points.is_empty()
                     && med.emission.is_none()
                 {
-                    // The segment's in-scattering by one distance (see `segment_distance`),
+                    // The segment's in-scattering by one distance (see `SegmentMixture`),
                     // then on to the surface attenuated by the exact transmittance.
                     let sigma_bar = h.sigma_t.element_sum() / 3.0;
                     let (u, v) = (sampler.next_1d(), sampler.next_1d());
@@ -497,7 +510,8 @@ impl PhotonMapper<'_> {
                         && cfg.allows(depth + 1)
                         && let Some(map) = &self.maps.volume
                         && let Some((t, pdf)) =
-                            segment_distance(&self.points, ray.o, ray.d, d_surface, sigma_bar, u, v)
+                            SegmentMixture::new(&self.points, ray.o, ray.d, d_surface, sigma_bar)
+                                .sample(u, v)
                     {
                         let p = ray.at(t);
                         let tr = (-h.sigma_t * t).exp();
@@ -686,7 +700,7 @@ mod tests {
     use crate::math::Vec2;
     use crate::stats::{Chi2Config, chi2_test_2d, sidak};
 
-    /// `segment_distance` draws distances by the density `segment_pdf` says: the density
+    /// `SegmentMixture::sample` draws distances by the density `SegmentMixture::pdf` says: the density
     /// integrates to 1 over a finite segment, and a χ² test (t mapped to s = 1 − e^{−t/2} on
     /// [0, 1), a uniform second coordinate; 32 × 32 cells, 10⁶ samples) does not reject it,
     /// α = 0.01 Šidák-corrected over the 3 cases: two point lights near the ray, one very
@@ -706,11 +720,12 @@ mod tests {
         ];
         let level = sidak(0.01, cases.len());
         for (points, end) in cases {
+            let mix = SegmentMixture::new(&points, o, d, end, sigma);
             if end.is_finite() {
                 let n = 200_000;
                 let h = end / n as f32;
                 let total: f64 = (0..n)
-                    .map(|k| segment_pdf(&points, o, d, end, sigma, (k as f32 + 0.5) * h) as f64)
+                    .map(|k| mix.pdf((k as f32 + 0.5) * h) as f64)
                     .sum::<f64>()
                     * h as f64;
                 assert!((total - 1.0).abs() < 1e-3, "∫pdf = {total}");
@@ -725,13 +740,13 @@ mod tests {
             };
             let r = chi2_test_2d(
                 |u2, u1| {
-                    let (t, pdf) = segment_distance(&points, o, d, end, sigma, u2.x, u2.y)?;
-                    assert!((pdf - segment_pdf(&points, o, d, end, sigma, t)).abs() <= 1e-5 * pdf);
+                    let (t, pdf) = mix.sample(u2.x, u2.y)?;
+                    assert!((pdf - mix.pdf(t)).abs() <= 1e-5 * pdf);
                     Some(Vec2::new(-(-t / scale).exp_m1(), u1))
                 },
                 |p| {
                     let t = -scale * (-p.x).ln_1p();
-                    let pdf = segment_pdf(&points, o, d, end, sigma, t);
+                    let pdf = mix.pdf(t);
                     if pdf > 0.0 {
                         pdf * scale / (1.0 - p.x)
                     } else {
