@@ -143,29 +143,23 @@ fn max_depth_bounds_the_whole_path() {
     }
 }
 
-/// Mitsuba's Cornell box at 128²: relMSE against the 16384-spp reference falls from 16 to 64
-/// iterations and the image mean is within 1 % at 64.
-#[test]
-fn converges_to_mitsubas_cornell_box() {
-    let Some(shared) = scene::testing::shared_dir("references") else {
-        return;
-    };
-    let shared = shared.join("..");
+/// Mitsuba's Cornell box at `res`² and the mean image of the reference `name`, or `None`
+/// (with a notice) without `../shared`.
+fn mitsuba_cbox(res: &str, name: &str) -> Option<(SceneDesc, Image)> {
+    let shared = scene::testing::shared_dir("references")?.join("..");
     let desc = load(
         &shared.join("scenes/standard/mitsuba-cbox/cbox-rgb.xml"),
-        &[("res", "128")],
+        &[("res", res)],
     );
-    let reference = load_reference(&shared.join("references/mitsuba-cbox"))
+    let reference = load_reference(&shared.join("references").join(name))
         .unwrap()
         .mean;
-    // The scene's path tracer stops at 6 edges (`max_depth`), and so does its reference.
-    let at16 = render_with(&desc, sppm(6, None), 16, 2);
-    let at64 = render_with(&desc, sppm(6, None), 64, 2);
-    let e16 = rel_mse(&at16, &reference).unwrap();
-    let e64 = rel_mse(&at64, &reference).unwrap();
-    eprintln!("mitsuba-cbox SPPM relMSE: 16 iterations {e16:.3e}, 64 iterations {e64:.3e}");
-    assert!(e64 < 0.7 * e16, "relMSE {e16} → {e64}");
-    let (m, r) = (mean(&at64), mean(&reference));
+    Some((desc, reference))
+}
+
+/// Each channel of `img`'s mean within 1 % of `reference`'s.
+fn assert_mean_within_1_percent(img: &Image, reference: &Image) {
+    let (m, r) = (mean(img), mean(reference));
     for c in 0..3 {
         assert!(
             (m[c] / r[c] - 1.0).abs() < 0.01,
@@ -176,32 +170,33 @@ fn converges_to_mitsubas_cornell_box() {
     }
 }
 
+/// Mitsuba's Cornell box at 128²: relMSE against the 16384-spp reference falls from 16 to 64
+/// iterations and the image mean is within 1 % at 64.
+#[test]
+fn converges_to_mitsubas_cornell_box() {
+    let Some((desc, reference)) = mitsuba_cbox("128", "mitsuba-cbox") else {
+        return;
+    };
+    // The scene's path tracer stops at 6 edges (`max_depth`), and so does its reference.
+    let at16 = render_with(&desc, sppm(6, None), 16, 2);
+    let at64 = render_with(&desc, sppm(6, None), 64, 2);
+    let e16 = rel_mse(&at16, &reference).unwrap();
+    let e64 = rel_mse(&at64, &reference).unwrap();
+    eprintln!("mitsuba-cbox SPPM relMSE: 16 iterations {e16:.3e}, 64 iterations {e64:.3e}");
+    assert!(e64 < 0.7 * e16, "relMSE {e16} → {e64}");
+    assert_mean_within_1_percent(&at64, &reference);
+}
+
 /// Spectral mode: every path of an iteration carries the iteration's wavelengths; at 256
 /// iterations the image mean of Mitsuba's Cornell box is within 1 % of the `llvm_ad_spectral`
 /// reference in every channel (the wavelengths follow a lattice over the iterations; with
 /// independent draws the blue channel was still 3 % off there).
 #[test]
 fn converges_in_spectral_mode() {
-    let Some(shared) = scene::testing::shared_dir("references") else {
+    let Some((desc, reference)) = mitsuba_cbox("64", "mitsuba-cbox-spectral") else {
         return;
     };
-    let shared = shared.join("..");
-    let desc = load(
-        &shared.join("scenes/standard/mitsuba-cbox/cbox-rgb.xml"),
-        &[("res", "64")],
-    );
-    let reference = load_reference(&shared.join("references/mitsuba-cbox-spectral"))
-        .unwrap()
-        .mean;
     let img = render_mode(&desc, sppm(6, None), 256, 2, RenderMode::Spectral);
     // The reference is 128²: compare image means (box-downsampling changes no mean).
-    let (m, r) = (mean(&img), mean(&reference));
-    for c in 0..3 {
-        assert!(
-            (m[c] / r[c] - 1.0).abs() < 0.01,
-            "channel {c}: {} vs {}",
-            m[c],
-            r[c]
-        );
-    }
+    assert_mean_within_1_percent(&img, &reference);
 }
