@@ -65,6 +65,7 @@ pub fn integrator(
                     .radius
                     .map(|r| if l.relative { r * scene_radius } else { r });
                 match (l.k, r) {
+                    (Some(k), None) if l.calibrated => Lookup::Calibrated { k },
                     (Some(k), r) => Lookup::Nearest {
                         k,
                         max_radius: r.unwrap_or(f32::INFINITY),
@@ -81,6 +82,7 @@ pub fn integrator(
                 photons: d.photons,
                 global: lookup(&d.global),
                 caustic: lookup(&d.caustic),
+                volume: lookup(&d.volume),
                 kernel: d.kernel,
                 final_gather: d.final_gather,
                 direct_samples: d.direct_samples,

@@ -14,10 +14,12 @@ use rayon::prelude::*;
 use crate::camera::CameraRay;
 use crate::film::{Film, FilmTile};
 use crate::integrators::Integrator;
-use crate::integrators::photon::{PhotonMapper, PhotonMaps};
+use crate::integrators::photon::{PhotonMapper, WAVELENGTH_SETS};
 use crate::math::{UVec2, Vec3};
 use crate::sampling::Sampler;
+use crate::spectral::lanes::{PathMode, RgbMode, SpectralMode};
 use crate::world::Scene;
+use base::RenderMode;
 
 pub use crate::session::{
     Progress, RenderObserver, RenderOptions, RenderOutcome, Silent, camera_sample,
@@ -49,7 +51,7 @@ impl Estimator for Integrator {
     }
 }
 
-impl Estimator for PhotonMapper<'_> {
+impl<M: PathMode> Estimator for PhotonMapper<'_, M> {
     fn li_stream<T>(
         &self,
         scene: &Scene,
@@ -122,9 +124,18 @@ pub fn render(
         Integrator::Sppm(cfg) => crate::integrators::sppm::render(scene, cfg, opts, observer),
         Integrator::Photon(cfg) => {
             let start = Instant::now();
-            let maps = PhotonMaps::build(scene, cfg, scene.sampler.seed);
-            let mapper = PhotonMapper::new(scene, cfg, maps);
-            let mut out = render_samples(scene, &mapper, opts, observer);
+            let seed = scene.sampler.seed;
+            let mut out = match scene.mode {
+                RenderMode::Rgb => {
+                    let mapper = PhotonMapper::<RgbMode>::build(scene, cfg, seed, 1);
+                    render_samples(scene, &mapper, opts, observer)
+                }
+                RenderMode::Spectral => {
+                    let mapper =
+                        PhotonMapper::<SpectralMode>::build(scene, cfg, seed, WAVELENGTH_SETS);
+                    render_samples(scene, &mapper, opts, observer)
+                }
+            };
             out.elapsed = start.elapsed();
             out
         }

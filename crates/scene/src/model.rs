@@ -877,6 +877,10 @@ pub struct PhotonLookupDesc {
     /// `radius` is a fraction of the scene's bounding-sphere radius (Mitsuba 0.6, Nori's
     /// default), resolved by `build`.
     pub relative: bool,
+    /// With `k` and no `radius`: the k nearest within a cap chosen from the map (the lower
+    /// quartile of its photons' distances to their k-th nearest neighbour; the volume map's
+    /// default, see `render::integrators::photon::Lookup::Calibrated`).
+    pub calibrated: bool,
 }
 
 impl Default for PhotonLookupDesc {
@@ -885,6 +889,7 @@ impl Default for PhotonLookupDesc {
             k: Some(64),
             radius: None,
             relative: false,
+            calibrated: false,
         }
     }
 }
@@ -900,6 +905,8 @@ pub struct PhotonDesc {
     pub global: PhotonLookupDesc,
     /// Lookups in the caustic map.
     pub caustic: PhotonLookupDesc,
+    /// Lookups in the volume map (scenes with media).
+    pub volume: PhotonLookupDesc,
     pub kernel: PhotonKernel,
     /// Final gathering rays per camera vertex (0: the map read directly).
     pub final_gather: u32,
@@ -914,6 +921,10 @@ impl Default for PhotonDesc {
             photons: 1_000_000,
             global: PhotonLookupDesc::default(),
             caustic: PhotonLookupDesc::default(),
+            volume: PhotonLookupDesc {
+                calibrated: true,
+                ..PhotonLookupDesc::default()
+            },
             kernel: PhotonKernel::Box,
             final_gather: 16,
             direct_samples: 1,

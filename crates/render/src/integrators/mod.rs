@@ -87,18 +87,6 @@ impl Integrator {
         if self.per_sample() {
             return None;
         }
-        // SPPM draws new wavelengths every iteration; PPM's visible points are traced once
-        // and the photon maps once, so neither would see more than one set of wavelengths.
-        let spectral_ok = matches!(
-            self,
-            Integrator::Sppm(c) if c.kind == sppm::Progressive::Stochastic
-        );
-        if scene.mode != RenderMode::Rgb && !spectral_ok {
-            return Some(format!(
-                "{}: spectral mode is not implemented yet (use --mode rgb, or sppm)",
-                self.name()
-            ));
-        }
         if !scene.media.is_empty() && !matches!(self, Integrator::Photon(_)) {
             return Some(format!(
                 "{}: participating media are not implemented yet (use photon or volpath)",

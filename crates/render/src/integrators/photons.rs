@@ -14,6 +14,7 @@ use crate::geometry::Ray;
 use crate::lights::Receiver;
 use crate::math::{Frame, UVec2, Vec3};
 use crate::media::Flight;
+use crate::sampling::sampler::{hash2, u64_to_unit};
 use crate::sampling::{Distribution1D, Sampler};
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::{Color, ColorMode, PathMode};
@@ -196,6 +197,16 @@ pub fn trace<M: PathMode>(
         medium = scene.medium_after(&si, wi, medium);
         ray = si.spawn_ray(wi);
     }
+}
+
+/// The uniform number ([`PathMode::from_u`]) of wavelength set `k` of the photon-mapping
+/// family under `seed`. A set tints everything that sees it alike, so the sets follow a
+/// rank-1 lattice (a random start, then steps of the golden ratio's fraction) rather than
+/// independent draws: the colour of the mean image over k sets converges as 1/k instead of
+/// 1/√k.
+pub fn wavelength_set(seed: u64, k: u32) -> f32 {
+    let u0 = u64_to_unit(hash2(seed, 0x5350_504D_4C41_4D42));
+    (u0 as f64 + k as f64 * 0.618_033_988_749_894_9).fract() as f32
 }
 
 /// Trace photons `0..count` of pass `pass` in parallel chunks, each photon in a fresh colour

@@ -27,9 +27,10 @@
 //! contributions are added to the pixels in chunk order: the image is a function of the seed
 //! and never of the thread count.
 //!
-//! Spectral mode (SPPM): all the paths of an iteration carry one set of wavelengths, which
-//! follows a rank-1 lattice over the iterations ([`render`]). Not yet: media, and PPM in
-//! spectral mode (its visible points are traced once, so they would see one set only).
+//! Spectral mode: in SPPM all the paths of an iteration carry one set of wavelengths, which
+//! follows a rank-1 lattice over the iterations; PPM's visible points are traced once, so
+//! they are spread over [`super::photon::WAVELENGTH_SETS`] sets by slot and each pass
+//! traces a group of photons per set ([`render`]). Not yet: media.
 
 use std::time::Instant;
 
@@ -40,7 +41,6 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::{Film, Filter};
 use crate::math::{Frame, PI, UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::sampling::sampler::{hash2, u64_to_unit};
 use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
 use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
 use crate::world::Scene;
@@ -400,9 +400,21 @@ fn render_in<M: PathMode + Send>(
     let lights = PhotonLights::new(scene);
     let camera_template = Sampler::new(scene.sampler.kind, opts.spp.max(eye), scene.sampler.seed);
     let target = opts.spp.max(1);
+    // Wavelength sets (`photons::wavelength_set`; RGB mode draws nothing). SPPM: set k for
+    // iteration k, shared by all its paths. PPM in spectral mode: set g for the slots
+    // s ≡ g (mod `WAVELENGTH_SETS`), fixed with the visible points (neighbouring pixels and
+    // eye samples get different sets); each pass traces a group of photons per set,
+    // gathered only by that set's visible points (the extended-Nori write-up's map per
+    // wavelength set).
+    let u_of = |set: u32| photons::wavelength_set(scene.sampler.seed, set);
+    let groups = match scene.mode {
+        base::RenderMode::Spectral if !nee => super::photon::WAVELENGTH_SETS,
+        _ => 1,
+    };
+    let group_photons = photons.div_ceil(groups as u64);
     let mut done = 0u32;
     let mut cancelled = false;
-    let mut vps: Vec<VisiblePoint<M::C>> = Vec::new();
+    let mut vps: Vec<Vec<VisiblePoint<M::C>>> = (0..groups).map(|_| Vec::new()).collect();
     while done < target {
         if opts.cancel.load(Ordering::Relaxed) {
             cancelled = true;
@@ -415,12 +427,6 @@ fn render_in<M: PathMode + Send>(
             break;
         }
         let iteration = done;
-        // The iteration's wavelengths (RGB mode draws nothing): they tint the whole image
-        // alike, so they follow a rank-1 lattice over the iterations (a random start, then
-        // steps of the golden ratio's fraction) rather than independent draws — the colour
-        // of the mean image converges as 1/k instead of 1/√k.
-        let u0 = u64_to_unit(hash2(scene.sampler.seed, 0x5350_504D_4C41_4D42));
-        let u_lambda = (u0 as f64 + iteration as f64 * 0.618_033_988_749_894_9).fract() as f32;
         // 1. Camera pass, one row per task: every iteration (SPPM) or once (PPM).
         if nee || iteration == 0 {
             let rows: Vec<CameraRow<M::C>> = (0..size.y)
@@ -433,8 +439,13 @@ fn render_in<M: PathMode + Send>(
                         let pixel = pmin + UVec2::new(x, y);
                         for e in 0..eye {
                             let slot = (y * size.x + x) * eye + e;
-                            // SPPM's iteration is its sample index; PPM's eye sample is.
-                            let sample = if nee { iteration } else { e };
+                            // SPPM's iteration is its sample index and its wavelength
+                            // set; PPM's eye sample is its sample index.
+                            let (sample, set) = if nee {
+                                (iteration, iteration)
+                            } else {
+                                (e, slot % groups)
+                            };
                             ld.push(camera_path(
                                 scene,
                                 cfg,
@@ -443,7 +454,7 @@ fn render_in<M: PathMode + Send>(
                                 sample,
                                 slot,
                                 nee,
-                                &M::from_u(u_lambda),
+                                &M::from_u(u_of(set)),
                                 &mut vps,
                             ));
                         }
@@ -451,55 +462,53 @@ fn render_in<M: PathMode + Send>(
                     (ld, vps)
                 })
                 .collect();
-            vps.clear();
+            vps.iter_mut().for_each(Vec::clear);
             let row_slots = size.x as usize * eye as usize;
             for (y, (ld, v)) in rows.into_iter().enumerate() {
                 for (k, l) in ld.into_iter().enumerate() {
                     slots[y * row_slots + k].ld += l;
                 }
-                vps.extend(v);
+                for vp in v {
+                    vps[(vp.slot % groups) as usize].push(vp);
+                }
             }
         }
-        // 2. The grid; 3. photons in fixed chunks, merged in order.
+        // 2. The grid; 3. photons in fixed chunks, merged in order; per group.
         let radii: Vec<f32> = slots.iter().map(|p| p.radius).collect();
-        let mut phi = vec![Vec3::ZERO; vps.len()];
-        let mut found = vec![0u32; vps.len()];
-        if lights.any()
-            && let Some(grid) = Grid::build(&vps, |v| radii[v.slot as usize])
-        {
+        let mut slot_phi = vec![Vec3::ZERO; slot_count];
+        let mut slot_m = vec![0u32; slot_count];
+        for (g, vps) in vps.iter().enumerate() {
+            let Some(grid) = Grid::build(vps, |v| radii[v.slot as usize]) else {
+                continue;
+            };
+            if !lights.any() {
+                break;
+            }
+            let set = if nee { iteration } else { g as u32 };
+            let u = u_of(set);
             let lists = photons::trace_all(
                 scene,
                 &lights,
                 cfg.max_depth,
                 scene.sampler.seed,
-                iteration,
-                photons,
-                || M::from_u(u_lambda),
+                iteration * groups + g as u32,
+                group_photons,
+                || M::from_u(u),
                 // Each chunk converts with its own pair of modes (a spectral mode is not Sync).
-                || {
-                    (
-                        Vec::new(),
-                        (M::from_u(u_lambda), M::from_u(u_lambda).terminate()),
-                    )
-                },
+                || (Vec::new(), (M::from_u(u), M::from_u(u).terminate())),
                 |(out, modes), hit, photon: &M| {
-                    gather(cfg, &grid, &vps, &radii, first, hit, photon, modes, out)
+                    gather(cfg, &grid, vps, &radii, first, hit, photon, modes, out)
                 },
             );
             for (list, _) in lists {
                 for (v, c) in list {
-                    phi[v as usize] += c;
-                    found[v as usize] += 1;
+                    let slot = vps[v as usize].slot as usize;
+                    slot_phi[slot] += c;
+                    slot_m[slot] += 1;
                 }
             }
         }
         // 4. Radius reduction per slot.
-        let mut slot_phi = vec![Vec3::ZERO; slot_count];
-        let mut slot_m = vec![0u32; slot_count];
-        for (i, vp) in vps.iter().enumerate() {
-            slot_phi[vp.slot as usize] += phi[i];
-            slot_m[vp.slot as usize] += found[i];
-        }
         for ((p, &dphi), &m) in slots.iter_mut().zip(&slot_phi).zip(&slot_m) {
             if m == 0 {
                 continue;
@@ -522,7 +531,8 @@ fn render_in<M: PathMode + Send>(
     // The film: one sample at each pixel's centre, weight 1 under the box filter.
     if done > 0 {
         let mut tile = film.tile(pmin, pmax);
-        let np = done as f64 * photons as f64;
+        // Photons each measurement could gather from.
+        let np = done as f64 * group_photons as f64;
         // SPPM sums `ld` over the iterations; PPM's is the fixed path's.
         let ld_scale = if nee { 1.0 / done as f32 } else { 1.0 };
         for (i, px) in slots.chunks(eye as usize).enumerate() {

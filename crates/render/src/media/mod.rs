@@ -295,6 +295,18 @@ impl Medium {
         }
     }
 
+    /// [`Self::sigma_s`] in the colour of `m`.
+    pub fn sigma_s_in<M: ColorMode>(&self, p: Vec3, m: &M) -> M::C {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => h.coefficients(m).1,
+            MediumKind::Heterogeneous(h) => {
+                let sigma_t = h.sigma_t_along(&Ray::new(p, Vec3::Z), 0.0);
+                let sigma_a = h.sigma_a_in(p, m);
+                M::C::from_fn(|i| (sigma_t - sigma_a.lane(i)).max(0.0))
+            }
+        }
+    }
+
     /// σt and σs of a homogeneous medium whose coefficients are the same in every channel.
     pub fn grey_homogeneous(&self) -> Option<(f32, f32)> {
         match &self.kind {

@@ -1936,8 +1936,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     /// gathering) when either of its parameters is given, else Mitsuba 0.6's
     /// (`globalPhotons` emitted, `lookupSize` nearest photons within `globalLookupRadius` /
     /// `causticLookupRadius` of the scene's size, `directSamples`, `maxDepth`; its maps are
-    /// read directly too). Our own: `final_gather` rays, `kernel` (box, cone,
-    /// epanechnikov).
+    /// read directly too; `volumeLookupSize`, see [`PhotonLookupDesc::calibrated`]). Our
+    /// own: `final_gather` rays, `kernel` (box, cone, epanechnikov).
     fn photon_mapper(&self, pl: &Plugin<'s>) -> Result<PhotonDesc> {
         let p = &pl.props;
         let nori = p.has("photon_count") || p.has("photon_radius");
@@ -1971,12 +1971,14 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     k: None,
                     radius: Some(radius),
                     relative: false,
+                    calibrated: false,
                 }
             } else if radius == 0.0 {
                 PhotonLookupDesc {
                     k: None,
                     radius: Some(1.0 / 250.0),
                     relative: true,
+                    calibrated: false,
                 }
             } else {
                 return Err(err(
@@ -1989,6 +1991,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 photons: p.int_in("photon_count", 1_000_000, 1, 1 << 40)? as u64,
                 global: lookup,
                 caustic: lookup,
+                volume: lookup,
                 kernel,
                 final_gather,
                 direct_samples: 1,
@@ -2002,11 +2005,21 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 k: Some(k),
                 radius: Some(positive("global_lookup_radius", 0.05)?),
                 relative: true,
+                calibrated: false,
             },
             caustic: PhotonLookupDesc {
                 k: Some(k),
                 radius: Some(positive("caustic_lookup_radius", 0.0125)?),
                 relative: true,
+                calibrated: false,
+            },
+            // Mitsuba 0.6 reads `volumeLookupSize` nearest photons; ours are capped (see
+            // `PhotonLookupDesc::calibrated`).
+            volume: PhotonLookupDesc {
+                k: Some(p.int_in("volume_lookup_size", 120, 1, 1 << 20)? as u32),
+                radius: None,
+                relative: false,
+                calibrated: true,
             },
             kernel,
             final_gather,
