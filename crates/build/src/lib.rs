@@ -28,7 +28,7 @@ use render::render::{RenderOptions, RenderOutcome, Silent, render};
 use render::shapes::ShapeGeom;
 use render::textures::Textures;
 use render::world::Scene;
-use scene::{IntegratorDesc, LightSelection, Loc, Material, MaterialId, SceneDesc};
+use scene::{IntegratorDesc, LightSelection, Loc, Material, MaterialId, SceneDesc, SppmDesc};
 
 /// A problem found while building (unreadable texture, unsupported feature).
 #[derive(Clone, Debug, thiserror::Error)]
@@ -180,6 +180,16 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         .clone()
         .or_else(|| sensor.integrator.clone())
         .unwrap_or_else(|| desc.integrator.clone());
+    // Mitsuba 0.6's `maxPasses`: the iterations when `--spp` does not say.
+    if let (
+        None,
+        IntegratorDesc::Sppm(SppmDesc {
+            passes: Some(n), ..
+        }),
+    ) = (opts.spp, &integrator_desc)
+    {
+        sampler.spp = *n;
+    }
     let ambient: Vec3 = desc
         .emitters
         .iter()

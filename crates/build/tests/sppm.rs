@@ -252,3 +252,60 @@ fn photon_mapper_converges_in_spectral_mode() {
         );
     }
 }
+
+/// Mitsuba 0.6's `sppm` and `ppm` parameters: photonCount, initialRadius, alpha, maxDepth,
+/// rrDepth and maxPasses (the iterations when `--spp` does not say), granularity (read,
+/// no effect), and `ppm`'s eye samples.
+#[test]
+fn mitsuba_progressive_parameters() {
+    use render::integrators::Integrator;
+    use render::integrators::sppm::Progressive;
+    let xml = |ty: &str, extra: &str| {
+        format!(
+            r#"<scene version="0.6.0">
+                 <integrator type="{ty}">
+                   <integer name="photonCount" value="1234"/>
+                   <float name="initialRadius" value="0.25"/>
+                   <float name="alpha" value="0.5"/>
+                   <integer name="maxDepth" value="7"/>
+                   <integer name="rrDepth" value="4"/>
+                   <integer name="maxPasses" value="37"/>
+                   <integer name="granularity" value="100"/>
+                   {extra}
+                 </integrator>
+                 <sensor type="perspective">
+                   <sampler type="independent"><integer name="sampleCount" value="8"/></sampler>
+                   <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+                 </sensor>
+                 <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+               </scene>"#
+        )
+    };
+    for (ty, extra, kind) in [
+        ("sppm", "", Progressive::Stochastic),
+        (
+            "ppm",
+            r#"<integer name="eyeSamples" value="3"/>"#,
+            Progressive::Fixed { eye_samples: 3 },
+        ),
+    ] {
+        let desc = scene::load_xml_text("test.xml", &xml(ty, extra)).expect("loads");
+        for (spp, want) in [(None, 37), (Some(5), 5)] {
+            let opts = BuildOptions {
+                spp,
+                ..Default::default()
+            };
+            let Built { scene, integrator } = build(&desc, &opts).expect("builds");
+            assert_eq!(scene.sampler.spp, want, "{ty}, --spp {spp:?}");
+            let Integrator::Sppm(cfg) = integrator else {
+                panic!("{ty}: {integrator:?}")
+            };
+            assert_eq!(cfg.photons, Some(1234));
+            assert_eq!(cfg.initial_radius, Some(0.25));
+            assert_eq!(cfg.alpha, 0.5);
+            assert_eq!(cfg.max_depth, 7);
+            assert_eq!(cfg.rr_depth, 4);
+            assert_eq!(cfg.kind, kind);
+        }
+    }
+}

@@ -948,6 +948,9 @@ pub struct SppmDesc {
     /// `Some(n)`: PPM — visible points traced once, `n` per pixel, each keeping its own
     /// radius; `None`: SPPM.
     pub fixed_eye_samples: Option<u32>,
+    /// Iterations the scene asks for (Mitsuba 0.6's `maxPasses`), used when the command line
+    /// gives no `--spp`; `None`: the sensor's sample count.
+    pub passes: Option<u32>,
 }
 
 impl Default for SppmDesc {
@@ -959,6 +962,7 @@ impl Default for SppmDesc {
             initial_radius: None,
             alpha: 2.0 / 3.0,
             fixed_eye_samples: None,
+            passes: None,
         }
     }
 }

@@ -1838,9 +1838,17 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             }
             // Mitsuba 0.6's parameters and defaults (camelCase arrives as snake_case):
             // photonCount per pass (250 000), initialRadius (0: guess), alpha (0.7),
-            // maxDepth (−1), rrDepth (3); `ppm` also takes our `eye_samples` (visible points
-            // per pixel, 4).
+            // maxDepth (−1), rrDepth (3), maxPasses (−1: until stopped; here the sensor's
+            // sample count, as `--spp`), granularity (the size of its scheduler's work units;
+            // read and ignored: our photon chunks are fixed so that the image does not
+            // depend on the thread count); `ppm` also takes our `eye_samples` (visible
+            // points per pixel, 4).
             "sppm" | "ppm" => {
+                pl.props.int_in("granularity", 0, -1, i32::MAX as i64)?;
+                let passes = match pl.props.int_in("max_passes", -1, -1, u32::MAX as i64)? {
+                    n if n > 0 => Some(n as u32),
+                    _ => None,
+                };
                 let initial_radius = match pl.props.float_opt("initial_radius")? {
                     Some(r) if r > 0.0 && r.is_finite() => Some(r),
                     Some(0.0) | None => None,
@@ -1870,6 +1878,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                         .then(|| pl.props.int_in("eye_samples", 4, 1, 1 << 16))
                         .transpose()?
                         .map(|n| n as u32),
+                    passes,
                 })
             }
             "photonmapper" => IntegratorDesc::Photon(self.photon_mapper(pl)?),
