@@ -163,10 +163,15 @@ fn mitsuba_cbox(res: &str, name: &str) -> Option<(SceneDesc, Image)> {
 
 /// Each channel of `img`'s mean within 1 % of `reference`'s.
 fn assert_mean_within_1_percent(img: &Image, reference: &Image) {
+    assert_mean_within(img, reference, 0.01);
+}
+
+/// Each channel of `img`'s mean within the fraction `tol` of `reference`'s.
+fn assert_mean_within(img: &Image, reference: &Image, tol: f64) {
     let (m, r) = (mean(img), mean(reference));
     for c in 0..3 {
         assert!(
-            (m[c] / r[c] - 1.0).abs() < 0.01,
+            (m[c] / r[c] - 1.0).abs() < tol,
             "channel {c}: {} vs {}",
             m[c],
             r[c]
