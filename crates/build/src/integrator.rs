@@ -2,6 +2,7 @@
 
 use render::integrators::path::{Combine, PathConfig};
 use render::integrators::photon::{Lookup, PhotonConfig};
+use render::integrators::ptracer::PtracerConfig;
 use render::integrators::sppm::{Progressive, SppmConfig};
 use render::integrators::volpath::VolPathConfig;
 use render::integrators::{Integrator, UnsupportedIntegrator};
@@ -58,6 +59,13 @@ pub fn integrator(
                 None => Progressive::Stochastic,
                 Some(eye_samples) => Progressive::Fixed { eye_samples },
             },
+        }),
+        IntegratorDesc::Ptracer {
+            max_depth,
+            hide_emitters,
+        } => Integrator::Ptracer(PtracerConfig {
+            max_depth: *max_depth,
+            hide_emitters: *hide_emitters,
         }),
         IntegratorDesc::Photon(d) => {
             let lookup = |l: &scene::PhotonLookupDesc| {

@@ -140,6 +140,22 @@ fn integrator(i: &IntegratorDesc) -> String {
                 ""
             }
         ),
+        IntegratorDesc::Ptracer {
+            max_depth,
+            hide_emitters,
+        } => format!(
+            "light tracing (ptracer): max depth {}{}",
+            if *max_depth < 0 {
+                "unbounded".to_string()
+            } else {
+                max_depth.to_string()
+            },
+            if *hide_emitters {
+                ", emitters hidden from the camera"
+            } else {
+                ""
+            }
+        ),
         IntegratorDesc::Sppm(d) => format!(
             "{}: max depth {}, {} photons per iteration, initial radius {}, alpha {}",
             match d.fixed_eye_samples {

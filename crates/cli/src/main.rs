@@ -251,6 +251,7 @@ impl TransportArgs {
             match integrator.as_mut() {
                 Some(IntegratorDesc::Sppm(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Photon(d)) => d.max_depth = m,
+                Some(IntegratorDesc::Ptracer { max_depth, .. }) => *max_depth = m,
                 _ => {}
             }
         }
@@ -290,6 +291,11 @@ impl TransportArgs {
                 IntegratorDesc::Photon(d) if !path_only => {
                     if let Some(m) = self.max_depth {
                         d.max_depth = m.max(-1);
+                    }
+                }
+                IntegratorDesc::Ptracer { max_depth, .. } if !path_only => {
+                    if let Some(m) = self.max_depth {
+                        *max_depth = m.max(-1);
                     }
                 }
                 _ if self.max_depth.is_some() || path_only => {
@@ -519,6 +525,7 @@ fn max_depth_of(i: &IntegratorDesc) -> Option<i32> {
         IntegratorDesc::VolPath { max_depth, .. } => Some(*max_depth),
         IntegratorDesc::Sppm(d) => Some(d.max_depth),
         IntegratorDesc::Photon(d) => Some(d.max_depth),
+        IntegratorDesc::Ptracer { max_depth, .. } => Some(*max_depth),
         _ => None,
     }
 }
@@ -580,6 +587,10 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             }
             d
         }),
+        "ptracer" if arg.is_empty() => IntegratorDesc::Ptracer {
+            max_depth: -1,
+            hide_emitters: false,
+        },
         "photon" => IntegratorDesc::Photon({
             let usage = "photon[:PHOTONS[,GATHER[,K]]]";
             let mut d = scene::PhotonDesc::default();
@@ -615,7 +626,7 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
                  photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
-                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]])"
+                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer)"
             ));
         }
     })

@@ -122,6 +122,7 @@ pub fn render(
 ) -> RenderOutcome {
     match integrator {
         Integrator::Sppm(cfg) => crate::integrators::sppm::render(scene, cfg, opts, observer),
+        Integrator::Ptracer(cfg) => crate::integrators::ptracer::render(scene, cfg, opts, observer),
         Integrator::Photon(cfg) => {
             let start = Instant::now();
             let seed = scene.sampler.seed;

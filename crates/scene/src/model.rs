@@ -1008,6 +1008,8 @@ pub enum IntegratorDesc {
     /// Photon mapping with a global and a caustic map (Nori's and Mitsuba 0.6's
     /// `photonmapper`).
     Photon(PhotonDesc),
+    /// Light tracing (Mitsuba's `ptracer`): light paths connected to the camera.
+    Ptracer { max_depth: i32, hide_emitters: bool },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },
     /// Nori's `simple` (one point light, no shadows from area lights).

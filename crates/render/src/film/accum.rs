@@ -56,7 +56,15 @@
 //! Samples whose radiance or position is NaN or infinite are rejected and counted once
 //! ([`Film::nonfinite_count`]); they touch no pixel.
 //!
-//! Memory: 96 bytes per stored pixel.
+//! **Light-path splats** (light tracing, Mitsuba 3's particle tracer). A contribution that
+//! a light path makes at a film position (through the camera's importance, not a camera
+//! sample of a pixel) is added to a separate layer, [`Film::add_splat`]: spread over the same
+//! pixels with the filter's weights normalised to sum to 1 (Mitsuba's normalised `put`), so
+//! each splat adds exactly its value to the image. A developed pixel is the camera samples'
+//! `Σ w L / Σ w` plus the splat layer times [`Film::set_splat_scale`]'s scale (1 / the light
+//! paths per pixel). The standard error covers the camera samples only.
+//!
+//! Memory: 96 bytes per stored pixel, 24 more once splats are added.
 
 use super::{Filter, Image, filter};
 use crate::math::{IVec2, UVec2, Vec2, Vec3};
@@ -285,6 +293,9 @@ pub struct Film {
     pixels: Vec<PixelSums>,
     samples: u64,
     nonfinite: u64,
+    /// Light-path splats per stored pixel (empty until the first).
+    splats: Vec<[f64; 3]>,
+    splat_scale: f64,
 }
 
 impl Film {
@@ -315,7 +326,58 @@ impl Film {
             pixels: vec![PixelSums::default(); size.x as usize * size.y as usize],
             samples: 0,
             nonfinite: 0,
+            splats: Vec::new(),
+            splat_scale: 1.0,
         }
+    }
+
+    /// Adds a light path's contribution `l` at film position `p` to the splat layer (see
+    /// the module docs): nothing outside the stored pixels' reach, and non-finite values are
+    /// counted and dropped.
+    pub fn add_splat(&mut self, p: Vec2, l: Vec3) {
+        if !(l.is_finite() && p.is_finite()) {
+            self.nonfinite += 1;
+            return;
+        }
+        if l == Vec3::ZERO {
+            return;
+        }
+        if self.splats.is_empty() {
+            self.splats = vec![[0.0; 3]; self.pixels.len()];
+        }
+        let r = self.filter.radius();
+        let c = p - 0.5;
+        let first = (floor_to_int(c - r) + 1).max(self.min.as_ivec2());
+        let last = floor_to_int(c + r).min(self.max.as_ivec2() - 1);
+        if first.cmpgt(last).any() {
+            return;
+        }
+        let (first, last) = (first.as_uvec2(), last.as_uvec2());
+        let g = |x: u32, pc: f32| self.filter.eval_1d(x as f32 + 0.5 - pc) as f64;
+        let sx: f64 = (first.x..=last.x).map(|x| g(x, p.x)).sum();
+        let sy: f64 = (first.y..=last.y).map(|y| g(y, p.y)).sum();
+        let norm = sx * sy;
+        if norm.is_nan() || norm <= 0.0 {
+            return;
+        }
+        let inv = 1.0 / norm;
+        let stride = (self.max.x - self.min.x) as usize;
+        let l = [l.x as f64, l.y as f64, l.z as f64];
+        for y in first.y..=last.y {
+            let wy = g(y, p.y) * inv;
+            for x in first.x..=last.x {
+                let w = g(x, p.x) * wy;
+                let i = (y - self.min.y) as usize * stride + (x - self.min.x) as usize;
+                for (s, lc) in self.splats[i].iter_mut().zip(l) {
+                    *s += w * lc;
+                }
+            }
+        }
+    }
+
+    /// The factor the splat layer is developed with (1 / light paths per pixel).
+    pub fn set_splat_scale(&mut self, scale: f64) {
+        self.splat_scale = scale;
     }
 
     /// The full image resolution (the camera's raster).
@@ -460,9 +522,15 @@ impl Film {
         }
     }
 
-    /// `Σ w L / Σ w` per pixel, a crop-sized image (pixels without weight are black).
+    /// `Σ w L / Σ w` per pixel plus the scaled splats, a crop-sized image (pixels without
+    /// weight or splats are black).
     pub fn develop(&self) -> Image {
-        self.develop_with(PixelSums::mean)
+        let mut img = self.develop_with(PixelSums::mean);
+        for (px, s) in img.pixels.iter_mut().zip(&self.splats) {
+            let k = self.splat_scale;
+            *px += Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32);
+        }
+        img
     }
 
     /// Standard error of [`Self::develop`] for sums over pixels: [`PixelSums::stderr`] times
@@ -494,15 +562,16 @@ impl Film {
         }
     }
 
-    /// Forgets every sample.
+    /// Forgets every sample and splat.
     pub fn clear(&mut self) {
         self.pixels.fill(PixelSums::default());
         self.samples = 0;
         self.nonfinite = 0;
+        self.splats.clear();
     }
 
     /// The whole film as one tile (to merge films rendered separately, e.g. on several
-    /// machines with disjoint sample ranges).
+    /// machines with disjoint sample ranges). Splats are not part of tiles.
     pub fn into_tile(self) -> FilmTile {
         FilmTile {
             filter: self.filter,
@@ -530,6 +599,48 @@ fn floor_to_int(v: Vec2) -> IVec2 {
 mod tests {
     use super::*;
     use base::FilterDesc;
+
+    /// A splat adds exactly its value to the image (weights normalised per splat), spread
+    /// by the filter, and is developed times the splat scale on top of the camera samples.
+    #[test]
+    fn splats_conserve_their_value() {
+        for desc in [
+            FilterDesc::Box { radius: 0.5 },
+            FilterDesc::Gaussian {
+                stddev: 0.5,
+                radius: 2.0,
+            },
+        ] {
+            let mut film = Film::new(16, 12, None, Filter::new(&desc));
+            let l = Vec3::new(1.0, 2.0, 4.0);
+            film.add_splat(Vec2::new(7.3, 5.6), l);
+            film.add_splat(Vec2::new(100.0, 5.0), l); // off the film: dropped
+            film.add_splat(Vec2::new(f32::NAN, 5.0), l); // counted, dropped
+            assert_eq!(film.nonfinite_count(), 1);
+            film.set_splat_scale(0.5);
+            let img = film.develop();
+            let sum: Vec3 = img.pixels.iter().copied().sum();
+            assert!(
+                (sum - 0.5 * l).abs().max_element() < 1e-5,
+                "{desc:?}: {sum}"
+            );
+            let touched = img.pixels.iter().filter(|p| p.x > 0.0).count();
+            match desc {
+                FilterDesc::Box { .. } => {
+                    assert_eq!(touched, 1);
+                    assert_eq!(img.pixels[5 * 16 + 7], 0.5 * l);
+                }
+                _ => assert!(touched > 4),
+            }
+            // Camera samples add their mean beneath.
+            let mut tile = film.tile(UVec2::ZERO, UVec2::new(16, 12));
+            tile.add_sample(Vec2::new(0.5, 0.5), Vec3::ONE);
+            film.merge(&tile);
+            assert!((film.develop().pixels[0] - Vec3::ONE).abs().max_element() < 1e-6);
+            film.clear();
+            assert!(film.develop().pixels.iter().all(|p| *p == Vec3::ZERO));
+        }
+    }
 
     #[test]
     fn floor_to_int_is_floor() {

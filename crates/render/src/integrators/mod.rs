@@ -9,6 +9,7 @@ mod direct;
 pub mod path;
 pub mod photon;
 pub mod photons;
+pub mod ptracer;
 pub mod sppm;
 pub mod volpath;
 
@@ -50,6 +51,9 @@ pub enum Integrator {
     /// Photon mapping: its maps are traced when the render starts, so
     /// the render driver (`render.rs`) runs it ([`photon::PhotonMapper`]).
     Photon(photon::PhotonConfig),
+    /// Light tracing (Mitsuba 3's particle tracer): light paths splatted into the film, run
+    /// as a whole by the render driver ([`ptracer::render`]).
+    Ptracer(ptracer::PtracerConfig),
 }
 
 /// An integrator the scene asks for that this build does not have.
@@ -72,22 +76,33 @@ impl Integrator {
                 sppm::Progressive::Fixed { .. } => "ppm",
             },
             Integrator::Photon(_) => "photon",
+            Integrator::Ptracer(_) => "ptracer",
         }
     }
 
     /// Whether [`Self::li`] estimates the radiance of one camera sample (every integrator
-    /// but the photon-mapping family, which the render driver, `render.rs`, runs as a whole).
+    /// but the photon-mapping family and the light tracer, which the render driver,
+    /// `render.rs`, runs as a whole).
     pub fn per_sample(&self) -> bool {
-        !matches!(self, Integrator::Sppm(_) | Integrator::Photon(_))
+        !matches!(
+            self,
+            Integrator::Sppm(_) | Integrator::Photon(_) | Integrator::Ptracer(_)
+        )
     }
 
-    /// Why `scene` cannot be rendered with this integrator (yet): the photon-mapping family
-    /// has no spectral mode and no media so far.
+    /// Why `scene` cannot be rendered with this integrator (yet): SPPM and PPM have no
+    /// media so far; light paths cannot reach an orthographic camera.
     pub fn unsupported(&self, scene: &Scene) -> Option<String> {
         if self.per_sample() {
             return None;
         }
-        if !scene.media.is_empty() && !matches!(self, Integrator::Photon(_)) {
+        if matches!(self, Integrator::Ptracer(_)) && !scene.camera.supports_importance() {
+            return Some(format!(
+                "{}: light paths cannot be connected to an orthographic camera (use path)",
+                self.name()
+            ));
+        }
+        if !scene.media.is_empty() && matches!(self, Integrator::Sppm(_)) {
             return Some(format!(
                 "{}: participating media are not implemented yet (use photon or volpath)",
                 self.name()
@@ -124,7 +139,7 @@ impl Integrator {
                     RenderMode::Spectral => direct::li_in::<Spectral>(scene, cray, sampler, e, b),
                 }
             }
-            Integrator::Sppm(_) | Integrator::Photon(_) => Vec3::ZERO,
+            Integrator::Sppm(_) | Integrator::Photon(_) | Integrator::Ptracer(_) => Vec3::ZERO,
         }
     }
 

@@ -422,7 +422,7 @@ pub struct PhotonMaps<C = Vec3> {
 impl PhotonMaps {
     /// Trace `cfg.photons` photons (RGB) on the current rayon pool and build the maps.
     pub fn build(scene: &Scene, cfg: &PhotonConfig, seed: u64) -> PhotonMaps {
-        PhotonMaps::build_in(scene, cfg, seed, 0, cfg.photons, || RgbMode)
+        PhotonMaps::build_in(scene, cfg, seed, 0, cfg.photons, |_| RgbMode)
     }
 }
 
@@ -435,7 +435,7 @@ impl<C: Color + Send> PhotonMaps<C> {
         seed: u64,
         pass: u32,
         count: u64,
-        mode: impl Fn() -> M + Sync,
+        mode: impl Fn(u64) -> M + Sync,
     ) -> PhotonMaps<C> {
         let lights = PhotonLights::new(scene);
         let with_media = !scene.media.is_empty();
@@ -450,7 +450,10 @@ impl<C: Color + Send> PhotonMaps<C> {
                 count,
                 mode,
                 <[MapData<C>; 3]>::default,
-                |[global, caustic, volume]: &mut [MapData<C>; 3], hit: &PhotonHit<C>, m: &M| {
+                |[global, caustic, volume]: &mut [MapData<C>; 3],
+                 hit: &PhotonHit<C>,
+                 m: &M,
+                 _: &mut Sampler| {
                     if hit.si.is_none() {
                         volume.push(hit, m);
                         return;
@@ -520,8 +523,8 @@ where
         let count = cfg.photons.div_ceil(sets as u64);
         let sets = (0..sets)
             .map(|k| {
-                let u = photons::wavelength_set(seed, k);
-                let maps = PhotonMaps::build_in(scene, cfg, seed, k, count, || M::from_u(u));
+                let u = photons::wavelength_set(seed, k as u64);
+                let maps = PhotonMaps::build_in(scene, cfg, seed, k, count, |_| M::from_u(u));
                 (u, maps)
             })
             .collect();
@@ -754,6 +757,10 @@ impl<M: PathMode> PhotonMapper<'_, M> {
                 l += power(beta, ratio) * scene.lights[li as usize].le(scene, &si, m);
             }
             let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
+                // Absorbed, unless an index-matched boundary.
+                if !scene.is_null(&si) {
+                    break;
+                }
                 medium = scene.medium_after(&si, ray.d, medium);
                 ray = si.spawn_ray(ray.d);
                 t_far = f32::INFINITY;

@@ -50,7 +50,8 @@ pub struct PhotonHit<'a, C = Vec3> {
     /// Where: the surface (`None` for a scattering event in a medium).
     pub si: Option<&'a SurfaceInteraction>,
     pub p: Vec3,
-    /// The medium of a scattering event.
+    /// The medium of a scattering event; for a surface hit, the medium the photon arrived
+    /// through.
     pub medium: Option<u32>,
     /// Its power: Φ of the emitted sample times the path's throughput (divide by the number
     /// of photons emitted for the flux it stands for). In a medium, the power after the
@@ -76,7 +77,7 @@ pub fn trace<M: PathMode>(
     max_depth: i32,
     sampler: &mut Sampler,
     m: &M,
-    mut deposit: impl FnMut(&PhotonHit<M::C>),
+    mut deposit: impl FnMut(&PhotonHit<M::C>, &mut Sampler),
 ) {
     let allows = |edges: u32| max_depth < 0 || edges <= max_depth as u32;
     let (li, pmf, _) = lights.dist.sample_discrete(sampler.next_1d());
@@ -123,7 +124,7 @@ pub fn trace<M: PathMode>(
                     ratio *= r;
                     let p = ray.at(d);
                     let wo = -ray.d;
-                    deposit(&PhotonHit {
+                    let hit = PhotonHit {
                         si: None,
                         p,
                         medium,
@@ -131,7 +132,8 @@ pub fn trace<M: PathMode>(
                         wi: wo,
                         edges,
                         caustic: false,
-                    });
+                    };
+                    deposit(&hit, sampler);
                     if !allows(edges + 2) {
                         break;
                     }
@@ -158,7 +160,11 @@ pub fn trace<M: PathMode>(
         };
         edges += 1;
         let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
-            // No surface (an index-matched boundary): straight on, into the medium beyond.
+            // A surface that does not scatter absorbs (an emitter without a BSDF) unless it
+            // is an index-matched boundary: straight on, into the medium beyond.
+            if !scene.is_null(&si) {
+                break;
+            }
             medium = scene.medium_after(&si, ray.d, medium);
             ray = si.spawn_ray(ray.d);
             edges -= 1;
@@ -167,15 +173,16 @@ pub fn trace<M: PathMode>(
         let here = power(beta, ratio);
         let before = m.live_max(here);
         if bsdf.has_smooth() {
-            deposit(&PhotonHit {
+            let hit = PhotonHit {
                 si: Some(&si),
                 p: si.p,
-                medium: None,
+                medium,
                 beta: here,
                 wi: -ray.d,
                 edges,
                 caustic: specular_only && edges > 1,
-            });
+            };
+            deposit(&hit, sampler);
         }
         if !allows(edges + 2) {
             break;
@@ -204,15 +211,16 @@ pub fn trace<M: PathMode>(
 /// rank-1 lattice (a random start, then steps of the golden ratio's fraction) rather than
 /// independent draws: the colour of the mean image over k sets converges as 1/k instead of
 /// 1/√k.
-pub fn wavelength_set(seed: u64, k: u32) -> f32 {
+pub fn wavelength_set(seed: u64, k: u64) -> f32 {
     let u0 = u64_to_unit(hash2(seed, 0x5350_504D_4C41_4D42));
     (u0 as f64 + k as f64 * 0.618_033_988_749_894_9).fract() as f32
 }
 
-/// Trace photons `0..count` of pass `pass` in parallel chunks, each photon in a fresh colour
-/// mode from `mode` (its wavelengths may be terminated on the way): `start` makes each
-/// chunk's accumulator, `deposit` adds a hit to it (with the photon's mode as it is then);
-/// the accumulators come back in chunk order.
+/// Trace photons `0..count` of pass `pass` in parallel chunks, photon `j` in a fresh colour
+/// mode `mode(j)` (its wavelengths may be terminated on the way): `start` makes each
+/// chunk's accumulator, `deposit` adds a hit to it (with the photon's mode as it is then and
+/// its sampler, whose stream is the photon's own); the accumulators come back in chunk
+/// order.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_all<T: Send, M: PathMode>(
     scene: &Scene,
@@ -221,9 +229,9 @@ pub fn trace_all<T: Send, M: PathMode>(
     seed: u64,
     pass: u32,
     count: u64,
-    mode: impl Fn() -> M + Sync,
+    mode: impl Fn(u64) -> M + Sync,
     start: impl Fn() -> T + Sync,
-    deposit: impl Fn(&mut T, &PhotonHit<M::C>, &M) + Sync,
+    deposit: impl Fn(&mut T, &PhotonHit<M::C>, &M, &mut Sampler) + Sync,
 ) -> Vec<T> {
     let template = Sampler::new(
         base::SamplerKind::Independent,
@@ -237,10 +245,15 @@ pub fn trace_all<T: Send, M: PathMode>(
             let mut acc = start();
             for j in c * CHUNK..((c + 1) * CHUNK).min(count) {
                 sampler.start_pixel_sample(UVec2::new(j as u32, (j >> 32) as u32), pass);
-                let m = mode();
-                trace(scene, lights, max_depth, &mut sampler, &m, |hit| {
-                    deposit(&mut acc, hit, &m)
-                });
+                let m = mode(j);
+                trace(
+                    scene,
+                    lights,
+                    max_depth,
+                    &mut sampler,
+                    &m,
+                    |hit, sampler| deposit(&mut acc, hit, &m, sampler),
+                );
             }
             acc
         })
@@ -331,7 +344,10 @@ pub fn walk<M: PathMode>(
             l += beta * scene.lights[li as usize].le(scene, &si, m);
         }
         let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
-            // No surface (an index-matched boundary): straight on.
+            // Absorbed, unless an index-matched boundary: straight on.
+            if !scene.is_null(&si) {
+                break;
+            }
             ray = si.spawn_ray(ray.d);
             t_max = f32::INFINITY;
             depth -= 1;

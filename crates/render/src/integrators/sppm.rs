@@ -406,7 +406,7 @@ fn render_in<M: PathMode + Send>(
     // eye samples get different sets); each pass traces a group of photons per set,
     // gathered only by that set's visible points (the extended-Nori write-up's map per
     // wavelength set).
-    let u_of = |set: u32| photons::wavelength_set(scene.sampler.seed, set);
+    let u_of = |set: u32| photons::wavelength_set(scene.sampler.seed, set as u64);
     let groups = match scene.mode {
         base::RenderMode::Spectral if !nee => super::photon::WAVELENGTH_SETS,
         _ => 1,
@@ -493,10 +493,10 @@ fn render_in<M: PathMode + Send>(
                 scene.sampler.seed,
                 iteration * groups + g as u32,
                 group_photons,
-                || M::from_u(u),
+                |_| M::from_u(u),
                 // Each chunk converts with its own pair of modes (a spectral mode is not Sync).
                 || (Vec::new(), (M::from_u(u), M::from_u(u).terminate())),
-                |(out, modes), hit, photon: &M| {
+                |(out, modes), hit, photon: &M, _: &mut Sampler| {
                     gather(cfg, &grid, vps, &radii, first, hit, photon, modes, out)
                 },
             );

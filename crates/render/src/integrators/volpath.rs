@@ -74,7 +74,7 @@ fn mis(a: f32, b: f32) -> f32 {
 
 /// Where a shadow ray starts.
 #[derive(Clone, Copy)]
-enum From<'a> {
+pub(crate) enum From<'a> {
     Surface(&'a SurfaceInteraction),
     Medium(Vec3, f32),
 }
@@ -666,7 +666,7 @@ fn shadow_ray<C>(from: &From<'_>, ls: &LightSample<C>) -> (Ray, f32) {
 /// crossed attenuate it, `null` surfaces let it through (switching media), any other surface
 /// blocks it.
 #[allow(clippy::too_many_arguments)]
-fn transmittance<M: PathMode>(
+pub(crate) fn transmittance<M: PathMode>(
     scene: &Scene,
     from: From<'_>,
     ls: &LightSample<M::C>,

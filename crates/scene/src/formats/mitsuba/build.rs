@@ -1882,6 +1882,21 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 })
             }
             "photonmapper" => IntegratorDesc::Photon(self.photon_mapper(pl)?),
+            // Mitsuba 3's particle tracer (max_depth, hide_emitters; rr_depth and
+            // samples_per_pass read: the photon tracer's roulette and one light path per
+            // pixel and pass are ours) and Mitsuba 0.6's (maxDepth, rrDepth, granularity,
+            // bruteForce read likewise).
+            "ptracer" => {
+                pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
+                pl.props
+                    .int_in("samples_per_pass", -1, -1, i32::MAX as i64)?;
+                pl.props.int_in("granularity", 0, -1, i32::MAX as i64)?;
+                pl.props.bool("brute_force", false)?;
+                IntegratorDesc::Ptracer {
+                    max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                    hide_emitters: pl.props.bool("hide_emitters", false)?,
+                }
+            }
             "whitted" => IntegratorDesc::Whitted {
                 // Nori's whitted has no depth limit (specular chains end by Russian roulette).
                 max_depth: pl
@@ -1932,7 +1947,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "path, direct, photonmapper, sppm, ppm, normals, albedo, depth, aov, ao, whitted, simple, \
+                    "path, direct, photonmapper, sppm, ppm, ptracer, normals, albedo, depth, aov, ao, whitted, simple, \
                      direct_ems, direct_mats, direct_mis, path_mats, path_ems, path_mis",
                 ));
             }

@@ -1,0 +1,285 @@
+//! Light tracing (Mitsuba 3's `ptracer`, the particle tracer; the t = 1 strategies of
+//! bidirectional path tracing): paths start at the lights and every vertex they reach on a
+//! surface with a non-delta lobe, or in a medium, is connected to the camera's lens
+//! ([`Camera::sample_wi`]) and splatted into the film where the connection lands.
+//!
+//! Each of the `--spp` passes traces one light path per pixel of the full image (the
+//! photon tracer, [`photons::trace_all`]: lights chosen by power, importance transport,
+//! pbrt-v4's roulette, free flights in media), and the film develops its splats divided by
+//! the number of passes (see `film::accum`). A vertex x with throughput β, reached from
+//! direction ωₗ, adds
+//!
+//! β · f(ωₗ → ω_c) · |cos θ_c| · Tr(x ↔ lens) · We·|cos θ_lens| / (d² · p_lens)
+//!
+//! (f in importance mode, the phase function in a medium) at the film position of the
+//! connection ω_c. Emitters seen directly cannot be reached by light paths through a
+//! pinhole; as in Mitsuba's particle tracer they come from the camera side: one camera ray
+//! per pixel and pass, which adds the emission (or environment) it meets first, through
+//! media and null surfaces (unless `hide_emitters`). Surfaces seen only through delta
+//! bounces (a mirror, glass) are out of reach of both: like Mitsuba's, this integrator does
+//! not render them (use `bdpt` or `path`). Orthographic cameras cannot be connected to.
+//!
+//! `max_depth` counts edges camera to light as everywhere: a vertex `k` edges from the
+//! light makes a path of k + 1. Determinism: light path `j` of pass `p` draws from its own
+//! stream (its lens samples and transmittance estimates too), and splats are added to the
+//! film in chunk order: the image does not depend on the thread count.
+//!
+//! Spectral mode: light path `j` of pass `p` carries its own wavelengths (a rank-1 lattice
+//! over the paths, [`photons::wavelength_set`]), each splat converted with them.
+
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::photons::{self, PhotonHit, PhotonLights};
+use super::volpath::{From, transmittance};
+use crate::bsdf::TransportMode;
+use crate::camera::CameraRay;
+use crate::film::Film;
+use crate::geometry::Ray;
+use crate::lights::{LightSample, ShadowTarget};
+use crate::math::{UVec2, Vec2, Vec3};
+use crate::sampling::Sampler;
+use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
+use crate::world::Scene;
+use base::{RenderMode, TransmittanceEstimator};
+
+/// The parameters of the light tracer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PtracerConfig {
+    /// Longest path in edges, camera to light (−1: unbounded).
+    pub max_depth: i32,
+    /// Leave out the emitters the camera sees directly.
+    pub hide_emitters: bool,
+}
+
+impl Default for PtracerConfig {
+    fn default() -> Self {
+        PtracerConfig {
+            max_depth: -1,
+            hide_emitters: false,
+        }
+    }
+}
+
+/// Render `scene` by light tracing: `opts.spp` passes (a time budget or cancellation stops
+/// after a whole pass).
+pub fn render(
+    scene: &Scene,
+    cfg: &PtracerConfig,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
+    match scene.mode {
+        RenderMode::Rgb => render_in::<RgbMode>(scene, cfg, opts, observer),
+        RenderMode::Spectral => render_in::<SpectralMode<'static>>(scene, cfg, opts, observer),
+    }
+}
+
+fn render_in<M: PathMode>(
+    scene: &Scene,
+    cfg: &PtracerConfig,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
+    let start = Instant::now();
+    let f = &scene.film;
+    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
+    let (pmin, pmax) = film.pixel_bounds();
+    let size = pmax - pmin;
+    let pixel_count = size.x as u64 * size.y as u64;
+    // The camera's importance is normalised over the full image: one light path per pixel
+    // of it makes one pass.
+    let paths = f.width as u64 * f.height as u64;
+    let lights = PhotonLights::new(scene);
+    let seed = scene.sampler.seed;
+    let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), seed);
+    let target = opts.spp.max(1);
+    let mut done = 0u32;
+    let mut cancelled = false;
+    while done < target {
+        if opts.cancel.load(Ordering::Relaxed) {
+            cancelled = true;
+            break;
+        }
+        if let Some(b) = opts.time_budget
+            && done > 0
+            && start.elapsed() >= b
+        {
+            break;
+        }
+        let pass = done;
+        // 1. Emitters seen directly: one camera ray per pixel, rows in parallel, merged in
+        // row order.
+        let rows: Vec<_> = (pmin.y..pmax.y)
+            .into_par_iter()
+            .map(|y| {
+                let mut tile = film.tile(UVec2::new(pmin.x, y), UVec2::new(pmax.x, y + 1));
+                let mut sampler = template.clone();
+                for x in pmin.x..pmax.x {
+                    let (p_film, cray) = camera_sample(scene, &mut sampler, UVec2::new(x, y), pass);
+                    let m = M::start(&mut sampler);
+                    let l = if cfg.hide_emitters {
+                        M::C::ZERO
+                    } else {
+                        seen_emission(scene, &cray, &mut sampler, &m)
+                    };
+                    tile.add_sample(p_film, m.to_rgb(l));
+                }
+                tile
+            })
+            .collect();
+        for tile in &rows {
+            film.merge(tile);
+        }
+        // 2. Light paths, their splats added in chunk order.
+        if lights.any() {
+            let lists = photons::trace_all(
+                scene,
+                &lights,
+                cfg.max_depth,
+                seed,
+                pass,
+                paths,
+                |j| M::from_u(photons::wavelength_set(seed, pass as u64 * paths + j)),
+                Vec::new,
+                |out: &mut Vec<(Vec2, Vec3)>, hit, m: &M, sampler: &mut Sampler| {
+                    if let Some(s) = connect(scene, cfg, hit, m, sampler) {
+                        out.push(s);
+                    }
+                },
+            );
+            for list in lists {
+                for (p, l) in list {
+                    film.add_splat(p, l);
+                }
+            }
+        }
+        done += 1;
+        film.set_splat_scale(1.0 / done as f64);
+        observer.progress(&Progress {
+            samples_done: done as u64 * pixel_count,
+            samples_total: target as u64 * pixel_count,
+            elapsed: start.elapsed(),
+            spp_done: done,
+        });
+        observer.pass_done(&film, done);
+    }
+    RenderOutcome {
+        film,
+        spp: done,
+        passes: done,
+        elapsed: start.elapsed(),
+        cancelled,
+    }
+}
+
+/// The emission a camera ray meets first (an emitter's surface, or the environment when it
+/// leaves the scene), attenuated by the media it crosses; null surfaces let it through.
+fn seen_emission<M: PathMode>(
+    scene: &Scene,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+    m: &M,
+) -> M::C {
+    let len = cray.ray.d.length();
+    let mut ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
+    let mut t_max = cray.t_max * len;
+    let mut medium = scene.camera_medium;
+    let mut tr = M::C::ONE;
+    // Bounded: a ray crosses finitely many null surfaces.
+    for _ in 0..256 {
+        let closest = scene.closest(&ray, t_max);
+        if let Some(mi) = medium {
+            let end = closest.t(&ray, t_max);
+            tr *= scene.media[mi as usize].transmittance_in(
+                &ray,
+                end,
+                TransmittanceEstimator::default(),
+                sampler,
+                m,
+            );
+            if tr.is_black() {
+                return tr;
+            }
+        }
+        let Some(si) = closest.surface(scene, &ray, t_max) else {
+            let mut l = M::C::ZERO;
+            for &i in &scene.infinite_lights {
+                l += scene.lights[i as usize].environment(ray.d, m);
+            }
+            return tr * l;
+        };
+        if let Some(li) = scene.shape_light(&si) {
+            return tr * scene.lights[li as usize].le(scene, &si, m);
+        }
+        if !scene.is_null(&si) {
+            return M::C::ZERO;
+        }
+        medium = scene.medium_after(&si, ray.d, medium);
+        ray = si.spawn_ray(ray.d);
+        t_max = f32::INFINITY;
+    }
+    M::C::ZERO
+}
+
+/// The splat of light path vertex `hit` connected to the camera: its film position and
+/// linear sRGB value, or `None` when the connection is blocked, leaves the film or would
+/// make the path longer than `max_depth`.
+fn connect<M: PathMode>(
+    scene: &Scene,
+    cfg: &PtracerConfig,
+    hit: &PhotonHit<M::C>,
+    m: &M,
+    sampler: &mut Sampler,
+) -> Option<(Vec2, Vec3)> {
+    if cfg.max_depth >= 0 && hit.edges + 1 > cfg.max_depth as u32 {
+        return None;
+    }
+    let c = scene.camera.sample_wi(hit.p, sampler.next_2d())?;
+    let (f, from, medium) = match hit.si {
+        Some(si) => {
+            let (bsdf, frame) = scene.bsdf_at_in(si, m)?;
+            let f = bsdf.eval(
+                frame.to_local(hit.wi),
+                frame.to_local(c.wi),
+                TransportMode::Importance,
+            );
+            (
+                f,
+                From::Surface(si),
+                scene.medium_after(si, c.wi, hit.medium),
+            )
+        }
+        None => {
+            let med = &scene.media[hit.medium? as usize];
+            let p = med.phase.eval(c.wi, hit.wi);
+            (M::C::splat(p), From::Medium(hit.p, 0.0), hit.medium)
+        }
+    };
+    if f.is_black() {
+        return None;
+    }
+    let query = LightSample {
+        wi: c.wi,
+        li: M::C::ZERO,
+        pdf: 1.0,
+        delta: true,
+        target: ShadowTarget::Point(c.p_lens),
+    };
+    let tr = transmittance(
+        scene,
+        from,
+        &query,
+        medium,
+        TransmittanceEstimator::default(),
+        sampler,
+        m,
+    );
+    if tr.is_black() {
+        return None;
+    }
+    Some((c.p_film, m.to_rgb(hit.beta * f * tr * c.weight)))
+}
