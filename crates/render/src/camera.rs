@@ -298,6 +298,37 @@ impl Camera {
         })
     }
 
+    /// The densities with which [`Self::generate_ray`] (film position uniform over the whole
+    /// film, lens point uniform over the aperture) produces a ray leaving the lens in world
+    /// direction `d`: (per unit lens area, per unit solid angle) = (1 / lens area,
+    /// 1 / (A·cos³θ)), A the image's area on the z = 1 plane (pbrt-v4's `PDF_We`); (0, 0)
+    /// when `d` does not reach the film, and for an orthographic camera.
+    pub fn pdf_we(&self, d: Vec3) -> (f32, f32) {
+        let lens_area = match self.kind {
+            Kind::Perspective => 1.0,
+            Kind::ThinLens {
+                aperture_radius, ..
+            } => crate::math::PI * aperture_radius * aperture_radius,
+            Kind::Orthographic => return (0.0, 0.0),
+        };
+        let c = self.to_camera.transform_vector3a(d).normalize();
+        if c.z <= 0.0 {
+            return (0.0, 0.0);
+        }
+        // The lens centre's ray in direction d reaches the same film point as every lens
+        // point's ray through the focus plane point along d.
+        let q = c / c.z;
+        let s = Vec2::new(
+            0.5 * (1.0 - (q.x - self.centre.x) / self.half_extent.x),
+            0.5 * (1.0 - (q.y - self.centre.y) / self.half_extent.y),
+        );
+        if !(s.cmpge(Vec2::ZERO).all() && s.cmplt(Vec2::ONE).all()) {
+            return (0.0, 0.0);
+        }
+        let area = 4.0 * self.half_extent.x * self.half_extent.y;
+        (1.0 / lens_area, 1.0 / (area * c.z * c.z * c.z))
+    }
+
     /// Whether the lens needs a 2D sample.
     pub fn needs_lens_sample(&self) -> bool {
         matches!(self.kind, Kind::ThinLens { .. })
@@ -424,6 +455,53 @@ mod tests {
                 }
             }
             assert!((sum - 1.0).abs() < 5e-3, "{proj:?}: {sum}");
+        }
+    }
+
+    /// `pdf_we`'s direction density is a density over the film's directions (∫ = 1 by the
+    /// midpoint rule on a (cos θ, φ) grid), 0 outside; and it relates to `sample_wi`'s
+    /// weight as pbrt-v4's importance does: We = pdf_pos·pdf_dir / cos θ, so the weight
+    /// We·cos θ / (d²·pdf_lens) is pdf_dir / d².
+    #[test]
+    fn pdf_we_is_the_ray_density() {
+        let cam = Camera::new(
+            &Projection::Perspective {
+                fov: 50.0,
+                fov_axis: FovAxis::X,
+            },
+            Mat4::from_rotation_y(0.3),
+            0.01,
+            1e4,
+            40,
+            30,
+        );
+        let (nt, np) = (1500, 1500);
+        let mut sum = 0.0f64;
+        for i in 0..nt {
+            let cos = (i as f32 + 0.5) / nt as f32;
+            let sin = (1.0 - cos * cos).sqrt();
+            for j in 0..np {
+                let phi = (j as f32 + 0.5) / np as f32 * 2.0 * crate::math::PI;
+                let local = Vec3::new(sin * phi.cos(), sin * phi.sin(), cos);
+                let d = cam.to_world.transform_vector3a(local);
+                sum += cam.pdf_we(d).1 as f64;
+            }
+        }
+        sum *= (1.0 / nt as f64) * (2.0 * std::f64::consts::PI / np as f64);
+        assert!((sum - 1.0).abs() < 2e-3, "∫ pdf_dir = {sum}");
+        let behind = cam.to_world.transform_vector3a(Vec3::new(0.0, 0.0, -1.0));
+        assert_eq!(cam.pdf_we(behind), (0.0, 0.0));
+        for p in [Vec3::new(0.3, 0.2, 3.0), Vec3::new(-1.0, 0.5, 4.0)] {
+            let pw = cam.to_world.transform_point3a(p);
+            let c = cam.sample_wi(pw, Vec2::ZERO).unwrap();
+            let (pos, dir) = cam.pdf_we(-c.wi);
+            assert_eq!(pos, 1.0);
+            let want = dir / (c.dist * c.dist);
+            assert!(
+                (c.weight / want - 1.0).abs() < 1e-4,
+                "{} vs {want}",
+                c.weight
+            );
         }
     }
 
