@@ -29,6 +29,10 @@
 //!   lights' rays start on the disk R before the scene's centre, and hit the scene's box in
 //!   the proportion its projected area πR² predicts (z-test of hit − A⊥(ω)/πR²).
 //!
+//! - `pdf_le` (not statistical) gives back each sample's `pdf_pos` and `pdf_dir` (10⁻³), its
+//!   direction density integrates to 1 over the sphere (10⁻², midpoint rule), and it is 0
+//!   for rays `sample_le` never draws.
+//!
 //! Significance: α = 0.01 over every statistical test of this file together, Šidák-corrected
 //! ([`TESTS`] = 14 × (3 + 4) lane z-tests + 7 part z-tests + 3 hit-fraction z-tests + 13 χ²
 //! tests = 121, each at level 1 − 0.99^(1/121) ≈ 8.3·10⁻⁵: |z| < 3.935, χ² p-values above
@@ -1244,4 +1248,223 @@ fn envmap_pdf_dir_is_its_pdf_li() {
             s.weight
         );
     }
+}
+
+/// Whether `got` is `want` to a relative `tol`.
+fn rel_close(got: f32, want: f32, tol: f32) -> bool {
+    (got - want).abs() <= tol * want.abs()
+}
+
+/// `pdf_le` gives back, for 2000 rays of every case's `sample_le`, that sample's `pdf_pos` and
+/// `pdf_dir` (to 10⁻³) from its unoffset origin `p`, normal `n` and direction; `p` is the ray's
+/// origin for the lights without a surface and within the offset of it for area lights.
+#[test]
+fn pdf_le_gives_the_densities_of_sample_le() {
+    let mut failures = Vec::new();
+    for (k, case) in cases(Mode::Rgb).iter().enumerate() {
+        let mut rng = Pcg32::new(400 + k as u64, 0xe6);
+        let (mut checked, mut worst) = (0, (0f32, 0f32));
+        for _ in 0..2000 {
+            let i = (rng.next_f32() * case.lights.len() as f32) as usize;
+            let light = &case.scene.lights[case.lights[i.min(case.lights.len() - 1)]];
+            let (u_pos, u_dir) = (rng.next_vec2(), rng.next_vec2());
+            let Some(s) = light.sample_le(&case.scene, u_pos, u_dir, &RgbMode) else {
+                continue;
+            };
+            checked += 1;
+            let off = (s.p - s.ray.o).length();
+            let bound = match case.place {
+                Place::Surface { .. } => 1e-4 * (1.0 + s.p.abs().max_element()),
+                _ => 0.0,
+            };
+            if off > bound {
+                failures.push(format!("{}: p {} is {off} from ray.o", case.name, s.p));
+                break;
+            }
+            let (pdf_pos, pdf_dir) = light.pdf_le(&case.scene, s.p, s.n, s.ray.d);
+            let (e_pos, e_dir) = (
+                (pdf_pos - s.pdf_pos).abs() / s.pdf_pos,
+                (pdf_dir - s.pdf_dir).abs() / s.pdf_dir,
+            );
+            worst = (worst.0.max(e_pos), worst.1.max(e_dir));
+            if !rel_close(pdf_pos, s.pdf_pos, 1e-3) || !rel_close(pdf_dir, s.pdf_dir, 1e-3) {
+                failures.push(format!(
+                    "{}: pdf_le ({pdf_pos}, {pdf_dir}) but sample_le drew ({}, {}) from {} along {}",
+                    case.name, s.pdf_pos, s.pdf_dir, s.p, s.ray.d
+                ));
+                break;
+            }
+        }
+        println!(
+            "{}: {checked} rays, largest relative differences {:.1e} (pos), {:.1e} (dir)",
+            case.name, worst.0, worst.1
+        );
+        if checked < 1900 {
+            failures.push(format!("{}: only {checked} of 2000 rays", case.name));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// ∫ f(ω) dω over the sphere by the midpoint rule on an equal-area grid of `nz` × `nphi`
+/// cells in (cos θ, φ).
+fn sphere_integral(nz: usize, nphi: usize, f: impl Fn(Vec3) -> f32) -> f64 {
+    let mut sum = 0f64;
+    for i in 0..nz {
+        let z = 1.0 - 2.0 * (i as f64 + 0.5) / nz as f64;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let mut ring = 0f64;
+        for j in 0..nphi {
+            let phi = 2.0 * PI * (j as f64 + 0.5) / nphi as f64;
+            let d = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+            ring += f(d) as f64;
+        }
+        sum += ring;
+    }
+    sum * 4.0 * PI / (nz * nphi) as f64
+}
+
+/// `pdf_le`'s direction density is normalised: its integral over the sphere (midpoint rule,
+/// 1024 × 2048 cells in (cos θ, φ)) is 1 to 10⁻², for the spots (rigid and scaled frame, where
+/// the Jacobian matters), the environment map, the constant and point lights, and the area
+/// lights at an emitted ray's origin: two-sided rectangle, one-sided disk, a cube face,
+/// the ellipsoid.
+#[test]
+fn pdf_le_direction_density_integrates_to_one() {
+    let cases = cases(Mode::Rgb);
+    let mut failures = Vec::new();
+    for name in [
+        "point",
+        "spot",
+        "spot, scaled frame",
+        "spot, CENG795 falloff",
+        "constant",
+        "envmap",
+        "cube (mesh, one-sided)",
+        "rectangle (mesh, two-sided)",
+        "disk",
+        "ellipsoid",
+    ] {
+        let case = cases.iter().find(|c| c.name == name).unwrap();
+        let light = &case.scene.lights[case.lights[0]];
+        // An origin and normal of the light's own (area lights read them).
+        let s = light
+            .sample_le(
+                &case.scene,
+                Vec2::new(0.3, 0.6),
+                Vec2::new(0.2, 0.7),
+                &RgbMode,
+            )
+            .unwrap();
+        let integral = sphere_integral(1024, 2048, |d| light.pdf_le(&case.scene, s.p, s.n, d).1);
+        println!("{name}: ∫ pdf_dir dω = {integral:.5}");
+        if (integral - 1.0).abs() > 1e-2 {
+            failures.push(format!("{name}: ∫ pdf_dir dω = {integral}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// `pdf_le` is (0, 0) for rays `sample_le` never draws: outside a spot's cutoff cone (of its
+/// own frame, rigid or scaled; just inside it is positive), behind a one-sided emitter (cube,
+/// disk, ellipsoid, sphere: the reflected direction and one grazing 0.5° behind; on both sides
+/// of a two-sided one it is |cos|/2π), and for a directional light off its direction (along
+/// it: (1/πR², 1)).
+#[test]
+fn pdf_le_is_zero_where_sample_le_never_emits() {
+    let cases = cases(Mode::Rgb);
+    let case = |name: &str| cases.iter().find(|c| c.name == name).unwrap();
+    let fv = |v: DVec3| Vec3::new(v.x as f32, v.y as f32, v.z as f32);
+    let mut failures: Vec<String> = Vec::new();
+    // A failure unless `got` is (0, 0), or `want` to 10⁻⁴.
+    let expect = |what: String, got: (f32, f32), want: Option<(f32, f32)>| {
+        let ok = match want {
+            None => got == (0.0, 0.0),
+            Some(w) => rel_close(got.0, w.0, 1e-4) && rel_close(got.1, w.1, 1e-4),
+        };
+        (!ok).then(|| format!("{what}: {got:?}, expected {want:?}"))
+    };
+
+    // Spots: local directions at 39.5° (inside the 40° cutoff) and 40.5°, 90°, 180° (outside)
+    // carried to the world by the frame.
+    for name in ["spot", "spot, scaled frame", "spot, CENG795 falloff"] {
+        let c = case(name);
+        let Place::Spot { to_world, .. } = &c.place else {
+            panic!()
+        };
+        let light = &c.scene.lights[0];
+        for phi in [0.0f64, 1.0, 2.5, 4.0] {
+            for deg in [39.5f64, 40.5, 90.0, 180.0] {
+                let t = deg.to_radians();
+                let local = DVec3::new(t.sin() * phi.cos(), t.sin() * phi.sin(), t.cos());
+                let d = fv((*to_world * local).normalize());
+                let got = light.pdf_le(&c.scene, Vec3::ZERO, Vec3::ZERO, d);
+                if deg < 40.0 {
+                    if !(got.0 == 1.0 && got.1 > 0.0) {
+                        failures.push(format!("{name}: {deg}° inside the cone: {got:?}"));
+                    }
+                } else {
+                    failures.extend(expect(format!("{name}: {deg}°, φ = {phi}"), got, None));
+                }
+            }
+        }
+    }
+
+    // Area lights at a ray's origin: the reflected direction (behind the emitting side) and
+    // a grazing one 0.5° behind it (both sides of a two-sided light emit: |cos|/2π).
+    for name in [
+        "cube (mesh, one-sided)",
+        "disk",
+        "ellipsoid",
+        "sphere",
+        "rectangle (mesh, two-sided)",
+    ] {
+        let c = case(name);
+        let light = &c.scene.lights[0];
+        let mut rng = Pcg32::new(31, 0xe7);
+        for _ in 0..100 {
+            let Some(s) = light.sample_le(&c.scene, rng.next_vec2(), rng.next_vec2(), &RgbMode)
+            else {
+                continue;
+            };
+            let back = s.ray.d - 2.0 * s.n.dot(s.ray.d) * s.n;
+            let (sin, cos) = 0.5f32.to_radians().sin_cos();
+            let grazing = (Frame::from_normal(s.n).s * cos - s.n * sin).normalize();
+            let two_sided = name.contains("two-sided");
+            for d in [back, grazing] {
+                let got = light.pdf_le(&c.scene, s.p, s.n, d);
+                let want = two_sided.then(|| (s.pdf_pos, s.n.dot(d).abs() / (2.0 * PI as f32)));
+                failures.extend(expect(format!("{name}: behind along {d}"), got, want));
+            }
+        }
+    }
+
+    // Directional: its direction, then others.
+    {
+        let c = case("directional");
+        let Place::Infinite {
+            direction: Some(dir),
+            ..
+        } = c.place
+        else {
+            panic!()
+        };
+        let light = &c.scene.lights[0];
+        let r = box_radius();
+        failures.extend(expect(
+            "directional along its direction".into(),
+            light.pdf_le(&c.scene, Vec3::ZERO, Vec3::ZERO, fv(dir)),
+            Some(((1.0 / (PI * r * r)) as f32, 1.0)),
+        ));
+        let f = Frame::from_normal(fv(dir));
+        for off in [0.01f32, 0.1, 1.0, 3.0] {
+            let d = (fv(dir) * off.cos() + f.s * off.sin()).normalize();
+            failures.extend(expect(
+                format!("directional {off} rad off its direction"),
+                light.pdf_le(&c.scene, Vec3::ZERO, Vec3::ZERO, d),
+                None,
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -275,11 +275,52 @@ impl LightModel for AreaLight {
         let le = m.illuminant_at(scene, &self.radiance, TexCoord { uv, p });
         Some(EmissionSample {
             ray: Ray::new(offset_ray_origin(p, p_error, n, w), w),
+            p,
             weight: le * (cos / (pdf_pos * pdf_dir)),
             pdf_pos,
             pdf_dir,
             n,
         })
+    }
+
+    /// `sample_le`'s densities: pdf_pos 1/A (meshes, disks, spheres; for an ellipsoid
+    /// 1/(4π·s) with s the area scale at the object-sphere point of `p`), pdf_dir cos/π with
+    /// cos = n·d (|n·d|/2π for a two-sided light); (0, 0) for d on or behind the emitting
+    /// side and for shapes `sample_le` does not emit from.
+    fn pdf_le(&self, scene: &impl LightScene, p: Vec3, n: Vec3, d: Vec3) -> (f32, f32) {
+        let info = scene.shape(self.shape);
+        let pdf_pos = match &info.geom {
+            ShapeGeom::Sphere { .. } | ShapeGeom::Disk { .. } => 1.0 / self.area,
+            ShapeGeom::Mesh { indices, .. } => {
+                // What `sample_point` accepts: a positive area, a triangle to sample.
+                let has_tri = match self.prim {
+                    Some(t) => (t as usize) < indices.len(),
+                    None => self.triangles.is_some(),
+                };
+                if self.area.is_nan() || self.area <= 0.0 || !has_tri {
+                    return (0.0, 0.0);
+                }
+                1.0 / self.area
+            }
+            ShapeGeom::Ellipsoid(e) => {
+                let q = e.to_object.transform_point3a(p).normalize_or(Vec3::Z);
+                1.0 / (4.0 * PI * e.area_scale(q))
+            }
+            ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => return (0.0, 0.0),
+        };
+        if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
+            return (0.0, 0.0);
+        }
+        let cos = n.dot(d);
+        let (cos, sides) = if self.two_sided {
+            (cos.abs(), 2.0)
+        } else {
+            (cos, 1.0)
+        };
+        if cos <= 0.0 {
+            return (0.0, 0.0);
+        }
+        (pdf_pos, cos / (PI * sides))
     }
 
     /// π·A·L̄, twice for a two-sided light.

@@ -2,7 +2,7 @@
 //! the sphere.
 
 use super::LightScene;
-use super::select::{disk_before_scene, mean, scene_radius};
+use super::select::{disk_before_scene, disk_pdf, mean, scene_radius};
 use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
 use crate::geometry::Ray;
 use crate::math::{PI, Vec2, Vec3};
@@ -73,12 +73,18 @@ impl LightModel for ConstantLight {
         let (o, pdf_pos) = disk_before_scene(scene, d, u_pos);
         Some(EmissionSample {
             ray: Ray::new(o, d),
+            p: o,
             weight: m.illuminant_declared(self.radiance, self.spectrum.as_deref())
                 / (pdf_pos * pdf_dir),
             pdf_pos,
             pdf_dir,
             n: Vec3::ZERO,
         })
+    }
+
+    /// (1/π r², 1/4π) along every direction.
+    fn pdf_le(&self, scene: &impl LightScene, _p: Vec3, _n: Vec3, _d: Vec3) -> (f32, f32) {
+        (disk_pdf(scene), warp::uniform_sphere_pdf())
     }
 
     /// The power through a disk of the scene's bounding radius r: 4π·π r²·L.

@@ -82,6 +82,9 @@ impl ShadowTarget {
 pub struct EmissionSample<C = Vec3> {
     /// Leaves the emitter (off its surface, for an area light).
     pub ray: Ray,
+    /// The point emitting the ray: on the surface for an area light (`ray.o` is offset off
+    /// it by the error bound), `ray.o` for the other lights. [`Light::pdf_le`] takes it.
+    pub p: Vec3,
     /// Le(p, ω)·|cos θ| / (pdf_pos·pdf_dir): the power the path carries, given that this
     /// light was chosen (divide by the light's selection probability). Its mean over the
     /// samples is the light's emitted power Φ.
@@ -183,6 +186,12 @@ pub(crate) trait LightModel {
         m: &M,
     ) -> Option<EmissionSample<M::C>>;
 
+    /// The densities `(pdf_pos, pdf_dir)` of [`EmissionSample`] with which `sample_le` draws
+    /// the ray from `p` (normal `n` for area lights) along the unit direction `d`; (0, 0) for
+    /// a ray it cannot draw. No default, as for `sample_le`: bidirectional methods weigh light
+    /// paths with it.
+    fn pdf_le(&self, scene: &impl LightScene, p: Vec3, n: Vec3, d: Vec3) -> (f32, f32);
+
     /// Bounds for the light BVH of a bounded light of power `phi` (`None`: infinite).
     fn bounds(&self, _scene: &impl LightScene, _phi: f32) -> Option<LightBounds> {
         None
@@ -282,6 +291,22 @@ impl Light {
         m: &M,
     ) -> Option<EmissionSample<M::C>> {
         dispatch!(self, l => l.sample_le(scene, u_pos, u_dir, m))
+    }
+
+    /// The densities `sample_le` would have drawn an emitted ray with: origin `p` (with
+    /// surface normal `n` for area lights, zero otherwise) and unit direction `d`:
+    /// (pdf_pos, pdf_dir), exactly the [`EmissionSample`] fields for that ray (pbrt-v4's
+    /// `Light::PDF_Le`). (0, 0) when `sample_le` cannot produce it.
+    ///
+    /// - `p`: [`EmissionSample::p`], the unoffset point. It is not checked to lie on the
+    ///   light: point and spot lights ignore it (their origin is their position), infinite
+    ///   lights too (pbrt's convention: pdf_pos is the density 1/(π R²) on the disk of the
+    ///   scene's bounding radius R across `d`, wherever the ray starts); area lights read it
+    ///   only where the area density varies (ellipsoids).
+    /// - `n`: the normal of the emitting side ([`EmissionSample::n`]; for a one-sided light,
+    ///   the side `le` emits to; either side for a two-sided one).
+    pub fn pdf_le(&self, scene: &impl LightScene, p: Vec3, n: Vec3, d: Vec3) -> (f32, f32) {
+        dispatch!(self, l => l.pdf_le(scene, p, n, d))
     }
 
     /// Emitted power (see [`select`]); 0 for a light that emits nothing.

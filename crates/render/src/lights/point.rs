@@ -58,11 +58,17 @@ impl LightModel for PointLight {
         let pdf_dir = warp::uniform_sphere_pdf();
         Some(EmissionSample {
             ray: Ray::new(self.position, w),
+            p: self.position,
             weight: m.illuminant_declared(self.intensity, self.spectrum.as_deref()) / pdf_dir,
             pdf_pos: 1.0,
             pdf_dir,
             n: Vec3::ZERO,
         })
+    }
+
+    /// (1, 1/4π) along every direction (`p` is taken to be the position).
+    fn pdf_le(&self, _scene: &impl LightScene, _p: Vec3, _n: Vec3, _d: Vec3) -> (f32, f32) {
+        (1.0, warp::uniform_sphere_pdf())
     }
 
     /// 4π·I.

@@ -73,8 +73,15 @@ pub(super) fn disk_before_scene(scene: &impl LightScene, d: Vec3, u: Vec2) -> (V
     let f = Frame::from_normal(d);
     (
         c + r * (f.to_world(Vec3::new(p.x, p.y, -1.0))),
-        1.0 / (PI * r * r),
+        disk_pdf(scene),
     )
+}
+
+/// The density per unit area of the origins [`disk_before_scene`] draws, 1/(π r²): an
+/// infinite light's `pdf_pos`, of whatever direction.
+pub(super) fn disk_pdf(scene: &impl LightScene) -> f32 {
+    let r = scene_radius(scene);
+    1.0 / (PI * r * r)
 }
 
 /// A light bounds box with no preferred direction (emission to every side) of power `phi`.

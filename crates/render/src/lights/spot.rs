@@ -132,11 +132,30 @@ impl LightModel for SpotLight {
         }
         Some(EmissionSample {
             ray: Ray::new(self.position, w),
+            p: self.position,
             weight: m.illuminant_declared(self.intensity, self.spectrum.as_deref()) * (f / pdf_dir),
             pdf_pos: 1.0,
             pdf_dir,
             n: Vec3::ZERO,
         })
+    }
+
+    /// (1, the cone's uniform density times the Jacobian |det A| / |A d|³) for a direction
+    /// whose local direction A d / |A d| has a non-zero falloff, (0, 0) otherwise (`p` is
+    /// taken to be the position).
+    fn pdf_le(&self, _scene: &impl LightScene, _p: Vec3, _n: Vec3, d: Vec3) -> (f32, f32) {
+        let ad = self.to_local * d;
+        let local = ad.normalize_or_zero();
+        if self.falloff(local.z) <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let aw = ad.length();
+        let pdf_dir = warp::uniform_cone_pdf(self.cos_cutoff) * self.to_local.determinant().abs()
+            / (aw * aw * aw);
+        if !(pdf_dir > 0.0 && pdf_dir.is_finite()) {
+            return (0.0, 0.0);
+        }
+        (1.0, pdf_dir)
     }
 
     /// 2π·I·((1 − cos θbeam) + (cos θbeam − cos θcutoff)/2).
