@@ -1,5 +1,6 @@
 //! Integrator factories: the scene's integrator description to the runtime integrator.
 
+use render::integrators::bdpt::BdptConfig;
 use render::integrators::path::{Combine, PathConfig};
 use render::integrators::photon::{Lookup, PhotonConfig};
 use render::integrators::ptracer::PtracerConfig;
@@ -59,6 +60,9 @@ pub fn integrator(
                 None => Progressive::Stochastic,
                 Some(eye_samples) => Progressive::Fixed { eye_samples },
             },
+        }),
+        IntegratorDesc::Bdpt { max_depth } => Integrator::Bdpt(BdptConfig {
+            max_depth: *max_depth,
         }),
         IntegratorDesc::Ptracer {
             max_depth,

@@ -140,6 +140,14 @@ fn integrator(i: &IntegratorDesc) -> String {
                 ""
             }
         ),
+        IntegratorDesc::Bdpt { max_depth } => format!(
+            "bidirectional path tracing (bdpt): max depth {}",
+            if *max_depth < 0 {
+                "unbounded".to_string()
+            } else {
+                max_depth.to_string()
+            }
+        ),
         IntegratorDesc::Ptracer {
             max_depth,
             hide_emitters,

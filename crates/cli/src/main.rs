@@ -252,6 +252,7 @@ impl TransportArgs {
                 Some(IntegratorDesc::Sppm(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Photon(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Ptracer { max_depth, .. }) => *max_depth = m,
+                Some(IntegratorDesc::Bdpt { max_depth }) => *max_depth = m,
                 _ => {}
             }
         }
@@ -291,6 +292,11 @@ impl TransportArgs {
                 IntegratorDesc::Photon(d) if !path_only => {
                     if let Some(m) = self.max_depth {
                         d.max_depth = m.max(-1);
+                    }
+                }
+                IntegratorDesc::Bdpt { max_depth } if !path_only => {
+                    if let Some(m) = self.max_depth {
+                        *max_depth = m.max(-1);
                     }
                 }
                 IntegratorDesc::Ptracer { max_depth, .. } if !path_only => {
@@ -526,6 +532,7 @@ fn max_depth_of(i: &IntegratorDesc) -> Option<i32> {
         IntegratorDesc::Sppm(d) => Some(d.max_depth),
         IntegratorDesc::Photon(d) => Some(d.max_depth),
         IntegratorDesc::Ptracer { max_depth, .. } => Some(*max_depth),
+        IntegratorDesc::Bdpt { max_depth } => Some(*max_depth),
         _ => None,
     }
 }
@@ -587,6 +594,7 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             }
             d
         }),
+        "bdpt" if arg.is_empty() => IntegratorDesc::Bdpt { max_depth: -1 },
         "ptracer" if arg.is_empty() => IntegratorDesc::Ptracer {
             max_depth: -1,
             hide_emitters: false,
@@ -626,7 +634,7 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
                  photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
-                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer)"
+                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt)"
             ));
         }
     })

@@ -55,6 +55,9 @@ enum Kind {
 pub struct CameraRay {
     pub ray: Ray,
     pub t_max: f32,
+    /// The lens point the ray leaves (world space; `ray.o` is moved along the ray to the
+    /// near clip distance). Bidirectional methods place the camera vertex there.
+    pub lens: Vec3,
 }
 
 /// A connection from a point in the scene to the camera's lens ([`Camera::sample_wi`]): where
@@ -214,6 +217,7 @@ impl Camera {
         CameraRay {
             ray: Ray::new(o + d * near_t, d),
             t_max: far_t - near_t,
+            lens: o,
         }
     }
 

@@ -123,6 +123,7 @@ pub fn render(
     match integrator {
         Integrator::Sppm(cfg) => crate::integrators::sppm::render(scene, cfg, opts, observer),
         Integrator::Ptracer(cfg) => crate::integrators::ptracer::render(scene, cfg, opts, observer),
+        Integrator::Bdpt(cfg) => crate::integrators::bdpt::render(scene, cfg, opts, observer),
         Integrator::Photon(cfg) => {
             let start = Instant::now();
             let seed = scene.sampler.seed;

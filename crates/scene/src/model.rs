@@ -1010,6 +1010,8 @@ pub enum IntegratorDesc {
     Photon(PhotonDesc),
     /// Light tracing (Mitsuba's `ptracer`): light paths connected to the camera.
     Ptracer { max_depth: i32, hide_emitters: bool },
+    /// Bidirectional path tracing (Mitsuba 0.6's `bdpt`).
+    Bdpt { max_depth: i32 },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },
     /// Nori's `simple` (one point light, no shadows from area lights).

@@ -5,6 +5,7 @@
 //! sampler's stream.
 
 mod aov;
+pub mod bdpt;
 mod direct;
 pub mod path;
 pub mod photon;
@@ -54,6 +55,9 @@ pub enum Integrator {
     /// Light tracing (Mitsuba 3's particle tracer): light paths splatted into the film, run
     /// as a whole by the render driver ([`ptracer::render`]).
     Ptracer(ptracer::PtracerConfig),
+    /// Bidirectional path tracing: light-tracing strategies splat into the film, so the
+    /// render driver runs it as a whole ([`bdpt::render`]).
+    Bdpt(bdpt::BdptConfig),
 }
 
 /// An integrator the scene asks for that this build does not have.
@@ -77,6 +81,7 @@ impl Integrator {
             },
             Integrator::Photon(_) => "photon",
             Integrator::Ptracer(_) => "ptracer",
+            Integrator::Bdpt(_) => "bdpt",
         }
     }
 
@@ -86,7 +91,10 @@ impl Integrator {
     pub fn per_sample(&self) -> bool {
         !matches!(
             self,
-            Integrator::Sppm(_) | Integrator::Photon(_) | Integrator::Ptracer(_)
+            Integrator::Sppm(_)
+                | Integrator::Photon(_)
+                | Integrator::Ptracer(_)
+                | Integrator::Bdpt(_)
         )
     }
 
@@ -96,7 +104,19 @@ impl Integrator {
         if self.per_sample() {
             return None;
         }
-        if matches!(self, Integrator::Ptracer(_)) && !scene.camera.supports_importance() {
+        if matches!(self, Integrator::Bdpt(_)) {
+            if !scene.media.is_empty() {
+                return Some(
+                    "bdpt: participating media are not implemented yet (use volpath)".into(),
+                );
+            }
+            if scene.mode != RenderMode::Rgb {
+                return Some("bdpt: spectral mode is not implemented yet (use --mode rgb)".into());
+            }
+        }
+        if matches!(self, Integrator::Ptracer(_) | Integrator::Bdpt(_))
+            && !scene.camera.supports_importance()
+        {
             return Some(format!(
                 "{}: light paths cannot be connected to an orthographic camera (use path)",
                 self.name()
@@ -139,7 +159,10 @@ impl Integrator {
                     RenderMode::Spectral => direct::li_in::<Spectral>(scene, cray, sampler, e, b),
                 }
             }
-            Integrator::Sppm(_) | Integrator::Photon(_) | Integrator::Ptracer(_) => Vec3::ZERO,
+            Integrator::Sppm(_)
+            | Integrator::Photon(_)
+            | Integrator::Ptracer(_)
+            | Integrator::Bdpt(_) => Vec3::ZERO,
         }
     }
 

@@ -99,6 +99,12 @@ pub struct EmissionSample<C = Vec3> {
     pub n: Vec3,
 }
 
+/// The density per unit area on the disk infinite lights start their emitted rays from
+/// (1 / (π R²), R the scene's bounding radius).
+pub fn infinite_disk_pdf(scene: &impl LightScene) -> f32 {
+    select::disk_pdf(scene)
+}
+
 /// The receiving point of a light query.
 #[derive(Clone, Copy, Debug)]
 pub struct Receiver {

@@ -1886,6 +1886,16 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             // samples_per_pass read: the photon tracer's roulette and one light path per
             // pixel and pass are ours) and Mitsuba 0.6's (maxDepth, rrDepth, granularity,
             // bruteForce read likewise).
+            // Mitsuba 0.6's bdpt: maxDepth; rrDepth, lightImage and sampleDirect read (our
+            // roulette starts at 5 vertices; light tracing and light sampling are always on).
+            "bdpt" => {
+                pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
+                pl.props.bool("light_image", true)?;
+                pl.props.bool("sample_direct", true)?;
+                IntegratorDesc::Bdpt {
+                    max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                }
+            }
             "ptracer" => {
                 pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
                 pl.props
@@ -1947,7 +1957,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "path, direct, photonmapper, sppm, ppm, ptracer, normals, albedo, depth, aov, ao, whitted, simple, \
+                    "path, direct, photonmapper, sppm, ppm, ptracer, bdpt, normals, albedo, depth, aov, ao, whitted, simple, \
                      direct_ems, direct_mats, direct_mis, path_mats, path_ems, path_mis",
                 ));
             }

@@ -1,0 +1,239 @@
+//! Light tracing (`ptracer`, `render::integrators::ptracer`) and bidirectional path tracing
+//! (`bdpt`, `render::integrators::bdpt`), against Mitsuba 3's references by the shared rule
+//! (16 batches × 32 spp, block t-test at α = 0.01 Šidák-corrected; skipped without
+//! `../shared`):
+//! - `bdpt` on all five RGB references;
+//! - `ptracer` on `mitsuba-cbox` (RGB and spectral) and `lights` (point, spot, directional
+//!   and area lights). The other references show surfaces through delta or near-delta
+//!   reflections (glass, mirrors, smooth plastic, `veach-plates`' α = 0.005 plate), which no
+//!   light path can reach through a pinhole: light tracing is not expected to pass them;
+//! - neither image depends on the thread count.
+
+use std::path::Path;
+
+use build::{BuildOptions, render_desc};
+use render::compare::{TestImages, compare, load_reference};
+use render::film::Image;
+use render::render::RenderOptions;
+use scene::{Document, IntegratorDesc, LoadOptions, RenderMode, SceneDesc};
+
+fn load(file: &Path, defines: &[(&str, &str)]) -> SceneDesc {
+    let opts = LoadOptions {
+        defines: defines
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+    };
+    let Document::Scene(desc) = scene::load(file, &opts).expect("scene loads") else {
+        panic!("not a scene")
+    };
+    *desc
+}
+
+/// The scene's path length (its path tracer's).
+fn max_depth(desc: &SceneDesc) -> i32 {
+    match &desc.integrator {
+        IntegratorDesc::Path(p) => p.max_depth,
+        _ => -1,
+    }
+}
+
+/// The light tracer with the scene's own path length.
+fn ptracer(desc: &SceneDesc) -> IntegratorDesc {
+    IntegratorDesc::Ptracer {
+        max_depth: max_depth(desc),
+        hide_emitters: false,
+    }
+}
+
+/// BDPT with the scene's own path length.
+fn bdpt(desc: &SceneDesc) -> IntegratorDesc {
+    IntegratorDesc::Bdpt {
+        max_depth: max_depth(desc),
+    }
+}
+
+type Choice = fn(&SceneDesc) -> IntegratorDesc;
+
+fn render_one(desc: &SceneDesc, integrator: Choice, seed: u64, mode: RenderMode) -> Image {
+    let opts = BuildOptions {
+        spp: Some(32),
+        seed: Some(seed),
+        mode,
+        integrator: Some(integrator(desc)),
+        ..Default::default()
+    };
+    let out = render_desc(desc, &opts).expect("scene builds");
+    assert_eq!(out.film.nonfinite_count(), 0, "NaN/Inf samples or splats");
+    out.film.develop()
+}
+
+/// 16 batches of 32 spp of `integrator` against the reference `name`.
+fn check(integrator: Choice, name: &str, scene_rel: &str, res: bool, mode: RenderMode) {
+    let Some(shared) = scene::testing::shared_dir("references").map(|r| r.join("..")) else {
+        return;
+    };
+    let defines: &[(&str, &str)] = if res { &[("res", "128")] } else { &[] };
+    let desc = load(&shared.join(scene_rel), defines);
+    let reference = load_reference(&shared.join("references").join(name)).expect("reference");
+    let batches: Vec<Image> = (0..16)
+        .map(|seed| render_one(&desc, integrator, seed, mode))
+        .collect();
+    let result = compare(&reference, &TestImages::Batches(batches)).expect("comparable");
+    let label = format!("{:?}", integrator(&desc));
+    println!("{label} {name}: {result}");
+    assert!(result.passed, "{label} {name}: {result}");
+}
+
+const CBOX: &str = "scenes/standard/mitsuba-cbox/cbox-rgb.xml";
+const RGB: RenderMode = RenderMode::Rgb;
+
+#[test]
+fn bdpt_mitsuba_cbox() {
+    check(bdpt, "mitsuba-cbox", CBOX, true, RGB);
+}
+
+/// Glass, a mirror, rough gold and the caustics they make.
+#[test]
+fn bdpt_cbox_specular() {
+    check(
+        bdpt,
+        "cbox-specular",
+        "references/scenes/cbox-specular.xml",
+        false,
+        RGB,
+    );
+}
+
+/// Sphere lights of four sizes over glossy plates (one of α = 0.005).
+#[test]
+fn bdpt_veach_plates() {
+    check(
+        bdpt,
+        "veach-plates",
+        "references/scenes/veach-plates.xml",
+        false,
+        RGB,
+    );
+}
+
+/// Point, spot, directional and a BSDF-less one-sided disk light.
+#[test]
+fn bdpt_lights() {
+    check(bdpt, "lights", "references/scenes/lights.xml", false, RGB);
+}
+
+/// The environment as a light (light subpaths start on the disk across the scene, their
+/// densities per unit solid angle at infinity) and a thin lens.
+#[test]
+fn bdpt_envmap_materials() {
+    let scene = "references/scenes/envmap-materials.xml";
+    check(bdpt, "envmap-materials", scene, false, RGB);
+}
+
+#[test]
+fn ptracer_mitsuba_cbox() {
+    check(ptracer, "mitsuba-cbox", CBOX, true, RGB);
+}
+
+/// Spectral mode: every light path carries its own wavelengths.
+#[test]
+fn ptracer_mitsuba_cbox_spectral() {
+    check(
+        ptracer,
+        "mitsuba-cbox-spectral",
+        CBOX,
+        true,
+        RenderMode::Spectral,
+    );
+}
+
+/// The disk has no BSDF, so light from the others must stop at it (a photon walking
+/// through such a surface once made its shadow 11 % too bright).
+#[test]
+fn ptracer_lights() {
+    check(
+        ptracer,
+        "lights",
+        "references/scenes/lights.xml",
+        false,
+        RGB,
+    );
+}
+
+#[test]
+fn same_image_for_one_and_two_threads() {
+    let desc = load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml"),
+        &[("res", "24")],
+    );
+    for integrator in [ptracer as Choice, bdpt] {
+        let render = |threads| {
+            let opts = BuildOptions {
+                spp: Some(3),
+                seed: Some(5),
+                integrator: Some(integrator(&desc)),
+                ..Default::default()
+            };
+            let built = build::build(&desc, &opts).expect("builds");
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let ropts = RenderOptions {
+                spp: 3,
+                ..Default::default()
+            };
+            pool.install(|| {
+                render::render::render(
+                    &built.scene,
+                    &built.integrator,
+                    &ropts,
+                    &render::render::Silent,
+                )
+            })
+            .film
+            .develop()
+        };
+        let (a, b) = (render(1), render(2));
+        assert!(a.pixels.iter().any(|p| p.x > 0.0));
+        assert_eq!(a.pixels, b.pixels, "{:?}", integrator(&desc));
+    }
+}
+
+/// Mitsuba 3's `ptracer` parameters (and Mitsuba 0.6's names): max_depth and hide_emitters
+/// reach the integrator; rr_depth and samples_per_pass are read.
+#[test]
+fn mitsuba_ptracer_parameters() {
+    use render::integrators::Integrator;
+    for (version, params) in [
+        (
+            "3.0.0",
+            r#"<integer name="max_depth" value="5"/><boolean name="hide_emitters" value="true"/>
+               <integer name="rr_depth" value="3"/><integer name="samples_per_pass" value="4"/>"#,
+        ),
+        (
+            "0.6.0",
+            r#"<integer name="maxDepth" value="5"/><boolean name="hideEmitters" value="true"/>
+               <integer name="rrDepth" value="3"/><integer name="granularity" value="1000"/>
+               <boolean name="bruteForce" value="false"/>"#,
+        ),
+    ] {
+        let xml = format!(
+            r#"<scene version="{version}">
+                 <integrator type="ptracer">{params}</integrator>
+                 <sensor type="perspective">
+                   <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+                 </sensor>
+                 <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+               </scene>"#
+        );
+        let desc = scene::load_xml_text("ptracer.xml", &xml).expect("loads");
+        let built = build::build(&desc, &BuildOptions::default()).expect("builds");
+        let Integrator::Ptracer(cfg) = built.integrator else {
+            panic!("{:?}", built.integrator)
+        };
+        assert_eq!(cfg.max_depth, 5, "{version}");
+        assert!(cfg.hide_emitters, "{version}");
+    }
+}

@@ -1,0 +1,820 @@
+//! Bidirectional path tracing (Veach 1997, with pbrt-v4's structure): per camera sample a
+//! camera subpath and a light subpath, and every connection strategy (s light vertices,
+//! t camera vertices) weighted by the power heuristic over all strategies that could have
+//! made the same path, from the forward and reverse densities of each vertex (area measure).
+//!
+//! - s = 0: the camera subpath reaches an emitter (or leaves the scene) by itself;
+//! - s = 1: a light point sampled for the camera vertex (`Light::sample_li`);
+//! - t = 1: a light subpath vertex connected to the camera (`Camera::sample_wi`), splatted
+//!   into the film's splat layer (see `film::accum`), merged in tile order;
+//! - s, t ≥ 2: the two subpaths' end vertices joined by a shadow ray.
+//!
+//! (s, t) = (1, 1) is left out, as in pbrt: a light point seen straight by the lens is the
+//! s = 0 strategy's. `max_depth` bounds the edges of every path (camera to light), as the
+//! path tracer's does. Each subpath goes on by Russian roulette once it has 5 vertices (its
+//! survival probability divides its throughput; the MIS densities leave it out).
+//!
+//! The densities: `pdf_fwd` of a vertex is the density, per unit area (per unit solid angle
+//! for a vertex at infinity), with which its own subpath sampled it; `pdf_rev` the density
+//! with which the other subpath would have. A vertex's reverse density needs its successor,
+//! so it is set one step late; a connection overrides the four around the joint. Light
+//! subpaths choose their light by power; the light sampled for s = 1 and the density of an
+//! emitter reached by a camera subpath use the same choice.
+//!
+//! Not yet: participating media (the scene is refused), spectral mode (refused),
+//! per-strategy images.
+
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::camera::CameraRay;
+use crate::film::Film;
+use crate::geometry::Ray;
+use crate::lights::{LightSample, Receiver, ShadowTarget};
+use crate::math::UVec2;
+use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::{Distribution1D, Sampler};
+use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::shapes::SurfaceInteraction;
+use crate::spectral::lanes::RgbMode;
+use crate::world::Scene;
+use base::TransmittanceEstimator;
+
+use super::volpath::{From, transmittance};
+
+/// The parameters of [`Bdpt`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct BdptConfig {
+    /// Longest path in edges, camera to light (−1: unbounded).
+    pub max_depth: i32,
+}
+
+impl Default for BdptConfig {
+    fn default() -> Self {
+        BdptConfig { max_depth: -1 }
+    }
+}
+
+/// Subpath vertices that start Russian roulette.
+const RR_FROM: usize = 5;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Camera,
+    /// The first vertex of a light subpath, or a light point sampled for s = 1.
+    Light(u32),
+    /// Where a camera subpath left the scene: the environment in direction `p − previous`.
+    Infinite,
+    Surface,
+}
+
+#[derive(Clone)]
+struct Vertex {
+    kind: Kind,
+    p: Vec3,
+    /// Geometric normal (zero for points and infinity).
+    ng: Vec3,
+    /// Shading normal (zero for points and infinity).
+    ns: Vec3,
+    si: Option<SurfaceInteraction>,
+    bsdf: Option<(Bsdf, Frame)>,
+    /// Throughput from the subpath's start to here (its own estimate's factor).
+    beta: Vec3,
+    /// Emission towards the previous vertex of a camera subpath (emitters it reached).
+    le: Vec3,
+    delta: bool,
+    /// A vertex at infinity (the environment, or a light subpath's origin on an infinite
+    /// light): densities towards it stay per unit solid angle.
+    at_infinity: bool,
+    pdf_fwd: f32,
+    pdf_rev: f32,
+}
+
+impl Vertex {
+    fn new(kind: Kind, p: Vec3, beta: Vec3) -> Vertex {
+        Vertex {
+            kind,
+            p,
+            ng: Vec3::ZERO,
+            ns: Vec3::ZERO,
+            si: None,
+            bsdf: None,
+            beta,
+            le: Vec3::ZERO,
+            delta: false,
+            at_infinity: kind == Kind::Infinite,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+        }
+    }
+
+    fn on_surface(&self) -> bool {
+        self.ng != Vec3::ZERO
+    }
+
+    /// Whether a connection can end here (no delta lobe only).
+    fn connectible(&self) -> bool {
+        match self.kind {
+            Kind::Camera => true,
+            Kind::Infinite => true,
+            Kind::Light(_) => true,
+            Kind::Surface => self.bsdf.as_ref().is_some_and(|(b, _)| b.has_smooth()),
+        }
+    }
+}
+
+/// The light a vertex stands for (its own, an emitter surface's, or the environment).
+#[derive(Clone, Copy)]
+enum LightRef {
+    One(u32),
+    Environment,
+}
+
+/// Bidirectional path tracer state shared by all samples.
+pub struct Bdpt<'a> {
+    cfg: &'a BdptConfig,
+    /// Lights chosen by power.
+    dist: Distribution1D,
+    any: bool,
+}
+
+/// Area density of `pdf` (per unit solid angle at `from`) at `to`.
+fn convert_density(pdf: f32, from: &Vertex, to: &Vertex) -> f32 {
+    if to.at_infinity {
+        return pdf;
+    }
+    let w = to.p - from.p;
+    let d2 = w.length_squared();
+    if d2 == 0.0 {
+        return 0.0;
+    }
+    let mut pdf = pdf / d2;
+    if to.on_surface() {
+        pdf *= to.ng.dot(w / d2.sqrt()).abs();
+    }
+    pdf
+}
+
+fn remap0(x: f32) -> f32 {
+    if x != 0.0 { x } else { 1.0 }
+}
+
+impl<'a> Bdpt<'a> {
+    pub fn new(scene: &Scene, cfg: &'a BdptConfig) -> Bdpt<'a> {
+        let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(scene)).collect();
+        Bdpt {
+            cfg,
+            any: powers.iter().any(|&p| p > 0.0),
+            dist: Distribution1D::new(&powers),
+        }
+    }
+
+    fn allows(&self, edges: usize) -> bool {
+        self.cfg.max_depth < 0 || edges <= self.cfg.max_depth as usize
+    }
+
+    fn light_of(&self, scene: &Scene, v: &Vertex) -> Option<LightRef> {
+        match v.kind {
+            Kind::Light(l) => Some(if scene.lights[l as usize].is_infinite() {
+                LightRef::Environment
+            } else {
+                LightRef::One(l)
+            }),
+            Kind::Infinite => Some(LightRef::Environment),
+            Kind::Surface => {
+                v.si.as_ref()
+                    .and_then(|si| scene.shape_light(si))
+                    .map(LightRef::One)
+            }
+            Kind::Camera => None,
+        }
+    }
+
+    /// Density of the light choice and of the origin `v` of a light subpath towards `next`
+    /// (pbrt's `PdfLightOrigin`): per unit area, or for the environment per unit solid
+    /// angle of the direction (summed over the infinite lights).
+    fn pdf_light_origin(&self, scene: &Scene, v: &Vertex, next: &Vertex) -> f32 {
+        let w = (next.p - v.p).normalize_or_zero();
+        match self.light_of(scene, v) {
+            Some(LightRef::One(l)) => {
+                let (pos, _) = scene.lights[l as usize].pdf_le(scene, v.p, v.ng, w);
+                self.dist.pmf(l as usize) * pos
+            }
+            Some(LightRef::Environment) => {
+                // `w` is the direction light leaves along, away from the environment.
+                let d = w;
+                scene
+                    .infinite_lights
+                    .iter()
+                    .map(|&i| {
+                        let (_, dir) = scene.lights[i as usize].pdf_le(scene, v.p, v.ng, d);
+                        self.dist.pmf(i as usize) * dir
+                    })
+                    .sum()
+            }
+            None => 0.0,
+        }
+    }
+
+    /// Area density at `next` of a light subpath leaving the emitter vertex `v` towards it
+    /// (pbrt's `PdfLight`).
+    fn pdf_light(&self, scene: &Scene, v: &Vertex, next: &Vertex) -> f32 {
+        let w = next.p - v.p;
+        let d2 = w.length_squared();
+        if d2 == 0.0 {
+            return 0.0;
+        }
+        let w = w / d2.sqrt();
+        let mut pdf = match self.light_of(scene, v) {
+            Some(LightRef::One(l)) => scene.lights[l as usize].pdf_le(scene, v.p, v.ng, w).1 / d2,
+            // The density on the disk the environment's rays start from.
+            Some(LightRef::Environment) => crate::lights::infinite_disk_pdf(scene),
+            None => 0.0,
+        };
+        if next.on_surface() {
+            pdf *= next.ng.dot(w).abs();
+        }
+        pdf
+    }
+
+    /// Area density with which vertex `v` (reached from `prev`) samples `next`.
+    fn pdf(&self, scene: &Scene, v: &Vertex, prev: Option<&Vertex>, next: &Vertex) -> f32 {
+        match v.kind {
+            Kind::Light(_) | Kind::Infinite => self.pdf_light(scene, v, next),
+            Kind::Camera => {
+                let w = (next.p - v.p).normalize_or_zero();
+                let (_, dir) = scene.camera.pdf_we(w);
+                convert_density(dir, v, next)
+            }
+            Kind::Surface => {
+                let (Some(prev), Some((bsdf, frame))) = (prev, v.bsdf.as_ref()) else {
+                    return 0.0;
+                };
+                let wo = (prev.p - v.p).normalize_or_zero();
+                let wi = (next.p - v.p).normalize_or_zero();
+                let pdf = bsdf.pdf(frame.to_local(wo), frame.to_local(wi));
+                convert_density(pdf, v, next)
+            }
+        }
+    }
+
+    /// f·|cos| at surface vertex `v` (reached from `prev`) towards `next`, in `mode`.
+    fn fcos(v: &Vertex, prev: &Vertex, next: &Vertex, mode: TransportMode) -> Vec3 {
+        let Some((bsdf, frame)) = v.bsdf.as_ref() else {
+            return Vec3::ZERO;
+        };
+        let wo = (prev.p - v.p).normalize_or_zero();
+        let wi = (next.p - v.p).normalize_or_zero();
+        bsdf.eval(frame.to_local(wo), frame.to_local(wi), mode)
+    }
+
+    /// Extend `path` from `ray` (its last vertex the start), `beta` its throughput and
+    /// `pdf_dir` the solid-angle density of `ray`'s direction, up to `max_vertices`.
+    #[allow(clippy::too_many_arguments)]
+    fn random_walk(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        mut t_max: f32,
+        mut beta: Vec3,
+        mut pdf_dir: f32,
+        sampler: &mut Sampler,
+        mode: TransportMode,
+        max_vertices: usize,
+        path: &mut Vec<Vertex>,
+    ) {
+        let m = &RgbMode;
+        // Bounded: null crossings add no vertex.
+        for _ in 0..(1 << 16) {
+            if path.len() >= max_vertices {
+                return;
+            }
+            let Some(si) = scene.intersect(&ray, t_max) else {
+                if mode == TransportMode::Radiance {
+                    let prev = path.last().expect("a subpath has a start");
+                    let mut v = Vertex::new(Kind::Infinite, prev.p + ray.d, beta);
+                    for &i in &scene.infinite_lights {
+                        v.le += scene.lights[i as usize].environment(ray.d, m);
+                    }
+                    v.pdf_fwd = pdf_dir;
+                    path.push(v);
+                }
+                return;
+            };
+            let bsdf = scene.bsdf_at_in(&si, m);
+            if bsdf.is_none() && scene.is_null(&si) {
+                ray = si.spawn_ray(ray.d);
+                t_max = f32::INFINITY;
+                continue;
+            }
+            let prev = path.last().expect("a subpath has a start");
+            let mut v = Vertex::new(Kind::Surface, si.p, beta);
+            v.ng = si.ng;
+            v.ns = si.shading.n;
+            if mode == TransportMode::Radiance
+                && let Some(l) = scene.shape_light(&si)
+            {
+                v.le = scene.lights[l as usize].le(scene, &si, m);
+            }
+            v.pdf_fwd = convert_density(pdf_dir, prev, &v);
+            v.bsdf = bsdf;
+            v.si = Some(si);
+            path.push(v);
+            let n = path.len();
+            if n >= max_vertices {
+                return;
+            }
+            let v = &path[n - 1];
+            let Some((bsdf, frame)) = v.bsdf.as_ref() else {
+                return;
+            };
+            let si = v.si.as_ref().expect("surface vertex");
+            let wo = frame.to_local(si.wo);
+            let u1 = sampler.next_1d();
+            let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), mode) else {
+                return;
+            };
+            let mut pdf_rev = bsdf.pdf(bs.wi, wo);
+            let delta = bs.delta;
+            if delta {
+                pdf_dir = 0.0;
+                pdf_rev = 0.0;
+            } else {
+                pdf_dir = bs.pdf;
+            }
+            beta *= bs.weight;
+            if n >= RR_FROM {
+                let q = beta.max_element().min(0.95);
+                if sampler.next_1d() >= q || q.is_nan() {
+                    return;
+                }
+                beta /= q;
+            }
+            if beta == Vec3::ZERO || !beta.is_finite() {
+                return;
+            }
+            let wi = frame.to_world(bs.wi);
+            ray = si.spawn_ray(wi);
+            t_max = f32::INFINITY;
+            // The reverse density of the previous vertex: from this one back to it.
+            let rev = {
+                let (prev, cur) = path.split_at_mut(n - 1);
+                let cur = &mut cur[0];
+                cur.delta = delta;
+                convert_density(pdf_rev, cur, &prev[n - 2])
+            };
+            path[n - 2].pdf_rev = rev;
+        }
+    }
+
+    fn camera_subpath(
+        &self,
+        scene: &Scene,
+        cray: &CameraRay,
+        sampler: &mut Sampler,
+        path: &mut Vec<Vertex>,
+    ) {
+        let max_vertices = if self.cfg.max_depth < 0 {
+            usize::MAX
+        } else {
+            self.cfg.max_depth as usize + 1
+        };
+        let mut v = Vertex::new(Kind::Camera, cray.lens, Vec3::ONE);
+        v.ns = Vec3::ZERO;
+        path.push(v);
+        let (_, pdf_dir) = scene.camera.pdf_we(cray.ray.d.normalize());
+        let len = cray.ray.d.length();
+        let ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
+        self.random_walk(
+            scene,
+            ray,
+            cray.t_max * len,
+            Vec3::ONE,
+            pdf_dir,
+            sampler,
+            TransportMode::Radiance,
+            max_vertices,
+            path,
+        );
+    }
+
+    fn light_subpath(&self, scene: &Scene, sampler: &mut Sampler, path: &mut Vec<Vertex>) {
+        let max_vertices = if self.cfg.max_depth < 0 {
+            usize::MAX
+        } else {
+            self.cfg.max_depth as usize
+        };
+        let (li, pmf, _) = self.dist.sample_discrete(sampler.next_1d());
+        let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+        if !self.any || pmf.is_nan() || pmf <= 0.0 || max_vertices == 0 {
+            return;
+        }
+        let light = &scene.lights[li];
+        let Some(e) = light.sample_le(scene, u_pos, u_dir, &RgbMode) else {
+            return;
+        };
+        if e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 {
+            return;
+        }
+        let mut v = Vertex::new(Kind::Light(li as u32), e.p, Vec3::ZERO);
+        v.ng = e.n;
+        v.ns = e.n;
+        let infinite = light.is_infinite();
+        v.at_infinity = infinite;
+        v.pdf_fwd = if infinite {
+            0.0 // set below, once the direction density of every infinite light is known
+        } else {
+            pmf * e.pdf_pos
+        };
+        path.push(v);
+        self.random_walk(
+            scene,
+            e.ray,
+            f32::INFINITY,
+            e.weight / pmf,
+            e.pdf_dir,
+            sampler,
+            TransportMode::Importance,
+            max_vertices,
+            path,
+        );
+        if infinite {
+            // pbrt: the first surface's density is the disk's, times its cosine; the
+            // light vertex's that of the direction (every infinite light's).
+            if path.len() > 1 {
+                let next = &path[1];
+                let mut pdf = e.pdf_pos;
+                if next.on_surface() {
+                    pdf *= next.ng.dot(e.ray.d).abs();
+                }
+                path[1].pdf_fwd = pdf;
+            }
+            let o = path[0].clone();
+            path[0].pdf_fwd = scene
+                .infinite_lights
+                .iter()
+                .map(|&i| {
+                    let (_, dir) = scene.lights[i as usize].pdf_le(scene, o.p, o.ng, e.ray.d);
+                    self.dist.pmf(i as usize) * dir
+                })
+                .sum();
+        }
+    }
+
+    /// The radiance of one camera sample; light-tracing contributions (t = 1) go to
+    /// `splats` as (film position, value).
+    pub fn li(
+        &self,
+        scene: &Scene,
+        cray: &CameraRay,
+        sampler: &mut Sampler,
+        splats: &mut Vec<(Vec2, Vec3)>,
+    ) -> Vec3 {
+        let mut cam = Vec::with_capacity(8);
+        let mut light = Vec::with_capacity(8);
+        self.camera_subpath(scene, cray, sampler, &mut cam);
+        self.light_subpath(scene, sampler, &mut light);
+        let mut l = Vec3::ZERO;
+        for t in 1..=cam.len() {
+            for s in 0..=light.len() {
+                let depth = s + t;
+                if (s == 1 && t == 1) || depth < 2 || !self.allows(depth - 1) {
+                    continue;
+                }
+                if t == 1 {
+                    if let Some((p, c)) = self.connect_camera(scene, &cam, &light, s, sampler) {
+                        splats.push((p, c));
+                    }
+                    continue;
+                }
+                l += self.connect(scene, &cam, &light, s, t, sampler);
+            }
+        }
+        l
+    }
+
+    /// Strategy (s, t ≥ 2).
+    fn connect(
+        &self,
+        scene: &Scene,
+        cam: &[Vertex],
+        light: &[Vertex],
+        s: usize,
+        t: usize,
+        sampler: &mut Sampler,
+    ) -> Vec3 {
+        let pt = &cam[t - 1];
+        if s == 0 {
+            // The camera subpath reached an emitter.
+            if pt.le == Vec3::ZERO {
+                return Vec3::ZERO;
+            }
+            let c = pt.beta * pt.le;
+            return c * self.mis_weight(scene, cam, light, None, s, t);
+        }
+        if !pt.connectible() || pt.kind != Kind::Surface {
+            return Vec3::ZERO;
+        }
+        let si = pt.si.as_ref().expect("surface vertex");
+        if s == 1 {
+            // A light point sampled for pt.
+            let (li, pmf, _) = self.dist.sample_discrete(sampler.next_1d());
+            let u = sampler.next_2d();
+            if pmf <= 0.0 || !self.any {
+                return Vec3::ZERO;
+            }
+            let light_ = &scene.lights[li];
+            let Some(ls) = light_.sample_li(scene, &Receiver::from(si), u, &RgbMode) else {
+                return Vec3::ZERO;
+            };
+            if ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
+                return Vec3::ZERO;
+            }
+            let (bsdf, frame) = pt.bsdf.as_ref().expect("connectible");
+            let f = bsdf.eval(
+                frame.to_local(si.wo),
+                frame.to_local(ls.wi),
+                TransportMode::Radiance,
+            );
+            if f == Vec3::ZERO {
+                return Vec3::ZERO;
+            }
+            if !self.visible(scene, From::Surface(si), &ls) {
+                return Vec3::ZERO;
+            }
+            let mut sampled = match ls.target {
+                ShadowTarget::Surface { p, n, .. } => {
+                    let mut v = Vertex::new(Kind::Light(li as u32), p, Vec3::ZERO);
+                    v.ng = n;
+                    v.ns = n;
+                    v
+                }
+                ShadowTarget::Point(p) => Vertex::new(Kind::Light(li as u32), p, Vec3::ZERO),
+                ShadowTarget::Infinite => {
+                    let mut v = Vertex::new(Kind::Light(li as u32), si.p + ls.wi, Vec3::ZERO);
+                    v.at_infinity = true;
+                    v
+                }
+            };
+            sampled.pdf_fwd = self.pdf_light_origin(scene, &sampled, pt);
+            let c = pt.beta * f * ls.li / (ls.pdf * pmf);
+            return c * self.mis_weight(scene, cam, light, Some(&sampled), s, t);
+        }
+        let qs = &light[s - 1];
+        if !qs.connectible() || qs.kind != Kind::Surface {
+            return Vec3::ZERO;
+        }
+        let d = qs.p - pt.p;
+        let d2 = d.length_squared();
+        if d2 == 0.0 {
+            return Vec3::ZERO;
+        }
+        let fq = Self::fcos(qs, &light[s - 2], pt, TransportMode::Importance);
+        let fp = Self::fcos(pt, &cam[t - 2], qs, TransportMode::Radiance);
+        let c = qs.beta * fq * fp * pt.beta / d2;
+        if c == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let qsi = qs.si.as_ref().expect("surface vertex");
+        let query = LightSample {
+            wi: d / d2.sqrt(),
+            li: Vec3::ZERO,
+            pdf: 1.0,
+            delta: true,
+            target: ShadowTarget::Surface {
+                p: qsi.p,
+                p_error: qsi.p_error,
+                n: qsi.ng,
+            },
+        };
+        if !self.visible(scene, From::Surface(si), &query) {
+            return Vec3::ZERO;
+        }
+        c * self.mis_weight(scene, cam, light, None, s, t)
+    }
+
+    /// Strategy t = 1: light vertex s − 1 seen by the lens.
+    fn connect_camera(
+        &self,
+        scene: &Scene,
+        cam: &[Vertex],
+        light: &[Vertex],
+        s: usize,
+        sampler: &mut Sampler,
+    ) -> Option<(Vec2, Vec3)> {
+        let qs = &light[s - 1];
+        if qs.kind != Kind::Surface || !qs.connectible() {
+            return None;
+        }
+        let c = scene.camera.sample_wi(qs.p, sampler.next_2d())?;
+        let lens_v = Vertex::new(Kind::Camera, c.p_lens, Vec3::ONE);
+        let f = Self::fcos(qs, &light[s - 2], &lens_v, TransportMode::Importance);
+        if f == Vec3::ZERO {
+            return None;
+        }
+        let qsi = qs.si.as_ref().expect("surface vertex");
+        let query = LightSample {
+            wi: c.wi,
+            li: Vec3::ZERO,
+            pdf: 1.0,
+            delta: true,
+            target: ShadowTarget::Point(c.p_lens),
+        };
+        if !self.visible(scene, From::Surface(qsi), &query) {
+            return None;
+        }
+        let value = qs.beta * f * c.weight;
+        let w = self.mis_weight(scene, cam, light, Some(&lens_v), s, 1);
+        Some((c.p_film, value * w))
+    }
+
+    fn visible(&self, scene: &Scene, from: From<'_>, query: &LightSample) -> bool {
+        let mut dummy = Sampler::new(base::SamplerKind::Independent, 1, 0);
+        transmittance(
+            scene,
+            from,
+            query,
+            None,
+            TransmittanceEstimator::default(),
+            &mut dummy,
+            &RgbMode,
+        ) != Vec3::ZERO
+    }
+
+    /// The power-heuristic weight of strategy (s, t); `sampled` replaces the end vertex the
+    /// strategy sampled afresh (the light point for s = 1, the lens point for t = 1).
+    fn mis_weight(
+        &self,
+        scene: &Scene,
+        cam: &[Vertex],
+        light: &[Vertex],
+        sampled: Option<&Vertex>,
+        s: usize,
+        t: usize,
+    ) -> f32 {
+        if s + t == 2 {
+            return 1.0;
+        }
+        // (pdf_fwd, pdf_rev, delta) of each vertex, with the joint's overrides.
+        let mut cm: Vec<(f32, f32, bool)> = cam[..t]
+            .iter()
+            .map(|v| (v.pdf_fwd, v.pdf_rev, v.delta))
+            .collect();
+        let mut lm: Vec<(f32, f32, bool)> = light[..s]
+            .iter()
+            .map(|v| (v.pdf_fwd, v.pdf_rev, v.delta))
+            .collect();
+        let pt: &Vertex = if t == 1 {
+            let v = sampled.expect("t = 1 has a sampled lens vertex");
+            cm[0] = (v.pdf_fwd, v.pdf_rev, false);
+            v
+        } else {
+            &cam[t - 1]
+        };
+        let qs: Option<&Vertex> = if s == 0 {
+            None
+        } else if s == 1 {
+            match sampled {
+                Some(v) if t != 1 => {
+                    lm[0] = (v.pdf_fwd, v.pdf_rev, false);
+                    Some(v)
+                }
+                _ => Some(&light[0]),
+            }
+        } else {
+            Some(&light[s - 1])
+        };
+        let pt_minus = if t >= 2 { Some(&cam[t - 2]) } else { None };
+        let qs_minus = if s >= 2 { Some(&light[s - 2]) } else { None };
+        // The endpoints are connectible: not delta.
+        cm[t - 1].2 = false;
+        if s > 0 {
+            lm[s - 1].2 = false;
+        }
+        // pt's reverse density: from qs (or, for s = 0, as a light subpath's origin).
+        cm[t - 1].1 = match qs {
+            Some(q) => self.pdf(scene, q, qs_minus, pt),
+            None => self.pdf_light_origin(scene, pt, pt_minus.expect("t ≥ 2 when s = 0")),
+        };
+        if let Some(pm) = pt_minus {
+            cm[t - 2].1 = match qs {
+                Some(q) => self.pdf(scene, pt, Some(q), pm),
+                None => self.pdf_light(scene, pt, pm),
+            };
+        }
+        if let Some(q) = qs {
+            lm[s - 1].1 = self.pdf(scene, pt, pt_minus, q);
+            if let Some(qm) = qs_minus {
+                lm[s - 2].1 = self.pdf(scene, q, Some(pt), qm);
+            }
+        }
+        let mut sum = 0.0f32;
+        let mut ri = 1.0f32;
+        for i in (1..t).rev() {
+            let r = remap0(cm[i].1) / remap0(cm[i].0);
+            ri *= r * r;
+            // Strategy (s + t − i, i); (1, 1) is not one of ours.
+            let ours = !(i == 1 && s + t == 2);
+            if ours && !cm[i].2 && !cm[i - 1].2 {
+                sum += ri;
+            }
+        }
+        ri = 1.0;
+        for i in (0..s).rev() {
+            let r = remap0(lm[i].1) / remap0(lm[i].0);
+            ri *= r * r;
+            let delta_before = if i > 0 {
+                lm[i - 1].2
+            } else {
+                // The light of the subpath's origin: a delta light is never hit.
+                let origin = match (s, t, sampled) {
+                    (1, t, Some(v)) if t != 1 => v,
+                    _ => &light[0],
+                };
+                matches!(origin.kind, Kind::Light(l) if scene.lights[l as usize].is_delta())
+            };
+            if !lm[i].2 && !delta_before {
+                sum += ri;
+            }
+        }
+        let w = 1.0 / (1.0 + sum);
+        if w.is_finite() { w } else { 0.0 }
+    }
+}
+
+/// Render `scene` with BDPT: `opts.spp` passes of one sample per pixel, rows in parallel,
+/// each row's film tile and light-tracing splats merged in row order (the image does not
+/// depend on the thread count); a time budget or cancellation stops after a whole pass.
+pub fn render(
+    scene: &Scene,
+    cfg: &BdptConfig,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
+    let start = Instant::now();
+    let f = &scene.film;
+    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
+    let (pmin, pmax) = film.pixel_bounds();
+    let size = pmax - pmin;
+    let pixel_count = size.x as u64 * size.y as u64;
+    let bdpt = Bdpt::new(scene, cfg);
+    let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
+    let target = opts.spp.max(1);
+    let mut done = 0u32;
+    let mut cancelled = false;
+    while done < target {
+        if opts.cancel.load(Ordering::Relaxed) {
+            cancelled = true;
+            break;
+        }
+        if let Some(b) = opts.time_budget
+            && done > 0
+            && start.elapsed() >= b
+        {
+            break;
+        }
+        let pass = done;
+        let rows: Vec<_> = (pmin.y..pmax.y)
+            .into_par_iter()
+            .map(|y| {
+                let mut tile = film.tile(UVec2::new(pmin.x, y), UVec2::new(pmax.x, y + 1));
+                let mut splats = Vec::new();
+                let mut sampler = template.clone();
+                for x in pmin.x..pmax.x {
+                    let (p_film, cray) = camera_sample(scene, &mut sampler, UVec2::new(x, y), pass);
+                    let l = bdpt.li(scene, &cray, &mut sampler, &mut splats);
+                    tile.add_sample(p_film, l);
+                }
+                (tile, splats)
+            })
+            .collect();
+        for (tile, splats) in &rows {
+            film.merge(tile);
+            for &(p, c) in splats {
+                film.add_splat(p, c);
+            }
+        }
+        done += 1;
+        // The camera's importance is normalised over the full image: light paths per
+        // pixel of it.
+        let full = f.width as f64 * f.height as f64;
+        film.set_splat_scale(full / (pixel_count.max(1) as f64 * done as f64));
+        observer.progress(&Progress {
+            samples_done: done as u64 * pixel_count,
+            samples_total: target as u64 * pixel_count,
+            elapsed: start.elapsed(),
+            spp_done: done,
+        });
+        observer.pass_done(&film, done);
+    }
+    RenderOutcome {
+        film,
+        spp: done,
+        passes: done,
+        elapsed: start.elapsed(),
+        cancelled,
+    }
+}
