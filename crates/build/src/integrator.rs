@@ -1,6 +1,7 @@
 //! Integrator factories: the scene's integrator description to the runtime integrator.
 
 use render::integrators::bdpt::BdptConfig;
+use render::integrators::mlt::MltConfig;
 use render::integrators::path::{Combine, PathConfig};
 use render::integrators::photon::{Lookup, PhotonConfig};
 use render::integrators::ptracer::PtracerConfig;
@@ -60,6 +61,19 @@ pub fn integrator(
                 None => Progressive::Stochastic,
                 Some(eye_samples) => Progressive::Fixed { eye_samples },
             },
+        }),
+        IntegratorDesc::Mlt {
+            max_depth,
+            bootstrap,
+            chains,
+            large_step,
+            sigma,
+        } => Integrator::Mlt(MltConfig {
+            max_depth: if *max_depth < 0 { 5 } else { *max_depth as u32 },
+            bootstrap: *bootstrap,
+            chains: *chains,
+            large_step: *large_step,
+            sigma: *sigma,
         }),
         IntegratorDesc::Bdpt { max_depth } => Integrator::Bdpt(BdptConfig {
             max_depth: *max_depth,

@@ -140,6 +140,16 @@ fn integrator(i: &IntegratorDesc) -> String {
                 ""
             }
         ),
+        IntegratorDesc::Mlt {
+            max_depth,
+            bootstrap,
+            chains,
+            large_step,
+            sigma,
+        } => format!(
+            "Metropolis light transport (mlt): max depth {max_depth}, {bootstrap} bootstrap \
+             samples per depth, {chains} chains, large steps {large_step}, sigma {sigma}"
+        ),
         IntegratorDesc::Bdpt { max_depth } => format!(
             "bidirectional path tracing (bdpt): max depth {}",
             if *max_depth < 0 {

@@ -253,6 +253,7 @@ impl TransportArgs {
                 Some(IntegratorDesc::Photon(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Ptracer { max_depth, .. }) => *max_depth = m,
                 Some(IntegratorDesc::Bdpt { max_depth }) => *max_depth = m,
+                Some(IntegratorDesc::Mlt { max_depth, .. }) => *max_depth = m,
                 _ => {}
             }
         }
@@ -292,6 +293,11 @@ impl TransportArgs {
                 IntegratorDesc::Photon(d) if !path_only => {
                     if let Some(m) = self.max_depth {
                         d.max_depth = m.max(-1);
+                    }
+                }
+                IntegratorDesc::Mlt { max_depth, .. } if !path_only => {
+                    if let Some(m) = self.max_depth {
+                        *max_depth = m.max(-1);
                     }
                 }
                 IntegratorDesc::Bdpt { max_depth } if !path_only => {
@@ -533,6 +539,7 @@ fn max_depth_of(i: &IntegratorDesc) -> Option<i32> {
         IntegratorDesc::Photon(d) => Some(d.max_depth),
         IntegratorDesc::Ptracer { max_depth, .. } => Some(*max_depth),
         IntegratorDesc::Bdpt { max_depth } => Some(*max_depth),
+        IntegratorDesc::Mlt { max_depth, .. } => Some(*max_depth),
         _ => None,
     }
 }
@@ -595,6 +602,13 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             d
         }),
         "bdpt" if arg.is_empty() => IntegratorDesc::Bdpt { max_depth: -1 },
+        "mlt" if arg.is_empty() => IntegratorDesc::Mlt {
+            max_depth: -1,
+            bootstrap: 100_000,
+            chains: 1000,
+            large_step: 0.3,
+            sigma: 0.01,
+        },
         "ptracer" if arg.is_empty() => IntegratorDesc::Ptracer {
             max_depth: -1,
             hide_emitters: false,
@@ -634,7 +648,7 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
                  photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
-                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt)"
+                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt, mlt)"
             ));
         }
     })

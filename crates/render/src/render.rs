@@ -124,6 +124,7 @@ pub fn render(
         Integrator::Sppm(cfg) => crate::integrators::sppm::render(scene, cfg, opts, observer),
         Integrator::Ptracer(cfg) => crate::integrators::ptracer::render(scene, cfg, opts, observer),
         Integrator::Bdpt(cfg) => crate::integrators::bdpt::render(scene, cfg, opts, observer),
+        Integrator::Mlt(cfg) => crate::integrators::mlt::render(scene, cfg, opts, observer),
         Integrator::Photon(cfg) => {
             let start = Instant::now();
             let seed = scene.sampler.seed;

@@ -1012,6 +1012,15 @@ pub enum IntegratorDesc {
     Ptracer { max_depth: i32, hide_emitters: bool },
     /// Bidirectional path tracing (Mitsuba 0.6's `bdpt`).
     Bdpt { max_depth: i32 },
+    /// Metropolis light transport over BDPT, multiplexed over strategies (pbrt-v3's `mlt`;
+    /// Mitsuba 0.6's `pssmlt`/`mlt` names): `max_depth` −1 means pbrt's 5.
+    Mlt {
+        max_depth: i32,
+        bootstrap: u32,
+        chains: u32,
+        large_step: f32,
+        sigma: f32,
+    },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },
     /// Nori's `simple` (one point light, no shadows from area lights).

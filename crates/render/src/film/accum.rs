@@ -375,6 +375,22 @@ impl Film {
         }
     }
 
+    /// Adds `other`'s splat layer (a film of the same size) times `scale` to this one's.
+    pub fn add_splat_layer(&mut self, other: &Film, scale: f64) {
+        if other.splats.is_empty() {
+            return;
+        }
+        if self.splats.is_empty() {
+            self.splats = vec![[0.0; 3]; self.pixels.len()];
+        }
+        for (a, b) in self.splats.iter_mut().zip(&other.splats) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y * scale;
+            }
+        }
+        self.nonfinite += other.nonfinite;
+    }
+
     /// The factor the splat layer is developed with (1 / light paths per pixel).
     pub fn set_splat_scale(&mut self, scale: f64) {
         self.splat_scale = scale;

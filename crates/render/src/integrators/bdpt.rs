@@ -58,6 +58,24 @@ impl Default for BdptConfig {
     }
 }
 
+/// Where BDPT's random numbers come from: a pixel sample's stream ([`Sampler`]) or a
+/// Markov chain's primary sample vector (`mlt`).
+pub trait Samples {
+    fn next_1d(&mut self) -> f32;
+    fn next_2d(&mut self) -> Vec2;
+}
+
+impl Samples for Sampler {
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        Sampler::next_1d(self)
+    }
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        Sampler::next_2d(self)
+    }
+}
+
 /// Subpath vertices that start Russian roulette.
 const RR_FROM: usize = 5;
 
@@ -281,7 +299,7 @@ impl<'a> Bdpt<'a> {
         mut t_max: f32,
         mut beta: Vec3,
         mut pdf_dir: f32,
-        sampler: &mut Sampler,
+        sampler: &mut impl Samples,
         mode: TransportMode,
         max_vertices: usize,
         path: &mut Vec<Vertex>,
@@ -370,18 +388,15 @@ impl<'a> Bdpt<'a> {
         }
     }
 
+    /// The camera subpath of at most `max_vertices` vertices (the camera's included).
     fn camera_subpath(
         &self,
         scene: &Scene,
         cray: &CameraRay,
-        sampler: &mut Sampler,
+        sampler: &mut impl Samples,
+        max_vertices: usize,
         path: &mut Vec<Vertex>,
     ) {
-        let max_vertices = if self.cfg.max_depth < 0 {
-            usize::MAX
-        } else {
-            self.cfg.max_depth as usize + 1
-        };
         let mut v = Vertex::new(Kind::Camera, cray.lens, Vec3::ONE);
         v.ns = Vec3::ZERO;
         path.push(v);
@@ -401,12 +416,14 @@ impl<'a> Bdpt<'a> {
         );
     }
 
-    fn light_subpath(&self, scene: &Scene, sampler: &mut Sampler, path: &mut Vec<Vertex>) {
-        let max_vertices = if self.cfg.max_depth < 0 {
-            usize::MAX
-        } else {
-            self.cfg.max_depth as usize
-        };
+    /// The light subpath of at most `max_vertices` vertices (the light's included).
+    fn light_subpath(
+        &self,
+        scene: &Scene,
+        sampler: &mut impl Samples,
+        max_vertices: usize,
+        path: &mut Vec<Vertex>,
+    ) {
         let (li, pmf, _) = self.dist.sample_discrete(sampler.next_1d());
         let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
         if !self.any || pmf.is_nan() || pmf <= 0.0 || max_vertices == 0 {
@@ -470,13 +487,17 @@ impl<'a> Bdpt<'a> {
         &self,
         scene: &Scene,
         cray: &CameraRay,
-        sampler: &mut Sampler,
+        sampler: &mut impl Samples,
         splats: &mut Vec<(Vec2, Vec3)>,
     ) -> Vec3 {
         let mut cam = Vec::with_capacity(8);
         let mut light = Vec::with_capacity(8);
-        self.camera_subpath(scene, cray, sampler, &mut cam);
-        self.light_subpath(scene, sampler, &mut light);
+        let (max_cam, max_light) = match self.cfg.max_depth {
+            d if d < 0 => (usize::MAX, usize::MAX),
+            d => (d as usize + 1, d as usize),
+        };
+        self.camera_subpath(scene, cray, sampler, max_cam, &mut cam);
+        self.light_subpath(scene, sampler, max_light, &mut light);
         let mut l = Vec3::ZERO;
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
@@ -496,6 +517,42 @@ impl<'a> Bdpt<'a> {
         l
     }
 
+    /// One strategy's contribution for MLT: a camera subpath of exactly `t` vertices from
+    /// `cray` (its randomness from `camera`), a light subpath of exactly `s` (from `light`),
+    /// joined with randomness from `connect`; the film position (the camera ray's, or the
+    /// light vertex's connection to the lens for t = 1) and the MIS-weighted value.
+    #[allow(clippy::too_many_arguments)]
+    pub fn strategy<S: Samples>(
+        &self,
+        scene: &Scene,
+        cray: &CameraRay,
+        p_film: Vec2,
+        s: usize,
+        t: usize,
+        sampler: &mut S,
+        streams: impl Fn(&mut S, usize),
+    ) -> Option<(Vec2, Vec3)> {
+        let mut cam = Vec::with_capacity(t);
+        let mut light = Vec::with_capacity(s);
+        self.camera_subpath(scene, cray, sampler, t, &mut cam);
+        if cam.len() != t {
+            return None;
+        }
+        streams(sampler, 1);
+        if s > 0 {
+            self.light_subpath(scene, sampler, s, &mut light);
+            if light.len() != s {
+                return None;
+            }
+        }
+        streams(sampler, 2);
+        if t == 1 {
+            return self.connect_camera(scene, &cam, &light, s, sampler);
+        }
+        let c = self.connect(scene, &cam, &light, s, t, sampler);
+        Some((p_film, c))
+    }
+
     /// Strategy (s, t ≥ 2).
     fn connect(
         &self,
@@ -504,7 +561,7 @@ impl<'a> Bdpt<'a> {
         light: &[Vertex],
         s: usize,
         t: usize,
-        sampler: &mut Sampler,
+        sampler: &mut impl Samples,
     ) -> Vec3 {
         let pt = &cam[t - 1];
         if s == 0 {
@@ -603,7 +660,7 @@ impl<'a> Bdpt<'a> {
         cam: &[Vertex],
         light: &[Vertex],
         s: usize,
-        sampler: &mut Sampler,
+        sampler: &mut impl Samples,
     ) -> Option<(Vec2, Vec3)> {
         let qs = &light[s - 1];
         if qs.kind != Kind::Surface || !qs.connectible() {

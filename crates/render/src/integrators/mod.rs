@@ -7,6 +7,7 @@
 mod aov;
 pub mod bdpt;
 mod direct;
+pub mod mlt;
 pub mod path;
 pub mod photon;
 pub mod photons;
@@ -58,6 +59,8 @@ pub enum Integrator {
     /// Bidirectional path tracing: light-tracing strategies splat into the film, so the
     /// render driver runs it as a whole ([`bdpt::render`]).
     Bdpt(bdpt::BdptConfig),
+    /// Metropolis light transport over BDPT ([`mlt::render`]).
+    Mlt(mlt::MltConfig),
 }
 
 /// An integrator the scene asks for that this build does not have.
@@ -82,6 +85,7 @@ impl Integrator {
             Integrator::Photon(_) => "photon",
             Integrator::Ptracer(_) => "ptracer",
             Integrator::Bdpt(_) => "bdpt",
+            Integrator::Mlt(_) => "mlt",
         }
     }
 
@@ -95,6 +99,7 @@ impl Integrator {
                 | Integrator::Photon(_)
                 | Integrator::Ptracer(_)
                 | Integrator::Bdpt(_)
+                | Integrator::Mlt(_)
         )
     }
 
@@ -104,18 +109,24 @@ impl Integrator {
         if self.per_sample() {
             return None;
         }
-        if matches!(self, Integrator::Bdpt(_)) {
+        if matches!(self, Integrator::Bdpt(_) | Integrator::Mlt(_)) {
             if !scene.media.is_empty() {
-                return Some(
-                    "bdpt: participating media are not implemented yet (use volpath)".into(),
-                );
+                return Some(format!(
+                    "{}: participating media are not implemented yet (use volpath)",
+                    self.name()
+                ));
             }
             if scene.mode != RenderMode::Rgb {
-                return Some("bdpt: spectral mode is not implemented yet (use --mode rgb)".into());
+                return Some(format!(
+                    "{}: spectral mode is not implemented yet (use --mode rgb)",
+                    self.name()
+                ));
             }
         }
-        if matches!(self, Integrator::Ptracer(_) | Integrator::Bdpt(_))
-            && !scene.camera.supports_importance()
+        if matches!(
+            self,
+            Integrator::Ptracer(_) | Integrator::Bdpt(_) | Integrator::Mlt(_)
+        ) && !scene.camera.supports_importance()
         {
             return Some(format!(
                 "{}: light paths cannot be connected to an orthographic camera (use path)",
@@ -162,7 +173,8 @@ impl Integrator {
             Integrator::Sppm(_)
             | Integrator::Photon(_)
             | Integrator::Ptracer(_)
-            | Integrator::Bdpt(_) => Vec3::ZERO,
+            | Integrator::Bdpt(_)
+            | Integrator::Mlt(_) => Vec3::ZERO,
         }
     }
 

@@ -1896,6 +1896,22 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
                 }
             }
+            // Mitsuba 0.6's pssmlt/mlt (maxDepth, pLarge, luminanceSamples as the bootstrap,
+            // chains as ours; its other mutation settings are read and do not apply: ours
+            // are primary-sample-space mutations of every strategy) and pbrt-v3's names.
+            "pssmlt" | "mlt" => {
+                pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
+                pl.props.bool("bidirectional", true)?;
+                pl.props.bool("two_stage", false)?;
+                pl.props.int_in("direct_samples", 16, -1, i32::MAX as i64)?;
+                IntegratorDesc::Mlt {
+                    max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                    bootstrap: pl.props.int_in("luminance_samples", 100_000, 1, 1 << 30)? as u32,
+                    chains: pl.props.int_in("chains", 1000, 1, 1 << 24)? as u32,
+                    large_step: pl.props.float("p_large", 0.3)?.clamp(0.0, 1.0),
+                    sigma: pl.props.float("sigma", 0.01)?.max(1e-6),
+                }
+            }
             "ptracer" => {
                 pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
                 pl.props
@@ -1957,7 +1973,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "path, direct, photonmapper, sppm, ppm, ptracer, bdpt, normals, albedo, depth, aov, ao, whitted, simple, \
+                    "path, direct, photonmapper, sppm, ppm, ptracer, bdpt, pssmlt, mlt, normals, albedo, depth, aov, ao, whitted, simple, \
                      direct_ems, direct_mats, direct_mis, path_mats, path_ems, path_mis",
                 ));
             }
