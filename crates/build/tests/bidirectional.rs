@@ -161,43 +161,53 @@ fn ptracer_lights() {
     );
 }
 
+/// `integrator` on `desc` at `spp` with `threads` threads.
+fn render_threads(desc: &SceneDesc, integrator: IntegratorDesc, spp: u32, threads: usize) -> Image {
+    let opts = BuildOptions {
+        spp: Some(spp),
+        seed: Some(5),
+        integrator: Some(integrator),
+        ..Default::default()
+    };
+    let built = build::build(desc, &opts).expect("builds");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    let ropts = RenderOptions {
+        spp,
+        ..Default::default()
+    };
+    pool.install(|| {
+        render::render::render(
+            &built.scene,
+            &built.integrator,
+            &ropts,
+            &render::render::Silent,
+        )
+    })
+    .film
+    .develop()
+}
+
 #[test]
 fn same_image_for_one_and_two_threads() {
     let desc = load(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml"),
         &[("res", "24")],
     );
-    for integrator in [ptracer as Choice, bdpt] {
-        let render = |threads| {
-            let opts = BuildOptions {
-                spp: Some(3),
-                seed: Some(5),
-                integrator: Some(integrator(&desc)),
-                ..Default::default()
-            };
-            let built = build::build(&desc, &opts).expect("builds");
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let ropts = RenderOptions {
-                spp: 3,
-                ..Default::default()
-            };
-            pool.install(|| {
-                render::render::render(
-                    &built.scene,
-                    &built.integrator,
-                    &ropts,
-                    &render::render::Silent,
-                )
-            })
-            .film
-            .develop()
-        };
-        let (a, b) = (render(1), render(2));
-        assert!(a.pixels.iter().any(|p| p.x > 0.0));
-        assert_eq!(a.pixels, b.pixels, "{:?}", integrator(&desc));
+    let mlt = IntegratorDesc::Mlt {
+        max_depth: 4,
+        bootstrap: 2000,
+        chains: 100,
+        large_step: 0.3,
+        sigma: 0.01,
+    };
+    for integrator in [ptracer(&desc), bdpt(&desc), mlt] {
+        let a = render_threads(&desc, integrator.clone(), 3, 1);
+        let b = render_threads(&desc, integrator.clone(), 3, 2);
+        assert!(a.pixels.iter().any(|p| p.x > 0.0), "{integrator:?}");
+        assert_eq!(a.pixels, b.pixels, "{integrator:?}");
     }
 }
 
@@ -289,48 +299,4 @@ fn mlt_converges_on_mitsuba_cbox() {
             a[c] / b[c]
         );
     }
-}
-
-#[test]
-fn mlt_same_image_for_one_and_two_threads() {
-    let desc = load(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml"),
-        &[("res", "24")],
-    );
-    let render = |threads| {
-        let opts = BuildOptions {
-            spp: Some(4),
-            seed: Some(5),
-            integrator: Some(IntegratorDesc::Mlt {
-                max_depth: 4,
-                bootstrap: 2000,
-                chains: 100,
-                large_step: 0.3,
-                sigma: 0.01,
-            }),
-            ..Default::default()
-        };
-        let built = build::build(&desc, &opts).expect("builds");
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        let ropts = RenderOptions {
-            spp: 4,
-            ..Default::default()
-        };
-        pool.install(|| {
-            render::render::render(
-                &built.scene,
-                &built.integrator,
-                &ropts,
-                &render::render::Silent,
-            )
-        })
-        .film
-        .develop()
-    };
-    let (a, b) = (render(1), render(2));
-    assert!(a.pixels.iter().any(|p| p.x > 0.0));
-    assert_eq!(a.pixels, b.pixels);
 }

@@ -71,6 +71,42 @@ pub trait RenderObserver: Sync {
 pub struct Silent;
 impl RenderObserver for Silent {}
 
+/// The pass loop of the renders that drive themselves (SPPM, light tracing, BDPT): runs
+/// `pass(k)` for k = 0, 1, … until `opts.spp` passes are done, the time budget is spent
+/// (after at least one pass) or the render is cancelled (between passes), reporting progress
+/// after each (`samples_per_pass` samples). Returns the passes done and whether it was
+/// cancelled.
+pub fn run_passes(
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+    start: std::time::Instant,
+    samples_per_pass: u64,
+    mut pass: impl FnMut(u32),
+) -> (u32, bool) {
+    let target = opts.spp.max(1);
+    let mut done = 0u32;
+    while done < target {
+        if opts.cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            return (done, true);
+        }
+        if let Some(b) = opts.time_budget
+            && done > 0
+            && start.elapsed() >= b
+        {
+            break;
+        }
+        pass(done);
+        done += 1;
+        observer.progress(&Progress {
+            samples_done: done as u64 * samples_per_pass,
+            samples_total: target as u64 * samples_per_pass,
+            elapsed: start.elapsed(),
+            spp_done: done,
+        });
+    }
+    (done, false)
+}
+
 /// Sets `sampler` up for sample `index` of `pixel` and draws its film position (uniform in
 /// the pixel) and camera ray.
 #[inline]

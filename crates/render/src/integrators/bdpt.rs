@@ -24,7 +24,6 @@
 //! Not yet: participating media (the scene is refused), spectral mode (refused),
 //! per-strategy images.
 
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -37,7 +36,7 @@ use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::UVec2;
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::{Distribution1D, Sampler};
-use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::RgbMode;
 use crate::world::Scene;
@@ -819,21 +818,10 @@ pub fn render(
     let pixel_count = size.x as u64 * size.y as u64;
     let bdpt = Bdpt::new(scene, cfg);
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
-    let target = opts.spp.max(1);
-    let mut done = 0u32;
-    let mut cancelled = false;
-    while done < target {
-        if opts.cancel.load(Ordering::Relaxed) {
-            cancelled = true;
-            break;
-        }
-        if let Some(b) = opts.time_budget
-            && done > 0
-            && start.elapsed() >= b
-        {
-            break;
-        }
-        let pass = done;
+    // The camera's importance is normalised over the full image: light paths per pixel of
+    // it, per pass.
+    let per_pass = pixel_count.max(1) as f64 / (f.width as f64 * f.height as f64);
+    let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |pass| {
         let rows: Vec<_> = (pmin.y..pmax.y)
             .into_par_iter()
             .map(|y| {
@@ -854,19 +842,9 @@ pub fn render(
                 film.add_splat(p, c);
             }
         }
-        done += 1;
-        // The camera's importance is normalised over the full image: light paths per
-        // pixel of it.
-        let full = f.width as f64 * f.height as f64;
-        film.set_splat_scale(full / (pixel_count.max(1) as f64 * done as f64));
-        observer.progress(&Progress {
-            samples_done: done as u64 * pixel_count,
-            samples_total: target as u64 * pixel_count,
-            elapsed: start.elapsed(),
-            spp_done: done,
-        });
-        observer.pass_done(&film, done);
-    }
+        film.set_splat_scale(1.0 / (per_pass * (pass + 1) as f64));
+        observer.pass_done(&film, pass + 1);
+    });
     RenderOutcome {
         film,
         spp: done,

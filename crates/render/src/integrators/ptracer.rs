@@ -27,7 +27,6 @@
 //! Spectral mode: light path `j` of pass `p` carries its own wavelengths (a rank-1 lattice
 //! over the paths, [`photons::wavelength_set`]), each splat converted with them.
 
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -41,7 +40,7 @@ use crate::geometry::Ray;
 use crate::lights::{LightSample, ShadowTarget};
 use crate::math::{UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
 use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
 use crate::world::Scene;
 use base::{RenderMode, TransmittanceEstimator};
@@ -96,21 +95,7 @@ fn render_in<M: PathMode>(
     let lights = PhotonLights::new(scene);
     let seed = scene.sampler.seed;
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), seed);
-    let target = opts.spp.max(1);
-    let mut done = 0u32;
-    let mut cancelled = false;
-    while done < target {
-        if opts.cancel.load(Ordering::Relaxed) {
-            cancelled = true;
-            break;
-        }
-        if let Some(b) = opts.time_budget
-            && done > 0
-            && start.elapsed() >= b
-        {
-            break;
-        }
-        let pass = done;
+    let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |pass| {
         // 1. Emitters seen directly: one camera ray per pixel, rows in parallel, merged in
         // row order.
         let rows: Vec<_> = (pmin.y..pmax.y)
@@ -157,16 +142,9 @@ fn render_in<M: PathMode>(
                 }
             }
         }
-        done += 1;
-        film.set_splat_scale(1.0 / done as f64);
-        observer.progress(&Progress {
-            samples_done: done as u64 * pixel_count,
-            samples_total: target as u64 * pixel_count,
-            elapsed: start.elapsed(),
-            spp_done: done,
-        });
-        observer.pass_done(&film, done);
-    }
+        film.set_splat_scale(1.0 / (pass + 1) as f64);
+        observer.pass_done(&film, pass + 1);
+    });
     RenderOutcome {
         film,
         spp: done,

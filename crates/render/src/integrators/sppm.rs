@@ -41,11 +41,10 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::{Film, Filter};
 use crate::math::{Frame, PI, UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
 use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
 use crate::world::Scene;
 use base::FilterDesc;
-use std::sync::atomic::Ordering;
 
 /// The parameters of [`render`].
 #[derive(Clone, Debug, PartialEq)]
@@ -399,7 +398,6 @@ fn render_in<M: PathMode + Send>(
     ];
     let lights = PhotonLights::new(scene);
     let camera_template = Sampler::new(scene.sampler.kind, opts.spp.max(eye), scene.sampler.seed);
-    let target = opts.spp.max(1);
     // Wavelength sets (`photons::wavelength_set`; RGB mode draws nothing). SPPM: set k for
     // iteration k, shared by all its paths. PPM in spectral mode: set g for the slots
     // s ≡ g (mod `WAVELENGTH_SETS`), fixed with the visible points (neighbouring pixels and
@@ -412,21 +410,8 @@ fn render_in<M: PathMode + Send>(
         _ => 1,
     };
     let group_photons = photons.div_ceil(groups as u64);
-    let mut done = 0u32;
-    let mut cancelled = false;
     let mut vps: Vec<Vec<VisiblePoint<M::C>>> = (0..groups).map(|_| Vec::new()).collect();
-    while done < target {
-        if opts.cancel.load(Ordering::Relaxed) {
-            cancelled = true;
-            break;
-        }
-        if let Some(b) = opts.time_budget
-            && done > 0
-            && start.elapsed() >= b
-        {
-            break;
-        }
-        let iteration = done;
+    let (done, cancelled) = run_passes(opts, observer, start, pixel_count as u64, |iteration| {
         // 1. Camera pass, one row per task: every iteration (SPPM) or once (PPM).
         if nee || iteration == 0 {
             let rows: Vec<CameraRow<M::C>> = (0..size.y)
@@ -520,14 +505,7 @@ fn render_in<M: PathMode + Send>(
             p.n = n_new;
             p.radius = r_new;
         }
-        done += 1;
-        observer.progress(&Progress {
-            samples_done: done as u64 * pixel_count as u64,
-            samples_total: target as u64 * pixel_count as u64,
-            elapsed: start.elapsed(),
-            spp_done: done,
-        });
-    }
+    });
     // The film: one sample at each pixel's centre, weight 1 under the box filter.
     if done > 0 {
         let mut tile = film.tile(pmin, pmax);
