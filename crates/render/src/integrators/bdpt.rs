@@ -94,8 +94,6 @@ struct Vertex {
     p: Vec3,
     /// Geometric normal (zero for points and infinity).
     ng: Vec3,
-    /// Shading normal (zero for points and infinity).
-    ns: Vec3,
     si: Option<SurfaceInteraction>,
     bsdf: Option<(Bsdf, Frame)>,
     /// Throughput from the subpath's start to here (its own estimate's factor).
@@ -116,7 +114,6 @@ impl Vertex {
             kind,
             p,
             ng: Vec3::ZERO,
-            ns: Vec3::ZERO,
             si: None,
             bsdf: None,
             beta,
@@ -330,7 +327,6 @@ impl<'a> Bdpt<'a> {
             let prev = path.last().expect("a subpath has a start");
             let mut v = Vertex::new(Kind::Surface, si.p, beta);
             v.ng = si.ng;
-            v.ns = si.shading.n;
             if mode == TransportMode::Radiance
                 && let Some(l) = scene.shape_light(&si)
             {
@@ -396,9 +392,7 @@ impl<'a> Bdpt<'a> {
         max_vertices: usize,
         path: &mut Vec<Vertex>,
     ) {
-        let mut v = Vertex::new(Kind::Camera, cray.lens, Vec3::ONE);
-        v.ns = Vec3::ZERO;
-        path.push(v);
+        path.push(Vertex::new(Kind::Camera, cray.lens, Vec3::ONE));
         let (_, pdf_dir) = scene.camera.pdf_we(cray.ray.d.normalize());
         let len = cray.ray.d.length();
         let ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
@@ -437,7 +431,6 @@ impl<'a> Bdpt<'a> {
         }
         let mut v = Vertex::new(Kind::Light(li as u32), e.p, Vec3::ZERO);
         v.ng = e.n;
-        v.ns = e.n;
         let infinite = light.is_infinite();
         v.at_infinity = infinite;
         v.pdf_fwd = if infinite {
@@ -605,7 +598,6 @@ impl<'a> Bdpt<'a> {
                 ShadowTarget::Surface { p, n, .. } => {
                     let mut v = Vertex::new(Kind::Light(li as u32), p, Vec3::ZERO);
                     v.ng = n;
-                    v.ns = n;
                     v
                 }
                 ShadowTarget::Point(p) => Vertex::new(Kind::Light(li as u32), p, Vec3::ZERO),
