@@ -12,12 +12,12 @@
 //! β · f(ωₗ → ω_c) · |cos θ_c| · Tr(x ↔ lens) · We·|cos θ_lens| / (d² · p_lens)
 //!
 //! (f in importance mode, the phase function in a medium) at the film position of the
-//! connection ω_c. Emitters seen directly cannot be reached by light paths through a
-//! pinhole; as in Mitsuba's particle tracer they come from the camera side: one camera ray
-//! per pixel and pass, which adds the emission (or environment) it meets first, through
-//! media and null surfaces (unless `hide_emitters`). Surfaces seen only through delta
-//! bounces (a mirror, glass) are out of reach of both: like Mitsuba's, this integrator does
-//! not render them (use `bdpt` or `path`). Orthographic cameras cannot be connected to.
+//! connection ω_c. Emitters seen directly come from the camera side: one camera ray per
+//! pixel and pass, which adds the emission (or environment) it meets first, through media
+//! and null surfaces (unless `hide_emitters`). Surfaces seen only through delta bounces (a
+//! mirror, glass) are out of reach of both: no light path reaches a pinhole through a
+//! delta bounce, so this integrator does not render them (use `bdpt` or `path`).
+//! Orthographic cameras cannot be connected to.
 //!
 //! `max_depth` counts edges camera to light as everywhere: a vertex `k` edges from the
 //! light makes a path of k + 1. Determinism: light path `j` of pass `p` draws from its own
