@@ -129,11 +129,7 @@ fn integrator(i: &IntegratorDesc) -> String {
             ..
         } => format!(
             "volumetric path tracer: max depth {}, Russian roulette after {rr_depth}{}",
-            if *max_depth < 0 {
-                "unbounded".to_string()
-            } else {
-                max_depth.to_string()
-            },
+            depth(*max_depth as i64),
             if *hide_emitters {
                 ", emitters hidden from the camera"
             } else {
@@ -152,22 +148,14 @@ fn integrator(i: &IntegratorDesc) -> String {
         ),
         IntegratorDesc::Bdpt { max_depth } => format!(
             "bidirectional path tracing (bdpt): max depth {}",
-            if *max_depth < 0 {
-                "unbounded".to_string()
-            } else {
-                max_depth.to_string()
-            }
+            depth(*max_depth as i64)
         ),
         IntegratorDesc::Ptracer {
             max_depth,
             hide_emitters,
         } => format!(
             "light tracing (ptracer): max depth {}{}",
-            if *max_depth < 0 {
-                "unbounded".to_string()
-            } else {
-                max_depth.to_string()
-            },
+            depth(*max_depth as i64),
             if *hide_emitters {
                 ", emitters hidden from the camera"
             } else {
@@ -180,11 +168,7 @@ fn integrator(i: &IntegratorDesc) -> String {
                 None => "stochastic progressive photon mapping".to_string(),
                 Some(n) => format!("progressive photon mapping, {n} visible points per pixel"),
             },
-            if d.max_depth < 0 {
-                "unbounded".to_string()
-            } else {
-                d.max_depth.to_string()
-            },
+            depth(d.max_depth as i64),
             d.photons
                 .map_or("one per pixel".to_string(), |n| n.to_string()),
             d.initial_radius

@@ -153,6 +153,9 @@ pub struct Bdpt<'a> {
     /// Lights chosen by power.
     dist: Distribution1D,
     any: bool,
+    /// The sampler handed to visibility queries, which draw nothing without media (made
+    /// once: a sampler's construction sets up its stratification grid).
+    no_draws: Sampler,
 }
 
 /// Area density of `pdf` (per unit solid angle at `from`) at `to`.
@@ -183,6 +186,7 @@ impl<'a> Bdpt<'a> {
             cfg,
             any: powers.iter().any(|&p| p > 0.0),
             dist: Distribution1D::new(&powers),
+            no_draws: Sampler::new(base::SamplerKind::Independent, 1, 0),
         }
     }
 
@@ -679,8 +683,10 @@ impl<'a> Bdpt<'a> {
         Some((c.p_film, value * w))
     }
 
+    /// Whether nothing but null surfaces lies between `from` and the query's target (no
+    /// media here, so the transmittance query draws no random numbers).
     fn visible(&self, scene: &Scene, from: From<'_>, query: &LightSample) -> bool {
-        let mut dummy = Sampler::new(base::SamplerKind::Independent, 1, 0);
+        let mut dummy = self.no_draws.clone();
         transmittance(
             scene,
             from,
@@ -706,85 +712,81 @@ impl<'a> Bdpt<'a> {
         if s + t == 2 {
             return 1.0;
         }
-        // (pdf_fwd, pdf_rev, delta) of each vertex, with the joint's overrides.
-        let mut cm: Vec<(f32, f32, bool)> = cam[..t]
-            .iter()
-            .map(|v| (v.pdf_fwd, v.pdf_rev, v.delta))
-            .collect();
-        let mut lm: Vec<(f32, f32, bool)> = light[..s]
-            .iter()
-            .map(|v| (v.pdf_fwd, v.pdf_rev, v.delta))
-            .collect();
         let pt: &Vertex = if t == 1 {
-            let v = sampled.expect("t = 1 has a sampled lens vertex");
-            cm[0] = (v.pdf_fwd, v.pdf_rev, false);
-            v
+            sampled.expect("t = 1 has a sampled lens vertex")
         } else {
             &cam[t - 1]
         };
-        let qs: Option<&Vertex> = if s == 0 {
-            None
-        } else if s == 1 {
-            match sampled {
-                Some(v) if t != 1 => {
-                    lm[0] = (v.pdf_fwd, v.pdf_rev, false);
-                    Some(v)
-                }
-                _ => Some(&light[0]),
-            }
-        } else {
-            Some(&light[s - 1])
+        let qs: Option<&Vertex> = match (s, sampled) {
+            (0, _) => None,
+            (1, Some(v)) if t != 1 => Some(v),
+            _ => Some(&light[s - 1]),
         };
         let pt_minus = if t >= 2 { Some(&cam[t - 2]) } else { None };
         let qs_minus = if s >= 2 { Some(&light[s - 2]) } else { None };
-        // The endpoints are connectible: not delta.
-        cm[t - 1].2 = false;
-        if s > 0 {
-            lm[s - 1].2 = false;
-        }
-        // pt's reverse density: from qs (or, for s = 0, as a light subpath's origin).
-        cm[t - 1].1 = match qs {
+        // The joint's reverse densities: pt's from qs (or, for s = 0, as a light subpath's
+        // origin), and on from pt back along the camera subpath and from qs back along the
+        // light subpath.
+        let pt_rev = match qs {
             Some(q) => self.pdf(scene, q, qs_minus, pt),
             None => self.pdf_light_origin(scene, pt, pt_minus.expect("t ≥ 2 when s = 0")),
         };
-        if let Some(pm) = pt_minus {
-            cm[t - 2].1 = match qs {
-                Some(q) => self.pdf(scene, pt, Some(q), pm),
-                None => self.pdf_light(scene, pt, pm),
-            };
-        }
-        if let Some(q) = qs {
-            lm[s - 1].1 = self.pdf(scene, pt, pt_minus, q);
-            if let Some(qm) = qs_minus {
-                lm[s - 2].1 = self.pdf(scene, q, Some(pt), qm);
+        let pt_minus_rev = pt_minus.map(|pm| match qs {
+            Some(q) => self.pdf(scene, pt, Some(q), pm),
+            None => self.pdf_light(scene, pt, pm),
+        });
+        let qs_rev = qs.map(|q| self.pdf(scene, pt, pt_minus, q));
+        let qs_minus_rev = qs
+            .zip(qs_minus)
+            .map(|(q, qm)| self.pdf(scene, q, Some(pt), qm));
+        // (pdf_fwd, pdf_rev, delta) of each vertex with the joint's overrides; the endpoints
+        // are connectible, so not delta.
+        let cam_at = |i: usize| -> (f32, f32, bool) {
+            if i == t - 1 {
+                (pt.pdf_fwd, pt_rev, false)
+            } else if i + 2 == t {
+                let v = &cam[i];
+                (v.pdf_fwd, pt_minus_rev.unwrap_or(v.pdf_rev), v.delta)
+            } else {
+                (cam[i].pdf_fwd, cam[i].pdf_rev, cam[i].delta)
             }
-        }
+        };
+        let light_at = |i: usize| -> (f32, f32, bool) {
+            if i + 1 == s {
+                let q = qs.expect("s > 0");
+                (q.pdf_fwd, qs_rev.unwrap_or(q.pdf_rev), false)
+            } else if i + 2 == s {
+                let v = &light[i];
+                (v.pdf_fwd, qs_minus_rev.unwrap_or(v.pdf_rev), v.delta)
+            } else {
+                (light[i].pdf_fwd, light[i].pdf_rev, light[i].delta)
+            }
+        };
         let mut sum = 0.0f32;
         let mut ri = 1.0f32;
+        // Strategies (s + t − i, i) with fewer camera vertices ((1, 1) cannot occur: s + t
+        // > 2 here).
         for i in (1..t).rev() {
-            let r = remap0(cm[i].1) / remap0(cm[i].0);
+            let (fwd, rev, delta) = cam_at(i);
+            let r = remap0(rev) / remap0(fwd);
             ri *= r * r;
-            // Strategy (s + t − i, i); (1, 1) is not one of ours.
-            let ours = !(i == 1 && s + t == 2);
-            if ours && !cm[i].2 && !cm[i - 1].2 {
+            if !delta && !cam_at(i - 1).2 {
                 sum += ri;
             }
         }
         ri = 1.0;
         for i in (0..s).rev() {
-            let r = remap0(lm[i].1) / remap0(lm[i].0);
+            let (fwd, rev, delta) = light_at(i);
+            let r = remap0(rev) / remap0(fwd);
             ri *= r * r;
             let delta_before = if i > 0 {
-                lm[i - 1].2
+                light_at(i - 1).2
             } else {
                 // The light of the subpath's origin: a delta light is never hit.
-                let origin = match (s, t, sampled) {
-                    (1, t, Some(v)) if t != 1 => v,
-                    _ => &light[0],
-                };
+                let origin = qs.filter(|_| s == 1).unwrap_or(&light[0]);
                 matches!(origin.kind, Kind::Light(l) if scene.lights[l as usize].is_delta())
             };
-            if !lm[i].2 && !delta_before {
+            if !delta && !delta_before {
                 sum += ri;
             }
         }
