@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # usage: bench/bitcheck.sh BASE_BIN NEW_BIN OUTDIR
-# Renders a fixed set of scenes (the RGB references, scenes/, shared course scenes) with two
+# Renders a fixed set of scenes (the RGB and media references, scenes/, shared course scenes) with two
 # binaries at 96x96, 4 spp, seed 3, and cmp-s the EXRs: the check that a refactoring changed
 # no image. SHARED overrides where ../shared is.
 set -u
@@ -9,6 +9,7 @@ ROOT=$(cd "$(dirname "$0")/.." && pwd); SH=${SHARED:-$ROOT/../shared}
 S=$SH/scenes; R=$SH/references/scenes; M=$ROOT/scenes
 scenes=(
  "$R/bench-cbox.xml" "$R/cbox-specular.xml" "$R/envmap-materials.xml" "$R/lights.xml" "$R/veach-plates.xml"
+ "$R/media-fog.xml" "$R/media-homogeneous.xml" "$R/media-heterogeneous.xml"
  "$M/cornell-box.xml" "$M/many-lights.xml" "$M/ceng795/cornell_phong.json" "$M/ceng795/textures.json"
  "$M/comp30019/showcase.txt" "$M/comp30019/dof.txt" "$M/cs184/floor_sphere.dae"
  "$S/nori/pa5/cbox/cbox_mis.xml" "$S/nori/pa4/cbox/cbox-whitted.xml"

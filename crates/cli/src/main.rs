@@ -122,7 +122,9 @@ struct RenderArgs {
     /// `photons` photons, default one per pixel; the scene's max depth is kept) or
     /// ppm[:photons[,radius[,eye_samples]]] (fixed visible points, 4 per pixel by default),
     /// or photon[:photons[,gather[,k]]] (photon mapping: 10⁶ photons, 16 final gathering
-    /// rays, the 64 nearest photons by default).
+    /// rays, the 64 nearest photons by default), or ptracer (light tracing), bdpt
+    /// (bidirectional path tracing) or mlt (primary-sample-space Metropolis over BDPT;
+    /// --spp mutations per pixel). The scene's max depth is kept.
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<IntegratorDesc>,
     /// Which sensor of the scene to render (0-based).

@@ -35,7 +35,7 @@ use crate::geometry::Ray;
 use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::UVec2;
 use crate::math::{Frame, Vec2, Vec3};
-use crate::sampling::{Distribution1D, Sampler};
+use crate::sampling::{Distribution1D, Sampler, Samples};
 use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::RgbMode;
@@ -54,24 +54,6 @@ pub struct BdptConfig {
 impl Default for BdptConfig {
     fn default() -> Self {
         BdptConfig { max_depth: -1 }
-    }
-}
-
-/// Where BDPT's random numbers come from: a pixel sample's stream ([`Sampler`]) or a
-/// Markov chain's primary sample vector (`mlt`).
-pub trait Samples {
-    fn next_1d(&mut self) -> f32;
-    fn next_2d(&mut self) -> Vec2;
-}
-
-impl Samples for Sampler {
-    #[inline]
-    fn next_1d(&mut self) -> f32 {
-        Sampler::next_1d(self)
-    }
-    #[inline]
-    fn next_2d(&mut self) -> Vec2 {
-        Sampler::next_2d(self)
     }
 }
 

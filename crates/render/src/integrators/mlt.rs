@@ -29,10 +29,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::bdpt::{Bdpt, BdptConfig, Samples};
+use super::bdpt::{Bdpt, BdptConfig};
 use crate::film::Film;
 use crate::math::{PI, Vec2, Vec3};
-use crate::sampling::Distribution1D;
+use crate::sampling::{Distribution1D, Samples};
 use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome};
 use crate::stats::Pcg32;
 use crate::world::Scene;

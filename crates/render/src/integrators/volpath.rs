@@ -32,7 +32,7 @@ use crate::integrators::path::{
 use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::Vec3;
 use crate::media::Flight;
-use crate::sampling::{Equiangular, Sampler};
+use crate::sampling::{Equiangular, Sampler, Samples};
 use crate::shapes::{SHADOW_EPSILON, SurfaceInteraction, offset_ray_origin};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
@@ -672,7 +672,7 @@ pub(crate) fn transmittance<M: PathMode>(
     ls: &LightSample<M::C>,
     mut medium: Option<u32>,
     estimator: TransmittanceEstimator,
-    sampler: &mut Sampler,
+    sampler: &mut impl Samples,
     mode: &M,
 ) -> M::C {
     let (mut ray, mut t_max) = shadow_ray(&from, ls);

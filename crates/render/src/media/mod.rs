@@ -22,8 +22,8 @@ use base::TransmittanceEstimator;
 
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec2, Vec3};
-use crate::sampling::Sampler;
 use crate::sampling::distrib::AliasTable;
+use crate::sampling::{Sampler, Samples};
 use crate::spectral::lanes::{Color, ColorMode, RgbMode};
 
 #[derive(Clone, Debug)]
@@ -251,7 +251,7 @@ impl Medium {
         ray: &Ray,
         d_max: f32,
         hero: usize,
-        sampler: &mut Sampler,
+        sampler: &mut impl Samples,
         m: &M,
     ) -> Flight<M::C> {
         match &self.kind {
@@ -343,7 +343,7 @@ impl Medium {
         ray: &Ray,
         d_max: f32,
         estimator: TransmittanceEstimator,
-        sampler: &mut Sampler,
+        sampler: &mut impl Samples,
         m: &M,
     ) -> M::C {
         match &self.kind {

@@ -9,3 +9,24 @@ pub mod warp;
 pub use distrib::{AliasTable, Distribution1D, Distribution2D, ONE_MINUS_EPSILON};
 pub use equiangular::Equiangular;
 pub use sampler::Sampler;
+
+use crate::math::Vec2;
+
+/// A stream of uniform numbers in `[0, 1)`: a pixel sample's [`Sampler`], or a Markov
+/// chain's primary sample vector (`integrators::mlt`). Code generic over it draws the same
+/// numbers in the same order from either.
+pub trait Samples {
+    fn next_1d(&mut self) -> f32;
+    fn next_2d(&mut self) -> Vec2;
+}
+
+impl Samples for Sampler {
+    #[inline(always)]
+    fn next_1d(&mut self) -> f32 {
+        Sampler::next_1d(self)
+    }
+    #[inline(always)]
+    fn next_2d(&mut self) -> Vec2 {
+        Sampler::next_2d(self)
+    }
+}
