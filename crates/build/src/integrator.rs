@@ -68,8 +68,10 @@ pub fn integrator(
             chains,
             large_step,
             sigma,
+            direct_samples,
         } => Integrator::Mlt(MltConfig {
-            max_depth: if *max_depth < 0 { 5 } else { *max_depth as u32 },
+            direct_samples: *direct_samples,
+            max_depth: if *max_depth < 0 { 6 } else { *max_depth as u32 },
             bootstrap: *bootstrap,
             chains: *chains,
             large_step: *large_step,

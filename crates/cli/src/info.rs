@@ -142,9 +142,15 @@ fn integrator(i: &IntegratorDesc) -> String {
             chains,
             large_step,
             sigma,
+            direct_samples,
         } => format!(
             "Metropolis light transport (mlt): max depth {max_depth}, {bootstrap} bootstrap \
-             samples per depth, {chains} chains, large steps {large_step}, sigma {sigma}"
+             samples per depth, {chains} chains, large steps {large_step}, sigma {sigma}, {}",
+            match direct_samples {
+                d if *d < 0 => "direct illumination by the chains too".to_string(),
+                0 => "direct illumination left out".to_string(),
+                d => format!("direct illumination apart at {d} samples per pixel"),
+            }
         ),
         IntegratorDesc::Bdpt { max_depth } => format!(
             "bidirectional path tracing (bdpt): max depth {}",

@@ -123,8 +123,10 @@ struct RenderArgs {
     /// ppm[:photons[,radius[,eye_samples]]] (fixed visible points, 4 per pixel by default),
     /// or photon[:photons[,gather[,k]]] (photon mapping: 10⁶ photons, 16 final gathering
     /// rays, the 64 nearest photons by default), or ptracer (light tracing), bdpt
-    /// (bidirectional path tracing) or mlt (primary-sample-space Metropolis over BDPT;
-    /// --spp mutations per pixel). The scene's max depth is kept.
+    /// (bidirectional path tracing) or mlt[:direct_samples] (primary-sample-space Metropolis
+    /// over BDPT; --spp mutations per pixel; paths of one and two edges apart by BDPT at
+    /// direct_samples per pixel, 16 by default as Mitsuba 0.6's pssmlt, -1: by the chains
+    /// too). The scene's max depth is kept.
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<IntegratorDesc>,
     /// Which sensor of the scene to render (0-based).
@@ -604,12 +606,22 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             d
         }),
         "bdpt" if arg.is_empty() => IntegratorDesc::Bdpt { max_depth: -1 },
-        "mlt" if arg.is_empty() => IntegratorDesc::Mlt {
+        "mlt" => IntegratorDesc::Mlt {
             max_depth: -1,
             bootstrap: 100_000,
             chains: 1000,
             large_step: 0.3,
             sigma: 0.01,
+            direct_samples: if arg.is_empty() {
+                16
+            } else {
+                arg.parse().ok().filter(|&d: &i32| d >= -1).ok_or_else(|| {
+                    format!(
+                        "mlt[:DIRECT_SAMPLES]: DIRECT_SAMPLES must be a count ≥ 0 or -1, \
+                         found '{arg}'"
+                    )
+                })?
+            },
         },
         "ptracer" if arg.is_empty() => IntegratorDesc::Ptracer {
             max_depth: -1,
@@ -650,7 +662,7 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
                  photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
-                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt, mlt)"
+                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt, mlt[:DIRECT_SAMPLES])"
             ));
         }
     })

@@ -1013,13 +1013,17 @@ pub enum IntegratorDesc {
     /// Bidirectional path tracing (Mitsuba 0.6's `bdpt`).
     Bdpt { max_depth: i32 },
     /// Metropolis light transport over BDPT, multiplexed over strategies (pbrt-v3's `mlt`;
-    /// Mitsuba 0.6's `pssmlt`/`mlt` names): `max_depth` −1 means pbrt's 5.
+    /// Mitsuba 0.6's `pssmlt`/`mlt` names): `max_depth` −1 means 6 edges (pbrt's
+    /// default `maxdepth` 5, which counts bounces);
+    /// `direct_samples` (Mitsuba 0.6's `directSamples`): paths of one or two edges rendered
+    /// apart at that many samples per pixel (0: left out), −1: by the chains too.
     Mlt {
         max_depth: i32,
         bootstrap: u32,
         chains: u32,
         large_step: f32,
         sigma: f32,
+        direct_samples: i32,
     },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },

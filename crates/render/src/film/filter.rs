@@ -143,6 +143,22 @@ impl Filter {
         self.eval_1d(p.x) * self.eval_1d(p.y)
     }
 
+    /// ∫ g(x) dx over `[a, b]` (clipped to the support): the 1D profile's weight over an
+    /// interval. Midpoint rule on 2048 steps, exact for the box filter.
+    pub fn integral_1d(&self, a: f32, b: f32) -> f64 {
+        let r = self.radius() as f64;
+        let (a, b) = ((a as f64).max(-r), (b as f64).min(r));
+        if b <= a {
+            return 0.0;
+        }
+        let n = 2048;
+        let dx = (b - a) / n as f64;
+        (0..n)
+            .map(|k| self.eval_1d((a + (k as f64 + 0.5) * dx) as f32) as f64)
+            .sum::<f64>()
+            * dx
+    }
+
     /// `(∫f)² / ∫f²` in pixels, at least 1: the effective number of pixels a splatted sample
     /// is spread over (1 for the box filter, π for the default gaussian). Midpoint rule.
     pub fn footprint(&self) -> f64 {

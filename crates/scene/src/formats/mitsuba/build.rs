@@ -1897,14 +1897,14 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
             }
             // Mitsuba 0.6's pssmlt/mlt (maxDepth, pLarge, luminanceSamples as the bootstrap,
-            // chains as ours; its other mutation settings are read and do not apply: ours
+            // directSamples, chains as ours; its other mutation settings are read and do not apply: ours
             // are primary-sample-space mutations of every strategy) and pbrt-v3's names.
             "pssmlt" | "mlt" => {
                 pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
                 pl.props.bool("bidirectional", true)?;
                 pl.props.bool("two_stage", false)?;
-                pl.props.int_in("direct_samples", 16, -1, i32::MAX as i64)?;
                 IntegratorDesc::Mlt {
+                    direct_samples: pl.props.int_in("direct_samples", 16, -1, 1 << 20)? as i32,
                     max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
                     bootstrap: pl.props.int_in("luminance_samples", 100_000, 1, 1 << 30)? as u32,
                     chains: pl.props.int_in("chains", 1000, 1, 1 << 24)? as u32,
