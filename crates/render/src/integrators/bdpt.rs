@@ -122,6 +122,23 @@ impl Vertex {
     }
 }
 
+/// The vertices of one camera sample's two subpaths, kept from sample to sample so that
+/// their storage is allocated once (per row of a pass, per Markov chain).
+#[derive(Default)]
+pub struct Subpaths {
+    camera: Vec<Vertex>,
+    light: Vec<Vertex>,
+}
+
+impl Subpaths {
+    /// Both subpaths emptied, their storage kept.
+    fn cleared(&mut self) -> (&mut Vec<Vertex>, &mut Vec<Vertex>) {
+        self.camera.clear();
+        self.light.clear();
+        (&mut self.camera, &mut self.light)
+    }
+}
+
 /// The light a vertex stands for (its own, an emitter surface's, or the environment).
 #[derive(Clone, Copy)]
 enum LightRef {
@@ -459,23 +476,23 @@ impl<'a> Bdpt<'a> {
         }
     }
 
-    /// The radiance of one camera sample; light-tracing contributions (t = 1) go to
-    /// `splats` as (film position, value).
+    /// The radiance of one camera sample (its subpaths built in `paths`); light-tracing
+    /// contributions (t = 1) go to `splats` as (film position, value).
     pub fn li(
         &self,
         scene: &Scene,
         cray: &CameraRay,
         sampler: &mut impl Samples,
+        paths: &mut Subpaths,
         splats: &mut Vec<(Vec2, Vec3)>,
     ) -> Vec3 {
-        let mut cam = Vec::with_capacity(8);
-        let mut light = Vec::with_capacity(8);
+        let (cam, light) = paths.cleared();
         let (max_cam, max_light) = match self.cfg.max_depth {
             d if d < 0 => (usize::MAX, usize::MAX),
             d => (d as usize + 1, d as usize),
         };
-        self.camera_subpath(scene, cray, sampler, max_cam, &mut cam);
-        self.light_subpath(scene, sampler, max_light, &mut light);
+        self.camera_subpath(scene, cray, sampler, max_cam, cam);
+        self.light_subpath(scene, sampler, max_light, light);
         let mut l = Vec3::ZERO;
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
@@ -484,12 +501,12 @@ impl<'a> Bdpt<'a> {
                     continue;
                 }
                 if t == 1 {
-                    if let Some((p, c)) = self.connect_camera(scene, &cam, &light, s, sampler) {
+                    if let Some((p, c)) = self.connect_camera(scene, cam, light, s, sampler) {
                         splats.push((p, c));
                     }
                     continue;
                 }
-                l += self.connect(scene, &cam, &light, s, t, sampler);
+                l += self.connect(scene, cam, light, s, t, sampler);
             }
         }
         l
@@ -497,8 +514,9 @@ impl<'a> Bdpt<'a> {
 
     /// One strategy's contribution for MLT: a camera subpath of exactly `t` vertices from
     /// `cray` (its randomness from `camera`), a light subpath of exactly `s` (from `light`),
-    /// joined with randomness from `connect`; the film position (the camera ray's, or the
-    /// light vertex's connection to the lens for t = 1) and the MIS-weighted value.
+    /// joined with randomness from `connect` (the subpaths built in `paths`); the film
+    /// position (the camera ray's, or the light vertex's connection to the lens for t = 1)
+    /// and the MIS-weighted value.
     #[allow(clippy::too_many_arguments)]
     pub fn strategy<S: Samples>(
         &self,
@@ -508,26 +526,26 @@ impl<'a> Bdpt<'a> {
         s: usize,
         t: usize,
         sampler: &mut S,
+        paths: &mut Subpaths,
         streams: impl Fn(&mut S, usize),
     ) -> Option<(Vec2, Vec3)> {
-        let mut cam = Vec::with_capacity(t);
-        let mut light = Vec::with_capacity(s);
-        self.camera_subpath(scene, cray, sampler, t, &mut cam);
+        let (cam, light) = paths.cleared();
+        self.camera_subpath(scene, cray, sampler, t, cam);
         if cam.len() != t {
             return None;
         }
         streams(sampler, 1);
         if s > 0 {
-            self.light_subpath(scene, sampler, s, &mut light);
+            self.light_subpath(scene, sampler, s, light);
             if light.len() != s {
                 return None;
             }
         }
         streams(sampler, 2);
         if t == 1 {
-            return self.connect_camera(scene, &cam, &light, s, sampler);
+            return self.connect_camera(scene, cam, light, s, sampler);
         }
-        let c = self.connect(scene, &cam, &light, s, t, sampler);
+        let c = self.connect(scene, cam, light, s, t, sampler);
         Some((p_film, c))
     }
 
@@ -803,10 +821,11 @@ pub fn render(
             .map(|y| {
                 let mut tile = film.tile(UVec2::new(pmin.x, y), UVec2::new(pmax.x, y + 1));
                 let mut splats = Vec::new();
+                let mut paths = Subpaths::default();
                 let mut sampler = template.clone();
                 for x in pmin.x..pmax.x {
                     let (p_film, cray) = camera_sample(scene, &mut sampler, UVec2::new(x, y), pass);
-                    let l = bdpt.li(scene, &cray, &mut sampler, &mut splats);
+                    let l = bdpt.li(scene, &cray, &mut sampler, &mut paths, &mut splats);
                     tile.add_sample(p_film, l);
                 }
                 (tile, splats)

@@ -37,7 +37,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::bdpt::{self, Bdpt, BdptConfig};
+use super::bdpt::{self, Bdpt, BdptConfig, Subpaths};
 use crate::film::Film;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::{Distribution1D, ONE_MINUS_EPSILON, Samples};
@@ -209,11 +209,12 @@ fn luminance(c: Vec3) -> f32 {
 }
 
 /// The value of the state `sampler` holds at depth `depth`: its film position and
-/// contribution (pbrt-v3's `MLTIntegrator::L`).
+/// contribution (pbrt-v3's `MLTIntegrator::L`); its subpaths are built in `paths`.
 fn state_value(
     scene: &Scene,
     bdpt: &Bdpt,
     sampler: &mut MltSampler,
+    paths: &mut Subpaths,
     depth: usize,
 ) -> Option<(Vec2, Vec3)> {
     sampler.start_stream(0);
@@ -228,7 +229,7 @@ fn state_value(
     let res = Vec2::new(f.width as f32, f.height as f32);
     let p_film = (sampler.next_2d() * res).min(res - Vec2::splat(1e-3));
     let cray = scene.camera.generate_ray(p_film, sampler.next_2d());
-    let (p, c) = bdpt.strategy(scene, &cray, p_film, s, t, sampler, |smp, k| {
+    let (p, c) = bdpt.strategy(scene, &cray, p_film, s, t, sampler, paths, |smp, k| {
         smp.start_stream(k)
     })?;
     let c = c * n as f32;
@@ -274,9 +275,9 @@ pub fn render(
     // 1. Bootstrap: state k has depth first + k mod n_depths.
     let weights: Vec<f32> = (0..n_boot * n_depths)
         .into_par_iter()
-        .map(|k| {
+        .map_init(Subpaths::default, |paths, k| {
             let mut sampler = MltSampler::new(seed_of(seed, k as u64), cfg.sigma, cfg.large_step);
-            state_value(scene, &bdpt, &mut sampler, first + k % n_depths)
+            state_value(scene, &bdpt, &mut sampler, paths, first + k % n_depths)
                 .map_or(0.0, |(_, c)| luminance(c))
         })
         .collect();
@@ -435,13 +436,14 @@ fn run_chain(
         large_sum: 0.0,
         large_count: 0,
     };
-    let Some(mut current) = state_value(scene, bdpt, &mut sampler, depth) else {
+    let mut paths = Subpaths::default();
+    let Some(mut current) = state_value(scene, bdpt, &mut sampler, &mut paths, depth) else {
         return out;
     };
     out.splats.reserve(2 * mutations as usize);
     for _ in 0..mutations {
         sampler.start_iteration();
-        let proposed = state_value(scene, bdpt, &mut sampler, depth);
+        let proposed = state_value(scene, bdpt, &mut sampler, &mut paths, depth);
         if sampler.large_step {
             out.large_count += 1;
             out.large_sum += proposed.map_or(0.0, |(_, c)| luminance(c) as f64);
