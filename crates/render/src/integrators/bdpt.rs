@@ -78,6 +78,10 @@ struct Vertex {
     ng: Vec3,
     si: Option<SurfaceInteraction>,
     bsdf: Option<(Bsdf, Frame)>,
+    /// Towards the previous vertex of its subpath, in the BSDF's frame (surface vertices with
+    /// a BSDF): one side of every BSDF query a connection makes here (sampling the walk on
+    /// and the s = 1 strategy start from the incoming ray's `si.wo` instead).
+    to_prev: Vec3,
     /// Throughput from the subpath's start to here (its own estimate's factor).
     beta: Vec3,
     /// Emission towards the previous vertex of a camera subpath (emitters it reached).
@@ -98,6 +102,7 @@ impl Vertex {
             ng: Vec3::ZERO,
             si: None,
             bsdf: None,
+            to_prev: Vec3::ZERO,
             beta,
             le: Vec3::ZERO,
             delta: false,
@@ -257,8 +262,9 @@ impl<'a> Bdpt<'a> {
         pdf
     }
 
-    /// Area density with which vertex `v` (reached from `prev`) samples `next`.
-    fn pdf(&self, scene: &Scene, v: &Vertex, prev: Option<&Vertex>, next: &Vertex) -> f32 {
+    /// Area density with which vertex `v` samples `next`: as a light subpath's origin, as the
+    /// camera, or by its BSDF having been reached from the previous vertex of its subpath.
+    fn pdf(&self, scene: &Scene, v: &Vertex, next: &Vertex) -> f32 {
         match v.kind {
             Kind::Light(_) | Kind::Infinite => self.pdf_light(scene, v, next),
             Kind::Camera => {
@@ -267,25 +273,37 @@ impl<'a> Bdpt<'a> {
                 convert_density(dir, v, next)
             }
             Kind::Surface => {
-                let (Some(prev), Some((bsdf, frame))) = (prev, v.bsdf.as_ref()) else {
+                let Some((bsdf, frame)) = v.bsdf.as_ref() else {
                     return 0.0;
                 };
-                let wo = (prev.p - v.p).normalize_or_zero();
-                let wi = (next.p - v.p).normalize_or_zero();
-                let pdf = bsdf.pdf(frame.to_local(wo), frame.to_local(wi));
+                let pdf = bsdf.pdf(v.to_prev, Self::local_dir(v, frame, next));
                 convert_density(pdf, v, next)
             }
         }
     }
 
-    /// f·|cos| at surface vertex `v` (reached from `prev`) towards `next`, in `mode`.
-    fn fcos(v: &Vertex, prev: &Vertex, next: &Vertex, mode: TransportMode) -> Vec3 {
+    /// Area density with which surface vertex `v`, reached from `from` instead, samples the
+    /// previous vertex of its subpath, `prev`.
+    fn pdf_back(v: &Vertex, from: &Vertex, prev: &Vertex) -> f32 {
+        let Some((bsdf, frame)) = v.bsdf.as_ref() else {
+            return 0.0;
+        };
+        let pdf = bsdf.pdf(Self::local_dir(v, frame, from), v.to_prev);
+        convert_density(pdf, v, prev)
+    }
+
+    /// The unit direction from `v` to `other` in `frame`.
+    fn local_dir(v: &Vertex, frame: &Frame, other: &Vertex) -> Vec3 {
+        frame.to_local((other.p - v.p).normalize_or_zero())
+    }
+
+    /// f·|cos| at surface vertex `v` (reached from the previous vertex of its subpath)
+    /// towards `next`, in `mode`.
+    fn fcos(v: &Vertex, next: &Vertex, mode: TransportMode) -> Vec3 {
         let Some((bsdf, frame)) = v.bsdf.as_ref() else {
             return Vec3::ZERO;
         };
-        let wo = (prev.p - v.p).normalize_or_zero();
-        let wi = (next.p - v.p).normalize_or_zero();
-        bsdf.eval(frame.to_local(wo), frame.to_local(wi), mode)
+        bsdf.eval(v.to_prev, Self::local_dir(v, frame, next), mode)
     }
 
     /// Extend `path` from `ray` (its last vertex the start), `beta` its throughput and
@@ -336,6 +354,9 @@ impl<'a> Bdpt<'a> {
                 v.le = scene.lights[l as usize].le(scene, &si, m);
             }
             v.pdf_fwd = convert_density(pdf_dir, prev, &v);
+            if let Some((_, frame)) = &bsdf {
+                v.to_prev = Self::local_dir(&v, frame, prev);
+            }
             v.bsdf = bsdf;
             v.si = Some(si);
             path.push(v);
@@ -624,8 +645,8 @@ impl<'a> Bdpt<'a> {
         if d2 == 0.0 {
             return Vec3::ZERO;
         }
-        let fq = Self::fcos(qs, &light[s - 2], pt, TransportMode::Importance);
-        let fp = Self::fcos(pt, &cam[t - 2], qs, TransportMode::Radiance);
+        let fq = Self::fcos(qs, pt, TransportMode::Importance);
+        let fp = Self::fcos(pt, qs, TransportMode::Radiance);
         let c = qs.beta * fq * fp * pt.beta / d2;
         if c == Vec3::ZERO {
             return Vec3::ZERO;
@@ -663,7 +684,7 @@ impl<'a> Bdpt<'a> {
         }
         let c = scene.camera.sample_wi(qs.p, sampler.next_2d())?;
         let lens_v = Vertex::new(Kind::Camera, c.p_lens, Vec3::ONE);
-        let f = Self::fcos(qs, &light[s - 2], &lens_v, TransportMode::Importance);
+        let f = Self::fcos(qs, &lens_v, TransportMode::Importance);
         if f == Vec3::ZERO {
             return None;
         }
@@ -728,17 +749,15 @@ impl<'a> Bdpt<'a> {
         // origin), and on from pt back along the camera subpath and from qs back along the
         // light subpath.
         let pt_rev = match qs {
-            Some(q) => self.pdf(scene, q, qs_minus, pt),
+            Some(q) => self.pdf(scene, q, pt),
             None => self.pdf_light_origin(scene, pt, pt_minus.expect("t ≥ 2 when s = 0")),
         };
         let pt_minus_rev = pt_minus.map(|pm| match qs {
-            Some(q) => self.pdf(scene, pt, Some(q), pm),
+            Some(q) => Self::pdf_back(pt, q, pm),
             None => self.pdf_light(scene, pt, pm),
         });
-        let qs_rev = qs.map(|q| self.pdf(scene, pt, pt_minus, q));
-        let qs_minus_rev = qs
-            .zip(qs_minus)
-            .map(|(q, qm)| self.pdf(scene, q, Some(pt), qm));
+        let qs_rev = qs.map(|q| self.pdf(scene, pt, q));
+        let qs_minus_rev = qs.zip(qs_minus).map(|(q, qm)| Self::pdf_back(q, pt, qm));
         // (pdf_fwd, pdf_rev, delta) of each vertex with the joint's overrides; the endpoints
         // are connectible, so not delta.
         let cam_at = |i: usize| -> (f32, f32, bool) {
