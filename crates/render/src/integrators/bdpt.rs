@@ -127,6 +127,19 @@ impl Vertex {
     }
 }
 
+/// Where a random walk goes on from a surface vertex ([`Bdpt::scatter`]).
+struct Scattered {
+    /// The sampled direction (world).
+    wi: Vec3,
+    /// The throughput after the vertex (Russian roulette's survival included).
+    beta: Vec3,
+    /// Solid-angle density of `wi` (0 for a delta lobe).
+    pdf_dir: f32,
+    /// Solid-angle density of sampling `wo` from `wi`, the reverse way (0 for a delta lobe).
+    pdf_rev: f32,
+    delta: bool,
+}
+
 /// The vertices of one camera sample's two subpaths, kept from sample to sample so that
 /// their storage is allocated once (per row of a pass, per Markov chain).
 #[derive(Default)]
@@ -354,57 +367,75 @@ impl<'a> Bdpt<'a> {
                 v.le = scene.lights[l as usize].le(scene, &si, m);
             }
             v.pdf_fwd = convert_density(pdf_dir, prev, &v);
-            if let Some((_, frame)) = &bsdf {
+            // The walk goes on from here unless the path is full, the surface has no BSDF,
+            // or sampling or Russian roulette ends it; sampled before the vertex is stored.
+            let n = path.len() + 1;
+            let scattered = bsdf.as_ref().and_then(|(bsdf, frame)| {
                 v.to_prev = Self::local_dir(&v, frame, prev);
-            }
+                if n >= max_vertices {
+                    return None;
+                }
+                Self::scatter(bsdf, frame, si.wo, beta, n, sampler, mode)
+            });
+            let Some(sc) = scattered else {
+                v.bsdf = bsdf;
+                v.si = Some(si);
+                path.push(v);
+                return;
+            };
+            v.delta = sc.delta;
+            // The reverse density of the previous vertex: from this one back to it.
+            let rev = convert_density(sc.pdf_rev, &v, prev);
+            path[n - 2].pdf_rev = rev;
+            ray = si.spawn_ray(sc.wi);
+            t_max = f32::INFINITY;
+            beta = sc.beta;
+            pdf_dir = sc.pdf_dir;
             v.bsdf = bsdf;
             v.si = Some(si);
             path.push(v);
-            let n = path.len();
-            if n >= max_vertices {
-                return;
-            }
-            let v = &path[n - 1];
-            let Some((bsdf, frame)) = v.bsdf.as_ref() else {
-                return;
-            };
-            let si = v.si.as_ref().expect("surface vertex");
-            let wo = frame.to_local(si.wo);
-            let u1 = sampler.next_1d();
-            let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), mode) else {
-                return;
-            };
-            let mut pdf_rev = bsdf.pdf(bs.wi, wo);
-            let delta = bs.delta;
-            if delta {
-                pdf_dir = 0.0;
-                pdf_rev = 0.0;
-            } else {
-                pdf_dir = bs.pdf;
-            }
-            beta *= bs.weight;
-            if n >= RR_FROM {
-                let q = beta.max_element().min(0.95);
-                if sampler.next_1d() >= q || q.is_nan() {
-                    return;
-                }
-                beta /= q;
-            }
-            if beta == Vec3::ZERO || !beta.is_finite() {
-                return;
-            }
-            let wi = frame.to_world(bs.wi);
-            ray = si.spawn_ray(wi);
-            t_max = f32::INFINITY;
-            // The reverse density of the previous vertex: from this one back to it.
-            let rev = {
-                let (prev, cur) = path.split_at_mut(n - 1);
-                let cur = &mut cur[0];
-                cur.delta = delta;
-                convert_density(pdf_rev, cur, &prev[n - 2])
-            };
-            path[n - 2].pdf_rev = rev;
         }
+    }
+
+    /// The direction a walk leaves a surface vertex in (its `n`th) by sampling its BSDF
+    /// (`bsdf` in `frame`, `wo` the world direction back along the incoming ray), with the
+    /// throughput `beta` so far; none if sampling fails, Russian roulette ends the path or
+    /// the throughput is left zero or not finite.
+    fn scatter(
+        bsdf: &Bsdf,
+        frame: &Frame,
+        wo: Vec3,
+        mut beta: Vec3,
+        n: usize,
+        sampler: &mut impl Samples,
+        mode: TransportMode,
+    ) -> Option<Scattered> {
+        let wo = frame.to_local(wo);
+        let u1 = sampler.next_1d();
+        let bs = bsdf.sample(wo, u1, sampler.next_2d(), mode)?;
+        let (pdf_dir, pdf_rev) = if bs.delta {
+            (0.0, 0.0)
+        } else {
+            (bs.pdf, bsdf.pdf(bs.wi, wo))
+        };
+        beta *= bs.weight;
+        if n >= RR_FROM {
+            let q = beta.max_element().min(0.95);
+            if sampler.next_1d() >= q || q.is_nan() {
+                return None;
+            }
+            beta /= q;
+        }
+        if beta == Vec3::ZERO || !beta.is_finite() {
+            return None;
+        }
+        Some(Scattered {
+            wi: frame.to_world(bs.wi),
+            beta,
+            pdf_dir,
+            pdf_rev,
+            delta: bs.delta,
+        })
     }
 
     /// The camera subpath of at most `max_vertices` vertices (the camera's included).
