@@ -116,6 +116,14 @@ impl Vertex {
         self.ng != Vec3::ZERO
     }
 
+    /// The unit direction to `other` in this vertex's BSDF frame (zero without a BSDF).
+    fn towards(&self, other: &Vertex) -> Vec3 {
+        match &self.bsdf {
+            Some((_, frame)) => local_dir(frame, self.p, other.p),
+            None => Vec3::ZERO,
+        }
+    }
+
     /// Whether a connection can end here (no delta lobe only).
     fn connectible(&self) -> bool {
         match self.kind {
@@ -123,6 +131,32 @@ impl Vertex {
             Kind::Infinite => true,
             Kind::Light(_) => true,
             Kind::Surface => self.bsdf.as_ref().is_some_and(|(b, _)| b.has_smooth()),
+        }
+    }
+}
+
+/// The two ends of a strategy's connection: the camera subpath's (`pt`; for t = 1 the lens
+/// point sampled) and the light subpath's (`qs`: none for s = 0; for s = 1 the light point
+/// sampled), with the unit direction from each end to the other in the end's BSDF frame
+/// (zero at an end without a BSDF), which f·|cos| and the MIS weight share.
+struct Joint<'a> {
+    pt: &'a Vertex,
+    qs: Option<&'a Vertex>,
+    pt_to_qs: Vec3,
+    qs_to_pt: Vec3,
+}
+
+impl<'a> Joint<'a> {
+    fn new(pt: &'a Vertex, qs: Option<&'a Vertex>) -> Joint<'a> {
+        let (pt_to_qs, qs_to_pt) = match qs {
+            Some(q) => (pt.towards(q), q.towards(pt)),
+            None => (Vec3::ZERO, Vec3::ZERO),
+        };
+        Joint {
+            pt,
+            qs,
+            pt_to_qs,
+            qs_to_pt,
         }
     }
 }
@@ -190,6 +224,11 @@ fn convert_density(pdf: f32, from: &Vertex, to: &Vertex) -> f32 {
         pdf *= to.ng.dot(w / d2.sqrt()).abs();
     }
     pdf
+}
+
+/// The unit direction from `from` to `to` in `frame`.
+fn local_dir(frame: &Frame, from: Vec3, to: Vec3) -> Vec3 {
+    frame.to_local((to - from).normalize_or_zero())
 }
 
 fn remap0(x: f32) -> f32 {
@@ -276,8 +315,9 @@ impl<'a> Bdpt<'a> {
     }
 
     /// Area density with which vertex `v` samples `next`: as a light subpath's origin, as the
-    /// camera, or by its BSDF having been reached from the previous vertex of its subpath.
-    fn pdf(&self, scene: &Scene, v: &Vertex, next: &Vertex) -> f32 {
+    /// camera, or by its BSDF having been reached from the previous vertex of its subpath
+    /// (`dir` the unit direction to `next` in the BSDF's frame, read only there).
+    fn pdf(&self, scene: &Scene, v: &Vertex, next: &Vertex, dir: Vec3) -> f32 {
         match v.kind {
             Kind::Light(_) | Kind::Infinite => self.pdf_light(scene, v, next),
             Kind::Camera => {
@@ -285,38 +325,29 @@ impl<'a> Bdpt<'a> {
                 let (_, dir) = scene.camera.pdf_we(w);
                 convert_density(dir, v, next)
             }
-            Kind::Surface => {
-                let Some((bsdf, frame)) = v.bsdf.as_ref() else {
-                    return 0.0;
-                };
-                let pdf = bsdf.pdf(v.to_prev, Self::local_dir(v, frame, next));
-                convert_density(pdf, v, next)
-            }
+            Kind::Surface => match &v.bsdf {
+                Some((bsdf, _)) => convert_density(bsdf.pdf(v.to_prev, dir), v, next),
+                None => 0.0,
+            },
         }
     }
 
-    /// Area density with which surface vertex `v`, reached from `from` instead, samples the
-    /// previous vertex of its subpath, `prev`.
-    fn pdf_back(v: &Vertex, from: &Vertex, prev: &Vertex) -> f32 {
-        let Some((bsdf, frame)) = v.bsdf.as_ref() else {
-            return 0.0;
-        };
-        let pdf = bsdf.pdf(Self::local_dir(v, frame, from), v.to_prev);
-        convert_density(pdf, v, prev)
-    }
-
-    /// The unit direction from `v` to `other` in `frame`.
-    fn local_dir(v: &Vertex, frame: &Frame, other: &Vertex) -> Vec3 {
-        frame.to_local((other.p - v.p).normalize_or_zero())
+    /// Area density with which surface vertex `v`, reached instead from the unit direction
+    /// `from` (in its BSDF's frame), samples the previous vertex of its subpath, `prev`.
+    fn pdf_back(v: &Vertex, from: Vec3, prev: &Vertex) -> f32 {
+        match &v.bsdf {
+            Some((bsdf, _)) => convert_density(bsdf.pdf(from, v.to_prev), v, prev),
+            None => 0.0,
+        }
     }
 
     /// f·|cos| at surface vertex `v` (reached from the previous vertex of its subpath)
-    /// towards `next`, in `mode`.
-    fn fcos(v: &Vertex, next: &Vertex, mode: TransportMode) -> Vec3 {
-        let Some((bsdf, frame)) = v.bsdf.as_ref() else {
-            return Vec3::ZERO;
-        };
-        bsdf.eval(v.to_prev, Self::local_dir(v, frame, next), mode)
+    /// towards the unit direction `wi` in its BSDF's frame, in `mode`.
+    fn fcos(v: &Vertex, wi: Vec3, mode: TransportMode) -> Vec3 {
+        match &v.bsdf {
+            Some((bsdf, _)) => bsdf.eval(v.to_prev, wi, mode),
+            None => Vec3::ZERO,
+        }
     }
 
     /// Extend `path` from `ray` (its last vertex the start), `beta` its throughput and
@@ -371,7 +402,7 @@ impl<'a> Bdpt<'a> {
             // or sampling or Russian roulette ends it; sampled before the vertex is stored.
             let n = path.len() + 1;
             let scattered = bsdf.as_ref().and_then(|(bsdf, frame)| {
-                v.to_prev = Self::local_dir(&v, frame, prev);
+                v.to_prev = local_dir(frame, v.p, prev.p);
                 if n >= max_vertices {
                     return None;
                 }
@@ -618,7 +649,7 @@ impl<'a> Bdpt<'a> {
                 return Vec3::ZERO;
             }
             let c = pt.beta * pt.le;
-            return c * self.mis_weight(scene, cam, light, None, s, t);
+            return c * self.mis_weight(scene, cam, light, &Joint::new(pt, None), s, t);
         }
         if !pt.connectible() || pt.kind != Kind::Surface {
             return Vec3::ZERO;
@@ -665,7 +696,8 @@ impl<'a> Bdpt<'a> {
             };
             sampled.pdf_fwd = self.pdf_light_origin(scene, &sampled, pt);
             let c = pt.beta * f * ls.li / (ls.pdf * pmf);
-            return c * self.mis_weight(scene, cam, light, Some(&sampled), s, t);
+            let joint = Joint::new(pt, Some(&sampled));
+            return c * self.mis_weight(scene, cam, light, &joint, s, t);
         }
         let qs = &light[s - 1];
         if !qs.connectible() || qs.kind != Kind::Surface {
@@ -676,8 +708,9 @@ impl<'a> Bdpt<'a> {
         if d2 == 0.0 {
             return Vec3::ZERO;
         }
-        let fq = Self::fcos(qs, pt, TransportMode::Importance);
-        let fp = Self::fcos(pt, qs, TransportMode::Radiance);
+        let joint = Joint::new(pt, Some(qs));
+        let fq = Self::fcos(qs, joint.qs_to_pt, TransportMode::Importance);
+        let fp = Self::fcos(pt, joint.pt_to_qs, TransportMode::Radiance);
         let c = qs.beta * fq * fp * pt.beta / d2;
         if c == Vec3::ZERO {
             return Vec3::ZERO;
@@ -697,7 +730,7 @@ impl<'a> Bdpt<'a> {
         if !self.visible(scene, From::Surface(si), &query) {
             return Vec3::ZERO;
         }
-        c * self.mis_weight(scene, cam, light, None, s, t)
+        c * self.mis_weight(scene, cam, light, &joint, s, t)
     }
 
     /// Strategy t = 1: light vertex s − 1 seen by the lens.
@@ -715,7 +748,8 @@ impl<'a> Bdpt<'a> {
         }
         let c = scene.camera.sample_wi(qs.p, sampler.next_2d())?;
         let lens_v = Vertex::new(Kind::Camera, c.p_lens, Vec3::ONE);
-        let f = Self::fcos(qs, &lens_v, TransportMode::Importance);
+        let joint = Joint::new(&lens_v, Some(qs));
+        let f = Self::fcos(qs, joint.qs_to_pt, TransportMode::Importance);
         if f == Vec3::ZERO {
             return None;
         }
@@ -731,7 +765,7 @@ impl<'a> Bdpt<'a> {
             return None;
         }
         let value = qs.beta * f * c.weight;
-        let w = self.mis_weight(scene, cam, light, Some(&lens_v), s, 1);
+        let w = self.mis_weight(scene, cam, light, &joint, s, 1);
         Some((c.p_film, value * w))
     }
 
@@ -750,45 +784,39 @@ impl<'a> Bdpt<'a> {
         ) != Vec3::ZERO
     }
 
-    /// The power-heuristic weight of strategy (s, t); `sampled` replaces the end vertex the
-    /// strategy sampled afresh (the light point for s = 1, the lens point for t = 1).
+    /// The power-heuristic weight of strategy (s, t), joined at `joint` (whose ends replace
+    /// the vertices the strategy sampled afresh: the light point for s = 1, the lens point
+    /// for t = 1).
     fn mis_weight(
         &self,
         scene: &Scene,
         cam: &[Vertex],
         light: &[Vertex],
-        sampled: Option<&Vertex>,
+        joint: &Joint,
         s: usize,
         t: usize,
     ) -> f32 {
         if s + t == 2 {
             return 1.0;
         }
-        let pt: &Vertex = if t == 1 {
-            sampled.expect("t = 1 has a sampled lens vertex")
-        } else {
-            &cam[t - 1]
-        };
-        let qs: Option<&Vertex> = match (s, sampled) {
-            (0, _) => None,
-            (1, Some(v)) if t != 1 => Some(v),
-            _ => Some(&light[s - 1]),
-        };
+        let (pt, qs) = (joint.pt, joint.qs);
         let pt_minus = if t >= 2 { Some(&cam[t - 2]) } else { None };
         let qs_minus = if s >= 2 { Some(&light[s - 2]) } else { None };
         // The joint's reverse densities: pt's from qs (or, for s = 0, as a light subpath's
         // origin), and on from pt back along the camera subpath and from qs back along the
         // light subpath.
         let pt_rev = match qs {
-            Some(q) => self.pdf(scene, q, pt),
+            Some(q) => self.pdf(scene, q, pt, joint.qs_to_pt),
             None => self.pdf_light_origin(scene, pt, pt_minus.expect("t ≥ 2 when s = 0")),
         };
         let pt_minus_rev = pt_minus.map(|pm| match qs {
-            Some(q) => Self::pdf_back(pt, q, pm),
+            Some(_) => Self::pdf_back(pt, joint.pt_to_qs, pm),
             None => self.pdf_light(scene, pt, pm),
         });
-        let qs_rev = qs.map(|q| self.pdf(scene, pt, q));
-        let qs_minus_rev = qs.zip(qs_minus).map(|(q, qm)| Self::pdf_back(q, pt, qm));
+        let qs_rev = qs.map(|q| self.pdf(scene, pt, q, joint.pt_to_qs));
+        let qs_minus_rev = qs
+            .zip(qs_minus)
+            .map(|(q, qm)| Self::pdf_back(q, joint.qs_to_pt, qm));
         // (pdf_fwd, pdf_rev, delta) of each vertex with the joint's overrides; the endpoints
         // are connectible, so not delta.
         let cam_at = |i: usize| -> (f32, f32, bool) {
