@@ -204,8 +204,9 @@ pub struct Bdpt<'a> {
     /// Lights chosen by power.
     dist: Distribution1D,
     any: bool,
-    /// The sampler handed to visibility queries, which draw nothing without media (made
-    /// once: a sampler's construction sets up its stratification grid).
+    /// The sampler handed to transmittance queries through null surfaces, which draw
+    /// nothing without media (made once: a sampler's construction sets up its
+    /// stratification grid).
     no_draws: Sampler,
 }
 
@@ -678,7 +679,7 @@ impl<'a> Bdpt<'a> {
             if f == Vec3::ZERO {
                 return Vec3::ZERO;
             }
-            if !self.visible(scene, From::Surface(si), &ls) {
+            if !self.visible(scene, si, &ls) {
                 return Vec3::ZERO;
             }
             let mut sampled = match ls.target {
@@ -727,7 +728,7 @@ impl<'a> Bdpt<'a> {
                 n: qsi.ng,
             },
         };
-        if !self.visible(scene, From::Surface(si), &query) {
+        if !self.visible(scene, si, &query) {
             return Vec3::ZERO;
         }
         c * self.mis_weight(scene, cam, light, &joint, s, t)
@@ -761,7 +762,7 @@ impl<'a> Bdpt<'a> {
             delta: true,
             target: ShadowTarget::Point(c.p_lens),
         };
-        if !self.visible(scene, From::Surface(qsi), &query) {
+        if !self.visible(scene, qsi, &query) {
             return None;
         }
         let value = qs.beta * f * c.weight;
@@ -769,13 +770,18 @@ impl<'a> Bdpt<'a> {
         Some((c.p_film, value * w))
     }
 
-    /// Whether nothing but null surfaces lies between `from` and the query's target (no
-    /// media here, so the transmittance query draws no random numbers).
-    fn visible(&self, scene: &Scene, from: From<'_>, query: &LightSample) -> bool {
+    /// Whether nothing but null surfaces lies between `si` and the query's target: without
+    /// null surfaces one occlusion query, made here as `transmittance` would make it; else
+    /// the transmittance query (no media here, so it draws no random numbers).
+    fn visible(&self, scene: &Scene, si: &SurfaceInteraction, query: &LightSample) -> bool {
+        if !scene.has_nulls {
+            let (ray, t_max) = query.target.ray_from(si, query.wi);
+            return !scene.occluded(&ray, t_max);
+        }
         let mut dummy = self.no_draws.clone();
         transmittance(
             scene,
-            from,
+            From::Surface(si),
             query,
             None,
             TransmittanceEstimator::default(),
