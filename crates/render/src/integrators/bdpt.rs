@@ -21,8 +21,18 @@
 //! subpaths choose their light by power; the light sampled for s = 1 and the density of an
 //! emitter reached by a camera subpath use the same choice.
 //!
-//! Not yet: participating media (the scene is refused), spectral mode (refused),
-//! per-strategy images.
+//! Participating media: free flights sampled along both subpaths (`Medium::sample_in`, with
+//! a hero channel drawn per camera sample and shared by both subpaths) make medium vertices,
+//! which scatter by their phase function and connect like surface vertices; every
+//! connection carries the transmittance of its segment (through null surfaces and media,
+//! `volpath::transmittance`). Each strategy's estimate carries the spectral-MIS weight over
+//! the hero choice of the vertices it uses (`hero_weight` of the product of both prefixes'
+//! density ratios), as `volpath`'s paths do. The MIS densities leave out the free-flight
+//! and transmittance factors (pbrt-v3's choice): the weights are still computed from one
+//! function of the path for every strategy, so they sum to one. Emitting media are
+//! refused.
+//!
+//! Not yet: spectral mode (refused), per-strategy images.
 
 use std::time::Instant;
 
@@ -35,10 +45,11 @@ use crate::geometry::Ray;
 use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::UVec2;
 use crate::math::{Frame, Vec2, Vec3};
+use crate::media::{Flight, Phase};
 use crate::sampling::{Distribution1D, Sampler, Samples};
 use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
 use crate::shapes::SurfaceInteraction;
-use crate::spectral::lanes::RgbMode;
+use crate::spectral::lanes::{PathMode, RgbMode};
 use crate::world::Scene;
 use base::TransmittanceEstimator;
 
@@ -68,6 +79,8 @@ enum Kind {
     /// Where a camera subpath left the scene: the environment in direction `p − previous`.
     Infinite,
     Surface,
+    /// A scattering event in a medium.
+    Medium,
 }
 
 #[derive(Clone)]
@@ -78,10 +91,19 @@ struct Vertex {
     ng: Vec3,
     si: Option<SurfaceInteraction>,
     bsdf: Option<(Bsdf, Frame)>,
+    /// The phase function of a medium vertex.
+    phase: Phase,
     /// Towards the previous vertex of its subpath, in the BSDF's frame (surface vertices with
-    /// a BSDF): one side of every BSDF query a connection makes here (sampling the walk on
-    /// and the s = 1 strategy start from the incoming ray's `si.wo` instead).
+    /// a BSDF; in world space at a medium vertex): one side of every BSDF or phase query a
+    /// connection makes here (sampling the walk on and the s = 1 strategy at a surface start
+    /// from the incoming ray's `si.wo` instead).
     to_prev: Vec3,
+    /// The medium the subpath was in when it reached this vertex (a medium vertex's own; the
+    /// camera's and a light's, the medium they sit in).
+    medium: Option<u32>,
+    /// The subpath's density ratios p_c / p_hero over the colour channels up to here (free
+    /// flights in media; 1 elsewhere).
+    ratio: Vec3,
     /// Throughput from the subpath's start to here (its own estimate's factor).
     beta: Vec3,
     /// Emission towards the previous vertex of a camera subpath (emitters it reached).
@@ -102,7 +124,10 @@ impl Vertex {
             ng: Vec3::ZERO,
             si: None,
             bsdf: None,
+            phase: Phase::Isotropic,
             to_prev: Vec3::ZERO,
+            medium: None,
+            ratio: Vec3::ONE,
             beta,
             le: Vec3::ZERO,
             delta: false,
@@ -116,11 +141,13 @@ impl Vertex {
         self.ng != Vec3::ZERO
     }
 
-    /// The unit direction to `other` in this vertex's BSDF frame (zero without a BSDF).
+    /// The unit direction to `other` in this vertex's BSDF frame (in world space at a
+    /// medium vertex; zero without a BSDF).
     fn towards(&self, other: &Vertex) -> Vec3 {
-        match &self.bsdf {
-            Some((_, frame)) => local_dir(frame, self.p, other.p),
-            None => Vec3::ZERO,
+        match (&self.bsdf, self.kind) {
+            (_, Kind::Medium) => (other.p - self.p).normalize_or_zero(),
+            (Some((_, frame)), _) => local_dir(frame, self.p, other.p),
+            (None, _) => Vec3::ZERO,
         }
     }
 
@@ -130,6 +157,7 @@ impl Vertex {
             Kind::Camera => true,
             Kind::Infinite => true,
             Kind::Light(_) => true,
+            Kind::Medium => true,
             Kind::Surface => self.bsdf.as_ref().is_some_and(|(b, _)| b.has_smooth()),
         }
     }
@@ -204,10 +232,6 @@ pub struct Bdpt<'a> {
     /// Lights chosen by power.
     dist: Distribution1D,
     any: bool,
-    /// The sampler handed to transmittance queries through null surfaces, which draw
-    /// nothing without media (made once: a sampler's construction sets up its
-    /// stratification grid).
-    no_draws: Sampler,
 }
 
 /// Area density of `pdf` (per unit solid angle at `from`) at `to`.
@@ -243,7 +267,6 @@ impl<'a> Bdpt<'a> {
             cfg,
             any: powers.iter().any(|&p| p > 0.0),
             dist: Distribution1D::new(&powers),
-            no_draws: Sampler::new(base::SamplerKind::Independent, 1, 0),
         }
     }
 
@@ -264,7 +287,7 @@ impl<'a> Bdpt<'a> {
                     .and_then(|si| scene.shape_light(si))
                     .map(LightRef::One)
             }
-            Kind::Camera => None,
+            Kind::Camera | Kind::Medium => None,
         }
     }
 
@@ -330,29 +353,35 @@ impl<'a> Bdpt<'a> {
                 Some((bsdf, _)) => convert_density(bsdf.pdf(v.to_prev, dir), v, next),
                 None => 0.0,
             },
+            Kind::Medium => convert_density(v.phase.eval(v.to_prev, dir), v, next),
         }
     }
 
-    /// Area density with which surface vertex `v`, reached instead from the unit direction
-    /// `from` (in its BSDF's frame), samples the previous vertex of its subpath, `prev`.
+    /// Area density with which surface or medium vertex `v`, reached instead from the unit
+    /// direction `from` (in its BSDF's frame; world space in a medium), samples the previous
+    /// vertex of its subpath, `prev`.
     fn pdf_back(v: &Vertex, from: Vec3, prev: &Vertex) -> f32 {
-        match &v.bsdf {
-            Some((bsdf, _)) => convert_density(bsdf.pdf(from, v.to_prev), v, prev),
-            None => 0.0,
+        match (&v.bsdf, v.kind) {
+            (_, Kind::Medium) => convert_density(v.phase.eval(from, v.to_prev), v, prev),
+            (Some((bsdf, _)), _) => convert_density(bsdf.pdf(from, v.to_prev), v, prev),
+            (None, _) => 0.0,
         }
     }
 
     /// f·|cos| at surface vertex `v` (reached from the previous vertex of its subpath)
-    /// towards the unit direction `wi` in its BSDF's frame, in `mode`.
+    /// towards the unit direction `wi` in its BSDF's frame, in `mode`; at a medium vertex
+    /// the phase function towards `wi` in world space.
     fn fcos(v: &Vertex, wi: Vec3, mode: TransportMode) -> Vec3 {
-        match &v.bsdf {
-            Some((bsdf, _)) => bsdf.eval(v.to_prev, wi, mode),
-            None => Vec3::ZERO,
+        match (&v.bsdf, v.kind) {
+            (_, Kind::Medium) => Vec3::splat(v.phase.eval(v.to_prev, wi)),
+            (Some((bsdf, _)), _) => bsdf.eval(v.to_prev, wi, mode),
+            (None, _) => Vec3::ZERO,
         }
     }
 
-    /// Extend `path` from `ray` (its last vertex the start), `beta` its throughput and
-    /// `pdf_dir` the solid-angle density of `ray`'s direction, up to `max_vertices`.
+    /// Extend `path` from `ray` (its last vertex the start), `beta` its throughput,
+    /// `pdf_dir` the solid-angle density of `ray`'s direction and `medium` the medium it
+    /// starts in, up to `max_vertices`; free flights in media sample with channel `hero`.
     #[allow(clippy::too_many_arguments)]
     fn random_walk(
         &self,
@@ -361,24 +390,68 @@ impl<'a> Bdpt<'a> {
         mut t_max: f32,
         mut beta: Vec3,
         mut pdf_dir: f32,
+        mut medium: Option<u32>,
+        hero: usize,
         sampler: &mut impl Samples,
         mode: TransportMode,
         max_vertices: usize,
         path: &mut Vec<Vertex>,
     ) {
         let m = &RgbMode;
+        let mut ratio = Vec3::ONE;
         // Bounded: null crossings add no vertex.
         for _ in 0..(1 << 16) {
             if path.len() >= max_vertices {
                 return;
             }
-            let Some(si) = scene.intersect(&ray, t_max) else {
+            let closest = scene.closest(&ray, t_max);
+            if let Some(mi) = medium {
+                let med = &scene.media[mi as usize];
+                let d_surface = closest.t(&ray, t_max);
+                match med.sample_in(&ray, d_surface, hero, sampler, m) {
+                    Flight::Scatter {
+                        d,
+                        weight,
+                        ratio: r,
+                        ..
+                    } => {
+                        beta *= weight;
+                        ratio *= r;
+                        let prev = path.last().expect("a subpath has a start");
+                        let mut v = Vertex::new(Kind::Medium, ray.at(d), beta);
+                        v.medium = medium;
+                        v.ratio = ratio;
+                        v.phase = med.phase;
+                        v.to_prev = -ray.d;
+                        v.pdf_fwd = convert_density(pdf_dir, prev, &v);
+                        let n = path.len() + 1;
+                        let Some(sc) = self.scatter_medium(&v, n, max_vertices, sampler) else {
+                            path.push(v);
+                            return;
+                        };
+                        // The phase function is symmetric: the reverse density is the same.
+                        path[n - 2].pdf_rev = convert_density(sc.pdf_rev, &v, prev);
+                        ray = Ray::at_time(v.p, sc.wi, ray.time);
+                        t_max = f32::INFINITY;
+                        beta = sc.beta;
+                        pdf_dir = sc.pdf_dir;
+                        path.push(v);
+                        continue;
+                    }
+                    Flight::Pass { weight, ratio: r } => {
+                        beta *= weight;
+                        ratio *= r;
+                    }
+                }
+            }
+            let Some(si) = closest.surface(scene, &ray, t_max) else {
                 if mode == TransportMode::Radiance {
                     let prev = path.last().expect("a subpath has a start");
                     let mut v = Vertex::new(Kind::Infinite, prev.p + ray.d, beta);
                     for &i in &scene.infinite_lights {
                         v.le += scene.lights[i as usize].environment(ray.d, m);
                     }
+                    v.ratio = ratio;
                     v.pdf_fwd = pdf_dir;
                     path.push(v);
                 }
@@ -386,6 +459,7 @@ impl<'a> Bdpt<'a> {
             };
             let bsdf = scene.bsdf_at_in(&si, m);
             if bsdf.is_none() && scene.is_null(&si) {
+                medium = scene.medium_after(&si, ray.d, medium);
                 ray = si.spawn_ray(ray.d);
                 t_max = f32::INFINITY;
                 continue;
@@ -393,6 +467,8 @@ impl<'a> Bdpt<'a> {
             let prev = path.last().expect("a subpath has a start");
             let mut v = Vertex::new(Kind::Surface, si.p, beta);
             v.ng = si.ng;
+            v.medium = medium;
+            v.ratio = ratio;
             if mode == TransportMode::Radiance
                 && let Some(l) = scene.shape_light(&si)
             {
@@ -407,7 +483,7 @@ impl<'a> Bdpt<'a> {
                 if n >= max_vertices {
                     return None;
                 }
-                Self::scatter(bsdf, frame, si.wo, beta, n, sampler, mode)
+                Self::scatter(bsdf, frame, si.wo, beta, ratio, n, sampler, mode)
             });
             let Some(sc) = scattered else {
                 v.bsdf = bsdf;
@@ -419,6 +495,7 @@ impl<'a> Bdpt<'a> {
             // The reverse density of the previous vertex: from this one back to it.
             let rev = convert_density(sc.pdf_rev, &v, prev);
             path[n - 2].pdf_rev = rev;
+            medium = scene.medium_after(&si, sc.wi, medium);
             ray = si.spawn_ray(sc.wi);
             t_max = f32::INFINITY;
             beta = sc.beta;
@@ -431,13 +508,15 @@ impl<'a> Bdpt<'a> {
 
     /// The direction a walk leaves a surface vertex in (its `n`th) by sampling its BSDF
     /// (`bsdf` in `frame`, `wo` the world direction back along the incoming ray), with the
-    /// throughput `beta` so far; none if sampling fails, Russian roulette ends the path or
-    /// the throughput is left zero or not finite.
+    /// throughput `beta` and channel density ratios `ratio` so far; none if sampling fails,
+    /// Russian roulette ends the path or the throughput is left zero or not finite.
+    #[allow(clippy::too_many_arguments)]
     fn scatter(
         bsdf: &Bsdf,
         frame: &Frame,
         wo: Vec3,
         mut beta: Vec3,
+        ratio: Vec3,
         n: usize,
         sampler: &mut impl Samples,
         mode: TransportMode,
@@ -451,35 +530,64 @@ impl<'a> Bdpt<'a> {
             (bs.pdf, bsdf.pdf(bs.wi, wo))
         };
         beta *= bs.weight;
-        if n >= RR_FROM {
-            let q = beta.max_element().min(0.95);
-            if sampler.next_1d() >= q || q.is_nan() {
-                return None;
-            }
-            beta /= q;
-        }
-        if beta == Vec3::ZERO || !beta.is_finite() {
-            return None;
-        }
         Some(Scattered {
             wi: frame.to_world(bs.wi),
-            beta,
+            beta: Self::roulette(beta, ratio, n, sampler)?,
             pdf_dir,
             pdf_rev,
             delta: bs.delta,
         })
     }
 
+    /// The direction a walk leaves medium vertex `v` (its `n`th) in, by sampling its phase
+    /// function; none once the path is full or Russian roulette ends it.
+    fn scatter_medium(
+        &self,
+        v: &Vertex,
+        n: usize,
+        max_vertices: usize,
+        sampler: &mut impl Samples,
+    ) -> Option<Scattered> {
+        if n >= max_vertices {
+            return None;
+        }
+        let (wi, pdf) = v.phase.sample(v.to_prev, sampler.next_2d());
+        Some(Scattered {
+            wi,
+            beta: Self::roulette(v.beta, v.ratio, n, sampler)?,
+            pdf_dir: pdf,
+            pdf_rev: pdf,
+            delta: false,
+        })
+    }
+
+    /// Russian roulette on the throughput `beta` leaving the `n`th vertex (by its effective
+    /// value, β over the mean channel density ratio): the survivor's throughput, or none.
+    fn roulette(mut beta: Vec3, ratio: Vec3, n: usize, sampler: &mut impl Samples) -> Option<Vec3> {
+        if n >= RR_FROM {
+            let q = (beta * RgbMode.hero_weight(ratio)).max_element().min(0.95);
+            if sampler.next_1d() >= q || q.is_nan() {
+                return None;
+            }
+            beta /= q;
+        }
+        (beta != Vec3::ZERO && beta.is_finite()).then_some(beta)
+    }
+
     /// The camera subpath of at most `max_vertices` vertices (the camera's included).
+    #[allow(clippy::too_many_arguments)]
     fn camera_subpath(
         &self,
         scene: &Scene,
         cray: &CameraRay,
+        hero: usize,
         sampler: &mut impl Samples,
         max_vertices: usize,
         path: &mut Vec<Vertex>,
     ) {
-        path.push(Vertex::new(Kind::Camera, cray.lens, Vec3::ONE));
+        let mut v = Vertex::new(Kind::Camera, cray.lens, Vec3::ONE);
+        v.medium = scene.camera_medium;
+        path.push(v);
         let (_, pdf_dir) = scene.camera.pdf_we(cray.ray.d.normalize());
         let len = cray.ray.d.length();
         let ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
@@ -489,6 +597,8 @@ impl<'a> Bdpt<'a> {
             cray.t_max * len,
             Vec3::ONE,
             pdf_dir,
+            scene.camera_medium,
+            hero,
             sampler,
             TransportMode::Radiance,
             max_vertices,
@@ -500,6 +610,7 @@ impl<'a> Bdpt<'a> {
     fn light_subpath(
         &self,
         scene: &Scene,
+        hero: usize,
         sampler: &mut impl Samples,
         max_vertices: usize,
         path: &mut Vec<Vertex>,
@@ -518,6 +629,7 @@ impl<'a> Bdpt<'a> {
         }
         let mut v = Vertex::new(Kind::Light(li as u32), e.p, Vec3::ZERO);
         v.ng = e.n;
+        v.medium = scene.light_media.get(li).copied().flatten();
         let infinite = light.is_infinite();
         v.at_infinity = infinite;
         v.pdf_fwd = if infinite {
@@ -525,6 +637,7 @@ impl<'a> Bdpt<'a> {
         } else {
             pmf * e.pdf_pos
         };
+        let medium = v.medium;
         path.push(v);
         self.random_walk(
             scene,
@@ -532,6 +645,8 @@ impl<'a> Bdpt<'a> {
             f32::INFINITY,
             e.weight / pmf,
             e.pdf_dir,
+            medium,
+            hero,
             sampler,
             TransportMode::Importance,
             max_vertices,
@@ -560,6 +675,16 @@ impl<'a> Bdpt<'a> {
         }
     }
 
+    /// The channel whose densities sample free flights in media for one camera sample (both
+    /// subpaths); scenes without media draw nothing.
+    fn hero(scene: &Scene, sampler: &mut impl Samples) -> usize {
+        if scene.media.is_empty() {
+            0
+        } else {
+            RgbMode.hero(sampler.next_1d())
+        }
+    }
+
     /// The radiance of one camera sample (its subpaths built in `paths`); light-tracing
     /// contributions (t = 1) go to `splats` as (film position, value).
     pub fn li(
@@ -575,8 +700,9 @@ impl<'a> Bdpt<'a> {
             d if d < 0 => (usize::MAX, usize::MAX),
             d => (d as usize + 1, d as usize),
         };
-        self.camera_subpath(scene, cray, sampler, max_cam, cam);
-        self.light_subpath(scene, sampler, max_light, light);
+        let hero = Self::hero(scene, sampler);
+        self.camera_subpath(scene, cray, hero, sampler, max_cam, cam);
+        self.light_subpath(scene, hero, sampler, max_light, light);
         let mut l = Vec3::ZERO;
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
@@ -614,13 +740,14 @@ impl<'a> Bdpt<'a> {
         streams: impl Fn(&mut S, usize),
     ) -> Option<(Vec2, Vec3)> {
         let (cam, light) = paths.cleared();
-        self.camera_subpath(scene, cray, sampler, t, cam);
+        let hero = Self::hero(scene, sampler);
+        self.camera_subpath(scene, cray, hero, sampler, t, cam);
         if cam.len() != t {
             return None;
         }
         streams(sampler, 1);
         if s > 0 {
-            self.light_subpath(scene, sampler, s, light);
+            self.light_subpath(scene, hero, sampler, s, light);
             if light.len() != s {
                 return None;
             }
@@ -649,13 +776,12 @@ impl<'a> Bdpt<'a> {
             if pt.le == Vec3::ZERO {
                 return Vec3::ZERO;
             }
-            let c = pt.beta * pt.le;
+            let c = pt.beta * pt.le * RgbMode.hero_weight(pt.ratio);
             return c * self.mis_weight(scene, cam, light, &Joint::new(pt, None), s, t);
         }
-        if !pt.connectible() || pt.kind != Kind::Surface {
+        if !pt.connectible() || !matches!(pt.kind, Kind::Surface | Kind::Medium) {
             return Vec3::ZERO;
         }
-        let si = pt.si.as_ref().expect("surface vertex");
         if s == 1 {
             // A light point sampled for pt.
             let (li, pmf, _) = self.dist.sample_discrete(sampler.next_1d());
@@ -664,22 +790,29 @@ impl<'a> Bdpt<'a> {
                 return Vec3::ZERO;
             }
             let light_ = &scene.lights[li];
-            let Some(ls) = light_.sample_li(scene, &Receiver::from(si), u, &RgbMode) else {
+            let receiver = match &pt.si {
+                Some(si) => Receiver::from(si),
+                None => Receiver::at(pt.p),
+            };
+            let Some(ls) = light_.sample_li(scene, &receiver, u, &RgbMode) else {
                 return Vec3::ZERO;
             };
             if ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
                 return Vec3::ZERO;
             }
-            let (bsdf, frame) = pt.bsdf.as_ref().expect("connectible");
-            let f = bsdf.eval(
-                frame.to_local(si.wo),
-                frame.to_local(ls.wi),
-                TransportMode::Radiance,
-            );
+            let f = match (&pt.bsdf, &pt.si) {
+                (Some((bsdf, frame)), Some(si)) if pt.kind == Kind::Surface => bsdf.eval(
+                    frame.to_local(si.wo),
+                    frame.to_local(ls.wi),
+                    TransportMode::Radiance,
+                ),
+                _ => Self::fcos(pt, ls.wi, TransportMode::Radiance),
+            };
             if f == Vec3::ZERO {
                 return Vec3::ZERO;
             }
-            if !self.visible(scene, si, &ls) {
+            let tr = self.tr(scene, pt, &ls, sampler);
+            if tr == Vec3::ZERO {
                 return Vec3::ZERO;
             }
             let mut sampled = match ls.target {
@@ -690,18 +823,18 @@ impl<'a> Bdpt<'a> {
                 }
                 ShadowTarget::Point(p) => Vertex::new(Kind::Light(li as u32), p, Vec3::ZERO),
                 ShadowTarget::Infinite => {
-                    let mut v = Vertex::new(Kind::Light(li as u32), si.p + ls.wi, Vec3::ZERO);
+                    let mut v = Vertex::new(Kind::Light(li as u32), pt.p + ls.wi, Vec3::ZERO);
                     v.at_infinity = true;
                     v
                 }
             };
             sampled.pdf_fwd = self.pdf_light_origin(scene, &sampled, pt);
-            let c = pt.beta * f * ls.li / (ls.pdf * pmf);
+            let c = pt.beta * f * tr * ls.li / (ls.pdf * pmf) * RgbMode.hero_weight(pt.ratio);
             let joint = Joint::new(pt, Some(&sampled));
             return c * self.mis_weight(scene, cam, light, &joint, s, t);
         }
         let qs = &light[s - 1];
-        if !qs.connectible() || qs.kind != Kind::Surface {
+        if !qs.connectible() || !matches!(qs.kind, Kind::Surface | Kind::Medium) {
             return Vec3::ZERO;
         }
         let d = qs.p - pt.p;
@@ -716,22 +849,26 @@ impl<'a> Bdpt<'a> {
         if c == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        let qsi = qs.si.as_ref().expect("surface vertex");
         let query = LightSample {
             wi: d / d2.sqrt(),
             li: Vec3::ZERO,
             pdf: 1.0,
             delta: true,
-            target: ShadowTarget::Surface {
-                p: qsi.p,
-                p_error: qsi.p_error,
-                n: qsi.ng,
+            target: match &qs.si {
+                Some(qsi) if qs.kind == Kind::Surface => ShadowTarget::Surface {
+                    p: qsi.p,
+                    p_error: qsi.p_error,
+                    n: qsi.ng,
+                },
+                _ => ShadowTarget::Point(qs.p),
             },
         };
-        if !self.visible(scene, si, &query) {
+        let tr = self.tr(scene, pt, &query, sampler);
+        if tr == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        c * self.mis_weight(scene, cam, light, &joint, s, t)
+        let hero = RgbMode.hero_weight(pt.ratio * qs.ratio);
+        c * tr * (hero * self.mis_weight(scene, cam, light, &joint, s, t))
     }
 
     /// Strategy t = 1: light vertex s − 1 seen by the lens.
@@ -744,7 +881,7 @@ impl<'a> Bdpt<'a> {
         sampler: &mut impl Samples,
     ) -> Option<(Vec2, Vec3)> {
         let qs = &light[s - 1];
-        if qs.kind != Kind::Surface || !qs.connectible() {
+        if !matches!(qs.kind, Kind::Surface | Kind::Medium) || !qs.connectible() {
             return None;
         }
         let c = scene.camera.sample_wi(qs.p, sampler.next_2d())?;
@@ -754,7 +891,6 @@ impl<'a> Bdpt<'a> {
         if f == Vec3::ZERO {
             return None;
         }
-        let qsi = qs.si.as_ref().expect("surface vertex");
         let query = LightSample {
             wi: c.wi,
             li: Vec3::ZERO,
@@ -762,32 +898,52 @@ impl<'a> Bdpt<'a> {
             delta: true,
             target: ShadowTarget::Point(c.p_lens),
         };
-        if !self.visible(scene, qsi, &query) {
+        let tr = self.tr(scene, qs, &query, sampler);
+        if tr == Vec3::ZERO {
             return None;
         }
-        let value = qs.beta * f * c.weight;
+        let value = qs.beta * f * tr * (c.weight * RgbMode.hero_weight(qs.ratio));
         let w = self.mis_weight(scene, cam, light, &joint, s, 1);
         Some((c.p_film, value * w))
     }
 
-    /// Whether nothing but null surfaces lies between `si` and the query's target: without
-    /// null surfaces one occlusion query, made here as `transmittance` would make it; else
-    /// the transmittance query (no media here, so it draws no random numbers).
-    fn visible(&self, scene: &Scene, si: &SurfaceInteraction, query: &LightSample) -> bool {
-        if !scene.has_nulls {
-            let (ray, t_max) = query.target.ray_from(si, query.wi);
-            return !scene.occluded(&ray, t_max);
-        }
-        let mut dummy = self.no_draws.clone();
+    /// The transmittance from surface or medium vertex `v` to the query's target: 0 if a
+    /// surface other than a null one lies between; through media an estimate
+    /// (`volpath::transmittance`, whose random numbers come from `sampler`). Without media
+    /// or null surfaces one occlusion query, made here as `transmittance` would make it.
+    fn tr(
+        &self,
+        scene: &Scene,
+        v: &Vertex,
+        query: &LightSample,
+        sampler: &mut impl Samples,
+    ) -> Vec3 {
+        let (from, medium) = match (&v.si, v.kind) {
+            (Some(si), Kind::Surface) => {
+                if !scene.has_nulls && scene.media.is_empty() {
+                    let (ray, t_max) = query.target.ray_from(si, query.wi);
+                    return if scene.occluded(&ray, t_max) {
+                        Vec3::ZERO
+                    } else {
+                        Vec3::ONE
+                    };
+                }
+                (
+                    From::Surface(si),
+                    scene.medium_after(si, query.wi, v.medium),
+                )
+            }
+            _ => (From::Medium(v.p, 0.0), v.medium),
+        };
         transmittance(
             scene,
-            From::Surface(si),
+            from,
             query,
-            None,
+            medium,
             TransmittanceEstimator::default(),
-            &mut dummy,
+            sampler,
             &RgbMode,
-        ) != Vec3::ZERO
+        )
     }
 
     /// The power-heuristic weight of strategy (s, t), joined at `joint` (whose ends replace

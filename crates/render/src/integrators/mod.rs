@@ -104,15 +104,16 @@ impl Integrator {
     }
 
     /// Why `scene` cannot be rendered with this integrator (yet): SPPM and PPM have no
-    /// media so far; light paths cannot reach an orthographic camera.
+    /// media so far, BDPT and MLT no emitting media; light paths cannot reach an
+    /// orthographic camera.
     pub fn unsupported(&self, scene: &Scene) -> Option<String> {
         if self.per_sample() {
             return None;
         }
         if matches!(self, Integrator::Bdpt(_) | Integrator::Mlt(_)) {
-            if !scene.media.is_empty() {
+            if scene.media.iter().any(|m| m.emission.is_some()) {
                 return Some(format!(
-                    "{}: participating media are not implemented yet (use volpath)",
+                    "{}: emitting media are not implemented yet (use volpath)",
                     self.name()
                 ));
             }
