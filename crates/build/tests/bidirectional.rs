@@ -238,10 +238,6 @@ fn render_threads(desc: &SceneDesc, integrator: IntegratorDesc, spp: u32, thread
 
 #[test]
 fn same_image_for_one_and_two_threads() {
-    let desc = load(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml"),
-        &[("res", "24")],
-    );
     let mlt = IntegratorDesc::Mlt {
         max_depth: 4,
         bootstrap: 2000,
@@ -250,11 +246,20 @@ fn same_image_for_one_and_two_threads() {
         sigma: 0.01,
         direct_samples: 16,
     };
-    for integrator in [ptracer(&desc), bdpt(&desc), mlt] {
-        let a = render_threads(&desc, integrator.clone(), 3, 1);
-        let b = render_threads(&desc, integrator.clone(), 3, 2);
-        assert!(a.pixels.iter().any(|p| p.x > 0.0), "{integrator:?}");
-        assert_eq!(a.pixels, b.pixels, "{integrator:?}");
+    // Surfaces only, and media (a null-bounded smoke sphere, a glass cube holding a medium).
+    for scene in ["cornell-box.xml", "media/smoky-box.xml"] {
+        let desc = load(
+            &Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../scenes")
+                .join(scene),
+            &[("res", "24")],
+        );
+        for integrator in [ptracer(&desc), bdpt(&desc), mlt.clone()] {
+            let a = render_threads(&desc, integrator.clone(), 3, 1);
+            let b = render_threads(&desc, integrator.clone(), 3, 2);
+            assert!(a.pixels.iter().any(|p| p.x > 0.0), "{scene} {integrator:?}");
+            assert_eq!(a.pixels, b.pixels, "{scene} {integrator:?}");
+        }
     }
 }
 
