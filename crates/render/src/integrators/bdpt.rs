@@ -425,7 +425,7 @@ impl<'a> Bdpt<'a> {
                         v.to_prev = -ray.d;
                         v.pdf_fwd = convert_density(pdf_dir, prev, &v);
                         let n = path.len() + 1;
-                        let Some(sc) = self.scatter_medium(&v, n, max_vertices, sampler) else {
+                        let Some(sc) = Self::scatter_medium(&v, n, max_vertices, sampler) else {
                             path.push(v);
                             return;
                         };
@@ -542,7 +542,6 @@ impl<'a> Bdpt<'a> {
     /// The direction a walk leaves medium vertex `v` (its `n`th) in, by sampling its phase
     /// function; none once the path is full or Russian roulette ends it.
     fn scatter_medium(
-        &self,
         v: &Vertex,
         n: usize,
         max_vertices: usize,
