@@ -131,7 +131,7 @@ pub fn render_adaptive(
 ) -> AdaptiveOutcome {
     let start = Instant::now();
     let f = &scene.film;
-    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
+    let mut film = f.film();
     let max_spp = opts.spp.max(1);
     let batch = settings.batch.max(1);
     let template = Sampler::new(scene.sampler.kind, max_spp, scene.sampler.seed);

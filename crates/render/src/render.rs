@@ -155,7 +155,7 @@ fn render_samples<E: Estimator>(
 ) -> RenderOutcome {
     let start = Instant::now();
     let f = &scene.film;
-    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
+    let mut film = f.film();
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
     let tile_list = film.tile_bounds(opts.tile_size.max(1));
     // One tile per region for the whole render, cleared before each pass.

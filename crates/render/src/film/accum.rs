@@ -434,6 +434,13 @@ impl Film {
         (self.min, self.max)
     }
 
+    /// The number of stored pixels (where samples are taken).
+    #[inline]
+    pub fn pixel_count(&self) -> u64 {
+        let size = self.max - self.min;
+        size.x as u64 * size.y as u64
+    }
+
     /// Size of the stored (crop) region = size of the developed images.
     #[inline]
     pub fn size(&self) -> UVec2 {

@@ -28,3 +28,10 @@ pub struct FilmSettings {
     pub filter: Filter,
     pub tonemap: Option<base::Tonemap>,
 }
+
+impl FilmSettings {
+    /// An empty film of this size, crop window and filter.
+    pub fn film(&self) -> Film {
+        Film::new(self.width, self.height, self.crop, self.filter)
+    }
+}

@@ -40,7 +40,6 @@ use rayon::prelude::*;
 
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::camera::CameraRay;
-use crate::film::Film;
 use crate::geometry::Ray;
 use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::UVec2;
@@ -1045,10 +1044,9 @@ pub fn render(
 ) -> RenderOutcome {
     let start = Instant::now();
     let f = &scene.film;
-    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
+    let mut film = f.film();
     let (pmin, pmax) = film.pixel_bounds();
-    let size = pmax - pmin;
-    let pixel_count = size.x as u64 * size.y as u64;
+    let pixel_count = film.pixel_count();
     let bdpt = Bdpt::new(scene, cfg);
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
     // The camera's importance is normalised over the full image: light paths per pixel of

@@ -38,7 +38,6 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::bdpt::{self, Bdpt, BdptConfig, Subpaths};
-use crate::film::Film;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::{Distribution1D, ONE_MINUS_EPSILON, Samples};
 use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, Silent};
@@ -261,7 +260,7 @@ pub fn render(
         film.bake_splat_scale();
         film
     } else {
-        Film::new(f.width, f.height, f.crop, f.filter)
+        f.film()
     };
     let bcfg = BdptConfig {
         max_depth: cfg.max_depth as i32,
@@ -334,7 +333,7 @@ pub fn render(
             // chains hardly leave a small bright emitter).
             let offset =
                 Pcg32::new(seed_of(seed, 0x5354_4152_5400 + d as u64), 7).next_f32() as f64;
-            let mut layer = Film::new(f.width, f.height, f.crop, f.filter);
+            let mut layer = f.film();
             let mut made = 0u64;
             let block = 64u64;
             let mut c0 = 0u64;

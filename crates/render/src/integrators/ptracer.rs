@@ -35,7 +35,6 @@ use super::photons::{self, PhotonHit, PhotonLights};
 use super::volpath::{From, transmittance};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
-use crate::film::Film;
 use crate::geometry::Ray;
 use crate::lights::{LightSample, ShadowTarget};
 use crate::math::{UVec2, Vec2, Vec3};
@@ -85,10 +84,9 @@ fn render_in<M: PathMode>(
 ) -> RenderOutcome {
     let start = Instant::now();
     let f = &scene.film;
-    let mut film = Film::new(f.width, f.height, f.crop, f.filter);
+    let mut film = f.film();
     let (pmin, pmax) = film.pixel_bounds();
-    let size = pmax - pmin;
-    let pixel_count = size.x as u64 * size.y as u64;
+    let pixel_count = film.pixel_count();
     // The camera's importance is normalised over the full image: one light path per pixel
     // of it makes one pass.
     let paths = f.width as u64 * f.height as u64;
