@@ -1,6 +1,6 @@
 //! Integrator factories: the scene's integrator description to the runtime integrator.
 
-use render::integrators::bdpt::BdptConfig;
+use render::integrators::bdpt::{BdptConfig, StrategyImages};
 use render::integrators::mlt::MltConfig;
 use render::integrators::path::{Combine, PathConfig};
 use render::integrators::photon::{Lookup, PhotonConfig};
@@ -77,8 +77,17 @@ pub fn integrator(
             large_step: *large_step,
             sigma: *sigma,
         }),
-        IntegratorDesc::Bdpt { max_depth } => Integrator::Bdpt(BdptConfig {
+        IntegratorDesc::Bdpt {
+            max_depth,
+            visualize_strategies,
+            visualize_weights,
+        } => Integrator::Bdpt(BdptConfig {
             max_depth: *max_depth,
+            strategy_images: match (visualize_strategies, visualize_weights) {
+                (_, true) => Some(StrategyImages::Weighted),
+                (true, false) => Some(StrategyImages::Unweighted),
+                (false, false) => None,
+            },
         }),
         IntegratorDesc::Ptracer {
             max_depth,

@@ -51,6 +51,8 @@ fn ptracer(desc: &SceneDesc) -> IntegratorDesc {
 fn bdpt(desc: &SceneDesc) -> IntegratorDesc {
     IntegratorDesc::Bdpt {
         max_depth: max_depth(desc),
+        visualize_strategies: false,
+        visualize_weights: false,
     }
 }
 
@@ -390,5 +392,131 @@ fn mlt_converges_on_mitsuba_cbox() {
     println!("mlt mitsuba-cbox mean ÷ reference at 4096: {ratio:.4?}");
     for (c, r) in ratio.iter().enumerate() {
         assert!((r - 1.0).abs() < 0.01, "channel {c}: {r}");
+    }
+}
+
+/// BDPT with per-strategy images on `scenes/cornell-box.xml` (all diffuse, one area light)
+/// at `res`², box filter, paths of at most 4 edges; the image and the strategy images by
+/// name.
+fn strategy_render(
+    visualize_weights: bool,
+    res: u32,
+    spp: u32,
+    seed: u64,
+) -> (Image, Vec<(String, Image)>) {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml");
+    let mut desc = load(&file, &[("res", &res.to_string())]);
+    for s in &mut desc.sensors {
+        s.film.filter = scene::FilterDesc::Box { radius: 0.5 };
+    }
+    let opts = BuildOptions {
+        spp: Some(spp),
+        seed: Some(seed),
+        integrator: Some(IntegratorDesc::Bdpt {
+            max_depth: 4,
+            visualize_strategies: !visualize_weights,
+            visualize_weights,
+        }),
+        ..Default::default()
+    };
+    let out = render_desc(&desc, &opts).expect("scene builds");
+    let extra = out
+        .extra
+        .iter()
+        .map(|(name, film)| (name.clone(), film.develop()))
+        .collect();
+    (out.film.develop(), extra)
+}
+
+/// pbrt-v4's `visualizeweights`: one image per strategy of paths up to 4 edges (13 of
+/// them, (1, 1) left out), named `bdpt_dDD_sSS_tTT`, and their sum is the image (box
+/// filter: every contribution lands in its own pixel; up to float rounding).
+#[test]
+fn weighted_strategy_images_sum_to_the_image() {
+    let (image, parts) = strategy_render(true, 24, 8, 3);
+    let names: Vec<&str> = parts.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names.len(), 13, "{names:?}");
+    assert!(names.contains(&"bdpt_d00_s00_t02") && names.contains(&"bdpt_d03_s04_t01"));
+    assert!(!names.contains(&"bdpt_d00_s01_t01"));
+    let mut sum = vec![render::math::Vec3::ZERO; image.pixels.len()];
+    for (name, part) in &parts {
+        assert!(part.pixels.iter().any(|p| p.x > 0.0), "{name} is black");
+        for (s, p) in sum.iter_mut().zip(&part.pixels) {
+            *s += *p;
+        }
+    }
+    for (i, (s, p)) in sum.iter().zip(&image.pixels).enumerate() {
+        let err = (*s - *p).abs().max_element();
+        assert!(
+            err <= 1e-4 * (1.0 + p.max_element()),
+            "pixel {i}: sum {s} image {p}"
+        );
+    }
+}
+
+/// pbrt-v4's `visualizestrategies`: each strategy's unweighted estimate. In a diffuse box
+/// lit by an area light every strategy samples every path, so the images of one depth
+/// estimate the same image: each strategy of depths 1 and 2 against the one that samples
+/// a light point (s = 1), by the z statistic of the per-pixel differences, 15 tests
+/// (5 pairs × RGB) at α = 0.01 Šidák-corrected.
+#[test]
+fn unweighted_strategy_images_of_one_depth_agree() {
+    let (_, parts) = strategy_render(false, 32, 256, 7);
+    let img = |name: &str| -> Vec<[f32; 3]> {
+        let (_, i) = parts.iter().find(|(n, _)| n == name).expect(name);
+        i.pixels.iter().map(|p| p.to_array()).collect()
+    };
+    // Šidák: 1 − 0.99^(1/15) = 6.70e-4 per test, two-sided normal quantile 3.40.
+    let z_crit = 3.40;
+    for (depth, others) in [
+        (1, &[(0, 3), (2, 1)][..]),
+        (2, &[(0, 4), (2, 2), (3, 1)][..]),
+    ] {
+        let light = img(&format!("bdpt_d{depth:02}_s01_t{:02}", depth + 1));
+        for &(s, t) in others {
+            let name = format!("bdpt_d{depth:02}_s{s:02}_t{t:02}");
+            let z = scene::testing::z_of_mean_difference(&img(&name), &light);
+            println!("{name} vs s = 1: z = {z:.2?} (|z| < {z_crit:.2})");
+            assert!(z.iter().all(|z| z.abs() < z_crit), "{name}: z = {z:?}");
+        }
+    }
+}
+
+/// Mitsuba 0.6's `bdpt` parameters and pbrt-v4's per-strategy image switches (as Mitsuba
+/// property names) reach the integrator; `visualizeWeights` wins over
+/// `visualizeStrategies`, as in pbrt-v4.
+#[test]
+fn mitsuba_bdpt_parameters() {
+    use render::integrators::Integrator;
+    use render::integrators::bdpt::StrategyImages;
+    for (params, expected) in [
+        ("", None),
+        (
+            r#"<boolean name="visualizeStrategies" value="true"/>"#,
+            Some(StrategyImages::Unweighted),
+        ),
+        (
+            r#"<boolean name="visualizeStrategies" value="true"/>
+               <boolean name="visualizeWeights" value="true"/>"#,
+            Some(StrategyImages::Weighted),
+        ),
+    ] {
+        let xml = format!(
+            r#"<scene version="0.6.0">
+                 <integrator type="bdpt"><integer name="maxDepth" value="4"/>
+                   <boolean name="lightImage" value="true"/>{params}</integrator>
+                 <sensor type="perspective">
+                   <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+                 </sensor>
+                 <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+               </scene>"#
+        );
+        let desc = scene::load_xml_text("bdpt.xml", &xml).expect("loads");
+        let built = build::build(&desc, &BuildOptions::default()).expect("builds");
+        let Integrator::Bdpt(cfg) = built.integrator else {
+            panic!("{:?}", built.integrator)
+        };
+        assert_eq!(cfg.max_depth, 4);
+        assert_eq!(cfg.strategy_images, expected, "{params}");
     }
 }

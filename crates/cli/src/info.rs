@@ -152,9 +152,18 @@ fn integrator(i: &IntegratorDesc) -> String {
                 d => format!("direct illumination apart at {d} samples per pixel"),
             }
         ),
-        IntegratorDesc::Bdpt { max_depth } => format!(
-            "bidirectional path tracing (bdpt): max depth {}",
-            depth(*max_depth as i64)
+        IntegratorDesc::Bdpt {
+            max_depth,
+            visualize_strategies,
+            visualize_weights,
+        } => format!(
+            "bidirectional path tracing (bdpt): max depth {}{}",
+            depth(*max_depth as i64),
+            match (visualize_strategies, visualize_weights) {
+                (_, true) => ", with MIS-weighted per-strategy images",
+                (true, false) => ", with unweighted per-strategy images",
+                (false, false) => "",
+            }
         ),
         IntegratorDesc::Ptracer {
             max_depth,

@@ -122,8 +122,11 @@ struct RenderArgs {
     /// `photons` photons, default one per pixel; the scene's max depth is kept) or
     /// ppm[:photons[,radius[,eye_samples]]] (fixed visible points, 4 per pixel by default),
     /// or photon[:photons[,gather[,k]]] (photon mapping: 10⁶ photons, 16 final gathering
-    /// rays, the 64 nearest photons by default), or ptracer (light tracing), bdpt
-    /// (bidirectional path tracing) or mlt[:direct_samples] (primary-sample-space Metropolis
+    /// rays, the 64 nearest photons by default), or ptracer (light tracing),
+    /// bdpt[:strategies|:weights] (bidirectional path tracing; with an argument it also
+    /// writes one EXR per strategy (s, t) beside the first output, OUT_bdpt_dDD_sSS_tTT.exr,
+    /// unweighted or MIS-weighted as pbrt-v4's visualizestrategies / visualizeweights; needs
+    /// --max-depth) or mlt[:direct_samples] (primary-sample-space Metropolis
     /// over BDPT; --spp mutations per pixel; paths of one and two edges apart by BDPT at
     /// direct_samples per pixel, 16 by default as Mitsuba 0.6's pssmlt, -1: by the chains
     /// too). The scene's max depth is kept.
@@ -256,7 +259,7 @@ impl TransportArgs {
                 Some(IntegratorDesc::Sppm(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Photon(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Ptracer { max_depth, .. }) => *max_depth = m,
-                Some(IntegratorDesc::Bdpt { max_depth }) => *max_depth = m,
+                Some(IntegratorDesc::Bdpt { max_depth, .. }) => *max_depth = m,
                 Some(IntegratorDesc::Mlt { max_depth, .. }) => *max_depth = m,
                 _ => {}
             }
@@ -304,7 +307,7 @@ impl TransportArgs {
                         *max_depth = m.max(-1);
                     }
                 }
-                IntegratorDesc::Bdpt { max_depth } if !path_only => {
+                IntegratorDesc::Bdpt { max_depth, .. } if !path_only => {
                     if let Some(m) = self.max_depth {
                         *max_depth = m.max(-1);
                     }
@@ -542,7 +545,7 @@ fn max_depth_of(i: &IntegratorDesc) -> Option<i32> {
         IntegratorDesc::Sppm(d) => Some(d.max_depth),
         IntegratorDesc::Photon(d) => Some(d.max_depth),
         IntegratorDesc::Ptracer { max_depth, .. } => Some(*max_depth),
-        IntegratorDesc::Bdpt { max_depth } => Some(*max_depth),
+        IntegratorDesc::Bdpt { max_depth, .. } => Some(*max_depth),
         IntegratorDesc::Mlt { max_depth, .. } => Some(*max_depth),
         _ => None,
     }
@@ -605,7 +608,20 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             }
             d
         }),
-        "bdpt" if arg.is_empty() => IntegratorDesc::Bdpt { max_depth: -1 },
+        "bdpt" => IntegratorDesc::Bdpt {
+            max_depth: -1,
+            visualize_strategies: arg == "strategies",
+            visualize_weights: match arg {
+                "" | "strategies" => false,
+                "weights" => true,
+                _ => {
+                    return Err(format!(
+                        "bdpt[:strategies|:weights]: expected 'strategies' (one unweighted image \
+                         per strategy) or 'weights' (MIS-weighted), found '{arg}'"
+                    ));
+                }
+            },
+        },
         "mlt" => IntegratorDesc::Mlt {
             max_depth: -1,
             bootstrap: 100_000,
@@ -662,7 +678,7 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
                  photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
-                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt, mlt[:DIRECT_SAMPLES])"
+                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt[:strategies|:weights], mlt[:DIRECT_SAMPLES])"
             ));
         }
     })
@@ -1032,6 +1048,7 @@ pub(crate) fn render_scene_with(
                 passes: 1,
                 elapsed: a.elapsed,
                 cancelled: a.cancelled,
+                extra: Vec::new(),
                 film: a.film,
             };
             reporter.finish_adaptive(&outcome, a.total_samples, mean_spp);
@@ -1084,6 +1101,20 @@ pub(crate) fn render_scene_with(
         write_image_tonemapped(o, &image, scene.film.tonemap.as_ref()).map_err(Failure::other)?;
         if !job.quiet {
             eprintln!("wrote {}", o.display());
+        }
+    }
+    if let Some(first) = job.outputs.first() {
+        let stem = first.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
+        for (name, film) in &outcome.extra {
+            let path = first.with_file_name(format!("{stem}_{name}.exr"));
+            write_image(&path, &film.develop()).map_err(Failure::other)?;
+        }
+        if !job.quiet && !outcome.extra.is_empty() {
+            eprintln!(
+                "wrote {} per-strategy image(s) beside {}",
+                outcome.extra.len(),
+                first.display()
+            );
         }
     }
     if let Some(se) = &job.stderr {

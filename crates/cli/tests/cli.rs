@@ -214,3 +214,65 @@ fn textures_of_a_scene_named_relatively_are_found() {
     assert!(dir.join("out.exr").is_file());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `--integrator bdpt:weights` writes one EXR per strategy beside the first output
+/// (pbrt-v4's names); without a finite max depth it is refused before rendering.
+#[test]
+fn bdpt_writes_per_strategy_images() {
+    let dir = temp_dir("strategies");
+    let png = dir.join("box.png");
+    let run = |extra: &[&str]| {
+        penumbra()
+            .arg("render")
+            .arg(repo_root().join("scenes/cornell-box.xml"))
+            .args([
+                "--integrator",
+                "bdpt:weights",
+                "--spp",
+                "1",
+                "--res",
+                "16x16",
+                "-q",
+            ])
+            .args(extra)
+            .arg("-o")
+            .arg(&png)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--max-depth", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("finite max depth"), "{stderr}");
+    let out = run(&["--max-depth", "3"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    // Paths of 1 to 3 edges: 1 + 3 + 4 strategies.
+    assert_eq!(names.len(), 1 + 8, "{names:?}");
+    assert!(
+        names.contains(&"box_bdpt_d00_s00_t02.exr".to_string()),
+        "{names:?}"
+    );
+    assert!(
+        names.contains(&"box_bdpt_d02_s03_t01.exr".to_string()),
+        "{names:?}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+    let out = penumbra()
+        .arg("render")
+        .arg(repo_root().join("scenes/cornell-box.xml"))
+        .args(["--integrator", "bdpt:weight", "-o", "x.png"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("'strategies'"), "{stderr}");
+}

@@ -109,6 +109,10 @@ pub fn integrator_memory(scene: &Scene, integrator: &Integrator) -> Option<(&'st
             "keeping the visible points and photon contributions",
             crate::integrators::sppm::memory_needed(scene, cfg),
         )),
+        Integrator::Bdpt(cfg) if cfg.strategy_images.is_some() => Some((
+            "keeping one image per strategy",
+            crate::integrators::bdpt::memory_needed(scene, cfg),
+        )),
         _ => None,
     }
 }
@@ -227,5 +231,6 @@ fn render_samples<E: Estimator>(
         passes,
         elapsed: start.elapsed(),
         cancelled,
+        extra: Vec::new(),
     }
 }

@@ -57,6 +57,8 @@ pub struct RenderOutcome {
     pub passes: u32,
     pub elapsed: Duration,
     pub cancelled: bool,
+    /// Images besides the film, by name (BDPT's per-strategy images), written beside it.
+    pub extra: Vec<(String, Film)>,
 }
 
 /// Events reported while rendering.

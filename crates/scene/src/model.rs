@@ -1010,8 +1010,14 @@ pub enum IntegratorDesc {
     Photon(PhotonDesc),
     /// Light tracing (Mitsuba's `ptracer`): light paths connected to the camera.
     Ptracer { max_depth: i32, hide_emitters: bool },
-    /// Bidirectional path tracing (Mitsuba 0.6's `bdpt`).
-    Bdpt { max_depth: i32 },
+    /// Bidirectional path tracing (Mitsuba 0.6's `bdpt`), optionally with one image per
+    /// strategy (pbrt-v4's `visualizestrategies`: unweighted; `visualizeweights`:
+    /// MIS-weighted, and it wins when both are set).
+    Bdpt {
+        max_depth: i32,
+        visualize_strategies: bool,
+        visualize_weights: bool,
+    },
     /// Metropolis light transport over BDPT, multiplexed over strategies (pbrt-v3's `mlt`;
     /// Mitsuba 0.6's `pssmlt`/`mlt` names): `max_depth` −1 means 6 edges (pbrt's
     /// default `maxdepth` 5, which counts bounces);

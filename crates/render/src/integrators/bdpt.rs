@@ -32,14 +32,20 @@
 //! function of the path for every strategy, so they sum to one. Emitting media are
 //! refused.
 //!
-//! Not yet: spectral mode (refused), per-strategy images.
+//! Per-strategy images (pbrt-v4's `visualizestrategies` / `visualizeweights`): `li` tells
+//! a [`StrategySink`] of every strategy's contribution; [`render`] keeps one film per
+//! (s, t) when asked.
+//!
+//! Not yet: spectral mode (refused).
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::camera::CameraRay;
+use crate::film::Film;
 use crate::geometry::Ray;
 use crate::lights::{LightSample, Receiver, ShadowTarget};
 use crate::math::UVec2;
@@ -59,13 +65,63 @@ use super::volpath::{From, transmittance};
 pub struct BdptConfig {
     /// Longest path in edges, camera to light (−1: unbounded).
     pub max_depth: i32,
+    /// Also render one image per strategy (pbrt-v4's `visualizestrategies` /
+    /// `visualizeweights`); needs a finite `max_depth`.
+    pub strategy_images: Option<StrategyImages>,
 }
 
 impl Default for BdptConfig {
     fn default() -> Self {
-        BdptConfig { max_depth: -1 }
+        BdptConfig {
+            max_depth: -1,
+            strategy_images: None,
+        }
     }
 }
+
+/// What the per-strategy images hold (pbrt-v4's two options).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StrategyImages {
+    /// Each strategy's own estimate, without its MIS weight (`visualizestrategies`): the
+    /// images of one path depth each converge to the whole image of that depth where the
+    /// strategy can sample every path, and show where it cannot.
+    Unweighted,
+    /// The MIS-weighted contributions (`visualizeweights`): they sum to the image.
+    Weighted,
+}
+
+impl StrategyImages {
+    /// The image name of strategy (s, t), pbrt-v4's: `bdpt_dDD_sSS_tTT`, the depth DD
+    /// counting bounces (s + t − 2).
+    pub fn name(s: usize, t: usize) -> String {
+        format!("bdpt_d{:02}_s{s:02}_t{t:02}", s + t - 2)
+    }
+
+    /// The strategies of paths of at most `max_depth` edges: (s, t) with t ≥ 1, s + t ≥ 2,
+    /// s + t − 1 ≤ max_depth, (1, 1) left out.
+    pub fn strategies(max_depth: u32) -> impl Iterator<Item = (usize, usize)> {
+        (2..=max_depth as usize + 1).flat_map(|n| {
+            (0..n)
+                .map(move |s| (s, n - s))
+                .filter(|&(s, t)| !(s == 1 && t == 1))
+        })
+    }
+}
+
+/// Told of every strategy's nonzero contribution as [`Bdpt::li`] makes it: (s, t), the film
+/// position of a light-tracing one (t = 1; `None`: the camera sample's), its MIS-weighted
+/// value and the weight. `()` is told nothing (and costs nothing).
+pub trait StrategySink {
+    fn add(&mut self, s: usize, t: usize, splat_at: Option<Vec2>, value: Vec3, weight: f32);
+}
+
+impl StrategySink for () {
+    #[inline(always)]
+    fn add(&mut self, _: usize, _: usize, _: Option<Vec2>, _: Vec3, _: f32) {}
+}
+
+/// What a strategy that makes nothing returns.
+const NONE: (Vec3, f32) = (Vec3::ZERO, 0.0);
 
 /// Subpath vertices that start Russian roulette.
 const RR_FROM: usize = 5;
@@ -684,7 +740,9 @@ impl<'a> Bdpt<'a> {
     }
 
     /// The radiance of one camera sample (its subpaths built in `paths`); light-tracing
-    /// contributions (t = 1) go to `splats` as (film position, value).
+    /// contributions (t = 1) go to `splats` as (film position, value); `sink` is told of
+    /// every strategy's.
+    #[allow(clippy::too_many_arguments)]
     pub fn li(
         &self,
         scene: &Scene,
@@ -692,6 +750,7 @@ impl<'a> Bdpt<'a> {
         sampler: &mut impl Samples,
         paths: &mut Subpaths,
         splats: &mut Vec<(Vec2, Vec3)>,
+        sink: &mut impl StrategySink,
     ) -> Vec3 {
         let (cam, light) = paths.cleared();
         let (max_cam, max_light) = match self.cfg.max_depth {
@@ -709,12 +768,17 @@ impl<'a> Bdpt<'a> {
                     continue;
                 }
                 if t == 1 {
-                    if let Some((p, c)) = self.connect_camera(scene, cam, light, s, sampler) {
+                    if let Some((p, c, w)) = self.connect_camera(scene, cam, light, s, sampler) {
                         splats.push((p, c));
+                        sink.add(s, 1, Some(p), c, w);
                     }
                     continue;
                 }
-                l += self.connect(scene, cam, light, s, t, sampler);
+                let (c, w) = self.connect(scene, cam, light, s, t, sampler);
+                if w > 0.0 && c != Vec3::ZERO {
+                    sink.add(s, t, None, c, w);
+                }
+                l += c;
             }
         }
         l
@@ -752,13 +816,16 @@ impl<'a> Bdpt<'a> {
         }
         streams(sampler, 2);
         if t == 1 {
-            return self.connect_camera(scene, cam, light, s, sampler);
+            return self
+                .connect_camera(scene, cam, light, s, sampler)
+                .map(|(p, c, _)| (p, c));
         }
-        let c = self.connect(scene, cam, light, s, t, sampler);
+        let (c, _) = self.connect(scene, cam, light, s, t, sampler);
         Some((p_film, c))
     }
 
-    /// Strategy (s, t ≥ 2).
+    /// Strategy (s, t ≥ 2): its MIS-weighted contribution and the weight (zero, 0 when
+    /// it makes none).
     fn connect(
         &self,
         scene: &Scene,
@@ -767,25 +834,26 @@ impl<'a> Bdpt<'a> {
         s: usize,
         t: usize,
         sampler: &mut impl Samples,
-    ) -> Vec3 {
+    ) -> (Vec3, f32) {
         let pt = &cam[t - 1];
         if s == 0 {
             // The camera subpath reached an emitter.
             if pt.le == Vec3::ZERO {
-                return Vec3::ZERO;
+                return NONE;
             }
             let c = pt.beta * pt.le * RgbMode.hero_weight(pt.ratio);
-            return c * self.mis_weight(scene, cam, light, &Joint::new(pt, None), s, t);
+            let w = self.mis_weight(scene, cam, light, &Joint::new(pt, None), s, t);
+            return (c * w, w);
         }
         if !pt.connectible() || !matches!(pt.kind, Kind::Surface | Kind::Medium) {
-            return Vec3::ZERO;
+            return NONE;
         }
         if s == 1 {
             // A light point sampled for pt.
             let (li, pmf, _) = self.dist.sample_discrete(sampler.next_1d());
             let u = sampler.next_2d();
             if pmf <= 0.0 || !self.any {
-                return Vec3::ZERO;
+                return NONE;
             }
             let light_ = &scene.lights[li];
             let receiver = match &pt.si {
@@ -793,10 +861,10 @@ impl<'a> Bdpt<'a> {
                 None => Receiver::at(pt.p),
             };
             let Some(ls) = light_.sample_li(scene, &receiver, u, &RgbMode) else {
-                return Vec3::ZERO;
+                return NONE;
             };
             if ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
-                return Vec3::ZERO;
+                return NONE;
             }
             let f = match (&pt.bsdf, &pt.si) {
                 (Some((bsdf, frame)), Some(si)) if pt.kind == Kind::Surface => bsdf.eval(
@@ -807,11 +875,11 @@ impl<'a> Bdpt<'a> {
                 _ => Self::fcos(pt, ls.wi, TransportMode::Radiance),
             };
             if f == Vec3::ZERO {
-                return Vec3::ZERO;
+                return NONE;
             }
             let tr = self.tr(scene, pt, &ls, sampler);
             if tr == Vec3::ZERO {
-                return Vec3::ZERO;
+                return NONE;
             }
             let mut sampled = match ls.target {
                 ShadowTarget::Surface { p, n, .. } => {
@@ -829,23 +897,24 @@ impl<'a> Bdpt<'a> {
             sampled.pdf_fwd = self.pdf_light_origin(scene, &sampled, pt);
             let c = pt.beta * f * tr * ls.li / (ls.pdf * pmf) * RgbMode.hero_weight(pt.ratio);
             let joint = Joint::new(pt, Some(&sampled));
-            return c * self.mis_weight(scene, cam, light, &joint, s, t);
+            let w = self.mis_weight(scene, cam, light, &joint, s, t);
+            return (c * w, w);
         }
         let qs = &light[s - 1];
         if !qs.connectible() || !matches!(qs.kind, Kind::Surface | Kind::Medium) {
-            return Vec3::ZERO;
+            return NONE;
         }
         let d = qs.p - pt.p;
         let d2 = d.length_squared();
         if d2 == 0.0 {
-            return Vec3::ZERO;
+            return NONE;
         }
         let joint = Joint::new(pt, Some(qs));
         let fq = Self::fcos(qs, joint.qs_to_pt, TransportMode::Importance);
         let fp = Self::fcos(pt, joint.pt_to_qs, TransportMode::Radiance);
         let c = qs.beta * fq * fp * pt.beta / d2;
         if c == Vec3::ZERO {
-            return Vec3::ZERO;
+            return NONE;
         }
         let query = LightSample {
             wi: d / d2.sqrt(),
@@ -863,13 +932,15 @@ impl<'a> Bdpt<'a> {
         };
         let tr = self.tr(scene, pt, &query, sampler);
         if tr == Vec3::ZERO {
-            return Vec3::ZERO;
+            return NONE;
         }
         let hero = RgbMode.hero_weight(pt.ratio * qs.ratio);
-        c * tr * (hero * self.mis_weight(scene, cam, light, &joint, s, t))
+        let w = self.mis_weight(scene, cam, light, &joint, s, t);
+        (c * tr * (hero * w), w)
     }
 
-    /// Strategy t = 1: light vertex s − 1 seen by the lens.
+    /// Strategy t = 1: light vertex s − 1 seen by the lens; the film position, the
+    /// MIS-weighted contribution and the weight.
     fn connect_camera(
         &self,
         scene: &Scene,
@@ -877,7 +948,7 @@ impl<'a> Bdpt<'a> {
         light: &[Vertex],
         s: usize,
         sampler: &mut impl Samples,
-    ) -> Option<(Vec2, Vec3)> {
+    ) -> Option<(Vec2, Vec3, f32)> {
         let qs = &light[s - 1];
         if !matches!(qs.kind, Kind::Surface | Kind::Medium) || !qs.connectible() {
             return None;
@@ -902,7 +973,7 @@ impl<'a> Bdpt<'a> {
         }
         let value = qs.beta * f * tr * (c.weight * RgbMode.hero_weight(qs.ratio));
         let w = self.mis_weight(scene, cam, light, &joint, s, 1);
-        Some((c.p_film, value * w))
+        Some((c.p_film, value * w, w))
     }
 
     /// The transmittance from surface or medium vertex `v` to the query's target: 0 if a
@@ -1033,9 +1104,39 @@ impl<'a> Bdpt<'a> {
     }
 }
 
+/// The per-strategy images' part of one camera sample: (s, t, film position, value).
+struct StrategyRecord<'a> {
+    p_film: Vec2,
+    weighted: bool,
+    out: &'a mut Vec<(u16, u16, Vec2, Vec3)>,
+}
+
+impl StrategySink for StrategyRecord<'_> {
+    fn add(&mut self, s: usize, t: usize, splat_at: Option<Vec2>, value: Vec3, weight: f32) {
+        let v = if self.weighted { value } else { value / weight };
+        self.out
+            .push((s as u16, t as u16, splat_at.unwrap_or(self.p_film), v));
+    }
+}
+
+/// Bytes the per-strategy images of `cfg` take (0 without them).
+pub fn memory_needed(scene: &Scene, cfg: &BdptConfig) -> u64 {
+    match (cfg.strategy_images, u32::try_from(cfg.max_depth)) {
+        (Some(_), Ok(d)) => {
+            let f = &scene.film;
+            let one = crate::film::Film::memory_needed(f.width, f.height, f.crop, &f.filter, 0);
+            StrategyImages::strategies(d).count() as u64 * one
+        }
+        _ => 0,
+    }
+}
+
 /// Render `scene` with BDPT: `opts.spp` passes of one sample per pixel, rows in parallel,
 /// each row's film tile and light-tracing splats merged in row order (the image does not
 /// depend on the thread count); a time budget or cancellation stops after a whole pass.
+/// With `cfg.strategy_images` the outcome also holds one image per strategy (s, t), named
+/// by [`StrategyImages::name`]: every contribution splatted at its film position, so that
+/// with the box filter the weighted images sum to the image up to rounding.
 pub fn render(
     scene: &Scene,
     cfg: &BdptConfig,
@@ -1052,36 +1153,71 @@ pub fn render(
     // The camera's importance is normalised over the full image: light paths per pixel of
     // it, per pass.
     let per_pass = pixel_count.max(1) as f64 / (f.width as f64 * f.height as f64);
+    // Every strategy's image, black ones too (the set of files depends on max_depth only).
+    let mut strategy_films: BTreeMap<(u16, u16), Film> = match cfg.strategy_images {
+        Some(_) => StrategyImages::strategies(cfg.max_depth.max(0) as u32)
+            .map(|(s, t)| ((s as u16, t as u16), f.film()))
+            .collect(),
+        None => BTreeMap::new(),
+    };
     let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |pass| {
         let rows: Vec<_> = (pmin.y..pmax.y)
             .into_par_iter()
             .map(|y| {
                 let mut tile = film.tile(UVec2::new(pmin.x, y), UVec2::new(pmax.x, y + 1));
                 let mut splats = Vec::new();
+                let mut records = Vec::new();
                 let mut paths = Subpaths::default();
                 let mut sampler = template.clone();
                 for x in pmin.x..pmax.x {
                     let (p_film, cray) = camera_sample(scene, &mut sampler, UVec2::new(x, y), pass);
-                    let l = bdpt.li(scene, &cray, &mut sampler, &mut paths, &mut splats);
+                    let (s, p) = (&mut sampler, &mut paths);
+                    let l = match cfg.strategy_images {
+                        None => bdpt.li(scene, &cray, s, p, &mut splats, &mut ()),
+                        Some(kind) => {
+                            let mut record = StrategyRecord {
+                                p_film,
+                                weighted: kind == StrategyImages::Weighted,
+                                out: &mut records,
+                            };
+                            bdpt.li(scene, &cray, s, p, &mut splats, &mut record)
+                        }
+                    };
                     tile.add_sample(p_film, l);
                 }
-                (tile, splats)
+                (tile, splats, records)
             })
             .collect();
-        for (tile, splats) in &rows {
+        for (tile, splats, records) in &rows {
             film.merge(tile);
             for &(p, c) in splats {
                 film.add_splat(p, c);
+            }
+            for &(s, t, p, c) in records {
+                if let Some(img) = strategy_films.get_mut(&(s, t)) {
+                    img.add_splat(p, c);
+                }
             }
         }
         film.set_splat_scale(1.0 / (per_pass * (pass + 1) as f64));
         observer.pass_done(&film, pass + 1);
     });
+    // Light-tracing images (t = 1) are normalised as the film's splats; the others hold one
+    // sample per pixel and pass.
+    let extra = strategy_films
+        .into_iter()
+        .map(|((s, t), mut img)| {
+            let paths_per_pixel = if t == 1 { per_pass } else { 1.0 };
+            img.set_splat_scale(1.0 / (paths_per_pixel * done.max(1) as f64));
+            (StrategyImages::name(s as usize, t as usize), img)
+        })
+        .collect();
     RenderOutcome {
         film,
         spp: done,
         passes: done,
         elapsed: start.elapsed(),
         cancelled,
+        extra,
     }
 }

@@ -250,6 +250,7 @@ pub fn render(
     let mut film = if cfg.direct_samples > 0 {
         let direct = BdptConfig {
             max_depth: (cfg.max_depth as i32).min(2),
+            ..BdptConfig::default()
         };
         let dopts = RenderOptions {
             spp: cfg.direct_samples as u32,
@@ -264,6 +265,7 @@ pub fn render(
     };
     let bcfg = BdptConfig {
         max_depth: cfg.max_depth as i32,
+        ..BdptConfig::default()
     };
     let bdpt = Bdpt::new(scene, &bcfg);
     let seed = scene.sampler.seed;
@@ -389,6 +391,7 @@ pub fn render(
         passes: 1,
         elapsed: start.elapsed(),
         cancelled,
+        extra: Vec::new(),
     }
 }
 

@@ -110,6 +110,16 @@ impl Integrator {
         if self.per_sample() {
             return None;
         }
+        if let Integrator::Bdpt(cfg) = self
+            && cfg.strategy_images.is_some()
+            && cfg.max_depth < 0
+        {
+            return Some(
+                "bdpt: per-strategy images need a finite max depth (e.g. --max-depth 6; \
+                 pbrt-v4's default maxdepth 5 is 6 edges)"
+                    .to_string(),
+            );
+        }
         if matches!(self, Integrator::Bdpt(_) | Integrator::Mlt(_)) {
             if scene.media.iter().any(|m| m.emission.is_some()) {
                 return Some(format!(

@@ -149,6 +149,7 @@ fn render_in<M: PathMode>(
         passes: done,
         elapsed: start.elapsed(),
         cancelled,
+        extra: Vec::new(),
     }
 }
 

@@ -533,5 +533,6 @@ fn render_in<M: PathMode + Send>(
         passes: done,
         elapsed: start.elapsed(),
         cancelled,
+        extra: Vec::new(),
     }
 }

@@ -1887,13 +1887,16 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             // pixel and pass are ours) and Mitsuba 0.6's (maxDepth, rrDepth, granularity,
             // bruteForce read likewise).
             // Mitsuba 0.6's bdpt: maxDepth; rrDepth, lightImage and sampleDirect read (our
-            // roulette starts at 5 vertices; light tracing and light sampling are always on).
+            // roulette starts at 5 vertices; light tracing and light sampling are always on);
+            // pbrt-v4's visualizeStrategies / visualizeWeights (per-strategy images).
             "bdpt" => {
                 pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
                 pl.props.bool("light_image", true)?;
                 pl.props.bool("sample_direct", true)?;
                 IntegratorDesc::Bdpt {
                     max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
+                    visualize_strategies: pl.props.bool("visualize_strategies", false)?,
+                    visualize_weights: pl.props.bool("visualize_weights", false)?,
                 }
             }
             // Mitsuba 0.6's pssmlt/mlt (maxDepth, pLarge, luminanceSamples as the bootstrap,
