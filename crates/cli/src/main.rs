@@ -287,6 +287,18 @@ impl TransportArgs {
                         p.nee = n;
                     }
                 }
+                IntegratorDesc::VolPath {
+                    max_depth,
+                    rr_depth,
+                    ..
+                } if self.clamp.is_none() && self.nee.is_none() => {
+                    if let Some(d) = self.max_depth {
+                        *max_depth = d.max(-1);
+                    }
+                    if let Some(d) = self.rr_depth {
+                        *rr_depth = d;
+                    }
+                }
                 IntegratorDesc::Whitted { max_depth } if !path_only => {
                     if let Some(d) = self.max_depth {
                         *max_depth = d.max(0) as u32;
@@ -320,7 +332,8 @@ impl TransportArgs {
                 _ if self.max_depth.is_some() || path_only => {
                     return Err(Failure::input(
                         "--max-depth, --rr-depth, --clamp and --nee apply to the path tracer \
-                         (and --max-depth to Whitted and the photon mappers); this scene or \
+                         (--max-depth and --rr-depth to volpath, --max-depth to Whitted, the \
+                         photon mappers and the light-path integrators); this scene or \
                          --integrator uses another",
                     ));
                 }

@@ -119,6 +119,35 @@ fn max_depth_and_nee_are_applied() {
     );
 }
 
+/// `--max-depth` reaches a scene's `volpath` too (it was refused as "another integrator").
+#[test]
+fn max_depth_applies_to_volpath() {
+    let dir = temp_dir("volpath-depth");
+    let mean_at = |depth: &str| {
+        let out = dir.join(format!("v{depth}.exr"));
+        let o = penumbra()
+            .current_dir(repo_root())
+            .args([
+                "render",
+                "scenes/media/smoky-box.xml",
+                "--res",
+                "24x24",
+                "--spp",
+                "8",
+            ])
+            .args(["-q", "--max-depth", depth, "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        mean(&read_image(&out).unwrap())
+    };
+    // One edge: the light alone; three: direct light and a bounce.
+    let (d1, d3) = (mean_at("1"), mean_at("3"));
+    assert!(d3 > 1.5 * d1, "{d1} vs {d3}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn rr_depth_sampler_and_filter_are_applied() {
     let dir = temp_dir("rr");
