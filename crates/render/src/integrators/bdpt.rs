@@ -268,9 +268,9 @@ struct Scattered {
     wi: Vec3,
     /// The throughput after the vertex (Russian roulette's survival included).
     beta: Vec3,
-    /// Solid-angle density of `wi` (0 for a delta lobe).
+    /// Solid-angle density of `wi` (1 for a delta lobe: the discrete measure).
     pdf_dir: f32,
-    /// Solid-angle density of sampling `wo` from `wi`, the reverse way (0 for a delta lobe).
+    /// Solid-angle density of sampling `wo` from `wi`, the reverse way (1 for a delta lobe).
     pdf_rev: f32,
     delta: bool,
 }
@@ -632,8 +632,11 @@ impl<'a> Bdpt<'a> {
         let wo = frame.to_local(wo);
         let u1 = sampler.next_1d();
         let bs = bsdf.sample(wo, u1, sampler.next_2d(), mode)?;
+        // A delta lobe's direction has probability 1 in the discrete measure both ways
+        // (Veach §10.3.5, Mitsuba 0.6), so that the next vertex's area density keeps its
+        // geometric factor (pbrt stores 0 and reads it as 1, which drops it).
         let (pdf_dir, pdf_rev) = if bs.delta {
-            (0.0, 0.0)
+            (1.0, 1.0)
         } else {
             (bs.pdf, bsdf.pdf(bs.wi, wo))
         };
