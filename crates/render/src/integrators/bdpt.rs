@@ -32,6 +32,13 @@
 //! function of the path for every strategy, so they sum to one. Emitting media are
 //! refused.
 //!
+//! Recording (`debug-paths`; `bdpt/record.rs`): [`Bdpt::record`] runs the same [`Bdpt::li`]
+//! on a `Bdpt` whose log keeps what a render throws away — both subpaths, and for every
+//! strategy with a nonzero contribution the two vertices it joined (the light point or lens
+//! point it sampled for s = 1 or t = 1), its MIS weight (reported by `mis_weight`, the one
+//! place every weight is computed) and its weighted value (reported by `li`). Rendering's
+//! log, [`NoLog`], does nothing, and its calls compile away.
+//!
 //! Not yet: spectral mode (refused), per-strategy images.
 
 use std::time::Instant;
@@ -53,6 +60,9 @@ use crate::world::Scene;
 use base::TransmittanceEstimator;
 
 use super::volpath::{From, transmittance};
+
+mod record;
+pub use record::{BdptConnection, BdptSample, BdptVertex, BdptVertexKind};
 
 /// The parameters of [`Bdpt`].
 #[derive(Clone, Debug, PartialEq)]
@@ -226,12 +236,31 @@ enum LightRef {
 }
 
 /// Bidirectional path tracer state shared by all samples.
-pub struct Bdpt<'a> {
+pub struct Bdpt<'a, L = NoLog> {
     cfg: &'a BdptConfig,
     /// Lights chosen by power.
     dist: Distribution1D,
     any: bool,
+    /// Where the strategies evaluated are reported: nowhere ([`NoLog`]) when rendering.
+    log: L,
 }
+
+/// The log of a rendering [`Bdpt`]: keeps nothing (every report compiles away).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoLog;
+
+/// Where a [`Bdpt`] reports the strategies it evaluates (for [`Bdpt::record`]).
+trait Log {
+    /// Strategy (s, t), joined at `joint`, has MIS weight `w` (from `mis_weight`).
+    #[inline(always)]
+    fn joint(&self, _s: usize, _t: usize, _joint: &Joint, _w: f32) {}
+    /// Strategy (s, t) added `value` to the estimate (from `li`), splatted at `p_film` for
+    /// t = 1.
+    #[inline(always)]
+    fn strategy(&self, _s: usize, _t: usize, _value: Vec3, _p_film: Option<Vec2>) {}
+}
+
+impl Log for NoLog {}
 
 /// Area density of `pdf` (per unit solid angle at `from`) at `to`.
 fn convert_density(pdf: f32, from: &Vertex, to: &Vertex) -> f32 {
@@ -266,9 +295,14 @@ impl<'a> Bdpt<'a> {
             cfg,
             any: powers.iter().any(|&p| p > 0.0),
             dist: Distribution1D::new(&powers),
+            log: NoLog,
         }
     }
+}
 
+// `Log` is this module's: outside it a `Bdpt` is always `Bdpt<NoLog>`, made by `Bdpt::new`.
+#[allow(private_bounds)]
+impl<'a, L: Log> Bdpt<'a, L> {
     fn allows(&self, edges: usize) -> bool {
         self.cfg.max_depth < 0 || edges <= self.cfg.max_depth as usize
     }
@@ -710,11 +744,14 @@ impl<'a> Bdpt<'a> {
                 }
                 if t == 1 {
                     if let Some((p, c)) = self.connect_camera(scene, cam, light, s, sampler) {
+                        self.log.strategy(s, t, c, Some(p));
                         splats.push((p, c));
                     }
                     continue;
                 }
-                l += self.connect(scene, cam, light, s, t, sampler);
+                let c = self.connect(scene, cam, light, s, t, sampler);
+                self.log.strategy(s, t, c, None);
+                l += c;
             }
         }
         l
@@ -946,8 +983,23 @@ impl<'a> Bdpt<'a> {
 
     /// The power-heuristic weight of strategy (s, t), joined at `joint` (whose ends replace
     /// the vertices the strategy sampled afresh: the light point for s = 1, the lens point
-    /// for t = 1).
+    /// for t = 1); reported to the log with its joint.
     fn mis_weight(
+        &self,
+        scene: &Scene,
+        cam: &[Vertex],
+        light: &[Vertex],
+        joint: &Joint,
+        s: usize,
+        t: usize,
+    ) -> f32 {
+        let w = self.power_heuristic(scene, cam, light, joint, s, t);
+        self.log.joint(s, t, joint, w);
+        w
+    }
+
+    /// [`Self::mis_weight`]'s value.
+    fn power_heuristic(
         &self,
         scene: &Scene,
         cam: &[Vertex],
