@@ -35,8 +35,9 @@ pub struct BdptVertex {
     pub p: Vec3,
     /// Geometric normal (zero at points, medium vertices and infinity).
     pub n: Vec3,
-    /// Throughput from the subpath's start to here (zero for a light point sampled for
-    /// s = 1; one at the lens).
+    /// Throughput from the subpath's start to here (one at the camera; zero at a light
+    /// subpath's first vertex and at a light point sampled for s = 1, whose emission the
+    /// next vertex's throughput or the connection carries).
     pub beta: Vec3,
     /// Density with which its own subpath sampled it (per unit area; per unit solid angle at
     /// infinity).
