@@ -104,11 +104,20 @@ impl Integrator {
     }
 
     /// Why `scene` cannot be rendered with this integrator (yet): SPPM and PPM have no
-    /// media so far, BDPT and MLT no emitting media; light paths cannot reach an
-    /// orthographic camera.
+    /// media so far, light tracing and the photon mapper no emitting media, BDPT and MLT no
+    /// spectral mode; light paths cannot reach an orthographic camera.
     pub fn unsupported(&self, scene: &Scene) -> Option<String> {
         if self.per_sample() {
             return None;
+        }
+        if matches!(self, Integrator::Ptracer(_) | Integrator::Photon(_))
+            && scene.media.iter().any(|m| m.emission.is_some())
+        {
+            return Some(format!(
+                "{}: emitting media are not implemented (their light is neither traced nor \
+                 gathered; use volpath or bdpt)",
+                self.name()
+            ));
         }
         if let Integrator::Bdpt(cfg) = self
             && cfg.strategy_images.is_some()
@@ -120,19 +129,12 @@ impl Integrator {
                     .to_string(),
             );
         }
-        if matches!(self, Integrator::Bdpt(_) | Integrator::Mlt(_)) {
-            if scene.media.iter().any(|m| m.emission.is_some()) {
-                return Some(format!(
-                    "{}: emitting media are not implemented yet (use volpath)",
-                    self.name()
-                ));
-            }
-            if scene.mode != RenderMode::Rgb {
-                return Some(format!(
-                    "{}: spectral mode is not implemented yet (use --mode rgb)",
-                    self.name()
-                ));
-            }
+        if matches!(self, Integrator::Bdpt(_) | Integrator::Mlt(_)) && scene.mode != RenderMode::Rgb
+        {
+            return Some(format!(
+                "{}: spectral mode is not implemented yet (use --mode rgb)",
+                self.name()
+            ));
         }
         if matches!(
             self,
