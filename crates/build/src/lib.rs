@@ -214,6 +214,13 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
     if let Integrator::Path(cfg) = &mut integrator {
         cfg.media_absorption = desc.media.is_empty() && !media.is_empty();
         debug_assert!(!cfg.media_absorption || media.iter().all(|m| m.is_purely_absorbing()));
+        if !desc.media.is_empty() {
+            warnings.push(format!(
+                "{}: warning: the path integrator ignores participating media, as Mitsuba's \
+                 does (use volpath, bdpt or mlt to render them)",
+                desc.source.display(),
+            ));
+        }
     }
     if ambient != Vec3::ZERO && !matches!(integrator_desc, IntegratorDesc::Whitted { .. }) {
         warnings.push(format!(

@@ -117,7 +117,8 @@ struct RenderArgs {
     /// Time budget in seconds: stop after the last whole pass that fits.
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
-    /// Replace the scene's integrator: normals, albedo, depth, ao[:samples], or
+    /// Replace the scene's integrator: path or volpath (Mitsuba's defaults: unidirectional
+    /// path tracing, with media), normals, albedo, depth, ao[:samples], or
     /// sppm[:photons[,radius]] (stochastic progressive photon mapping; --spp iterations of
     /// `photons` photons, default one per pixel; the scene's max depth is kept) or
     /// ppm[:photons[,radius[,eye_samples]]] (fixed visible points, 4 per pixel by default),
@@ -256,6 +257,8 @@ impl TransportArgs {
         // what its reference shows).
         if let Some(m) = max_depth_of(&desc.integrator) {
             match integrator.as_mut() {
+                Some(IntegratorDesc::Path(d)) => d.max_depth = m,
+                Some(IntegratorDesc::VolPath { max_depth, .. }) => *max_depth = m,
                 Some(IntegratorDesc::Sppm(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Photon(d)) => d.max_depth = m,
                 Some(IntegratorDesc::Ptracer { max_depth, .. }) => *max_depth = m,
@@ -621,6 +624,15 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             }
             d
         }),
+        "path" if arg.is_empty() => IntegratorDesc::Path(scene::PathDesc::default()),
+        "volpath" if arg.is_empty() => IntegratorDesc::VolPath {
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+            equiangular: true,
+            transmittance: Default::default(),
+            sample_emission: false,
+        },
         "bdpt" => IntegratorDesc::Bdpt {
             max_depth: -1,
             visualize_strategies: arg == "strategies",
@@ -691,7 +703,8 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             return Err(format!(
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
                  photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
-                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], ptracer, bdpt[:strategies|:weights], mlt[:DIRECT_SAMPLES])"
+                 ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], path, volpath, ptracer, bdpt[:strategies|:weights], \
+                 mlt[:DIRECT_SAMPLES])"
             ));
         }
     })

@@ -276,3 +276,42 @@ fn bdpt_writes_per_strategy_images() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("'strategies'"), "{stderr}");
 }
+
+/// `--integrator path` and `volpath` switch any scene back to unidirectional path tracing;
+/// `path` on a scene with media says that it ignores them.
+#[test]
+fn integrator_path_and_volpath_are_selectable() {
+    let dir = temp_dir("path-volpath");
+    let run = |scene: &str, integrator: &str| {
+        penumbra()
+            .arg("render")
+            .arg(repo_root().join(scene))
+            .args([
+                "--integrator",
+                integrator,
+                "--spp",
+                "1",
+                "--res",
+                "8x8",
+                "-o",
+            ])
+            .arg(dir.join(format!("{integrator}.exr")))
+            .output()
+            .unwrap()
+    };
+    let out = run("scenes/cornell-box.xml", "volpath");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = run("scenes/media/smoky-box.xml", "path");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("ignores participating media"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
