@@ -30,23 +30,8 @@ fn ply_edges_connect_vertices_of_one_path() {
     let o = out("p.ply");
     let r = run(&["--pixel", "128,140", "--count", "12"], &o);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let text = std::fs::read_to_string(&o).unwrap();
-    let (header, body) = text.split_once("end_header\n").unwrap();
-    let count = |elem: &str| -> usize {
-        header
-            .lines()
-            .find_map(|l| l.strip_prefix(&format!("element {elem} ")))
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
-    let (nv, ne) = (count("vertex"), count("edge"));
-    let lines: Vec<&str> = body.lines().collect();
-    assert_eq!(lines.len(), nv + ne);
-    let verts: Vec<Vec<f64>> = lines[..nv]
-        .iter()
-        .map(|l| l.split(' ').map(|x| x.parse().unwrap()).collect())
-        .collect();
+    let (verts, edges) = read_ply(&o);
+    let (nv, ne) = (verts.len(), edges.len());
     // 12 paths, each starting with a camera vertex (event 0) at the camera position.
     let starts: Vec<&Vec<f64>> = verts.iter().filter(|v| v[10] == 0.0).collect();
     assert_eq!(starts.len(), 12);
@@ -54,9 +39,8 @@ fn ply_edges_connect_vertices_of_one_path() {
         assert!((s[2] - 3.79).abs() < 1e-3, "camera at z = 3.79: {s:?}");
     }
     // Every edge joins consecutive vertices of the same path; a path of k vertices has k − 1.
-    for l in &lines[nv..] {
-        let (a, b) = l.split_once(' ').unwrap();
-        let (a, b): (usize, usize) = (a.parse().unwrap(), b.parse().unwrap());
+    for e in &edges {
+        let (a, b) = (e[0] as usize, e[1] as usize);
         assert_eq!(b, a + 1);
         assert_eq!(verts[a][11], verts[b][11], "edge across paths");
     }
