@@ -741,7 +741,8 @@ impl<'a> Bdpt<'a> {
 
     /// The radiance of one camera sample (its subpaths built in `paths`); light-tracing
     /// contributions (t = 1) go to `splats` as (film position, value); `sink` is told of
-    /// every strategy's.
+    /// every strategy's. The camera subpath draws from the sampler's current stream, the
+    /// light subpath from stream 1, the connections from stream 2 ([`Samples::start_stream`]).
     #[allow(clippy::too_many_arguments)]
     pub fn li(
         &self,
@@ -759,7 +760,9 @@ impl<'a> Bdpt<'a> {
         };
         let hero = Self::hero(scene, sampler);
         self.camera_subpath(scene, cray, hero, sampler, max_cam, cam);
+        sampler.start_stream(1);
         self.light_subpath(scene, hero, sampler, max_light, light);
+        sampler.start_stream(2);
         let mut l = Vec3::ZERO;
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
@@ -785,21 +788,20 @@ impl<'a> Bdpt<'a> {
     }
 
     /// One strategy's contribution for MLT: a camera subpath of exactly `t` vertices from
-    /// `cray` (its randomness from `camera`), a light subpath of exactly `s` (from `light`),
-    /// joined with randomness from `connect` (the subpaths built in `paths`); the film
-    /// position (the camera ray's, or the light vertex's connection to the lens for t = 1)
-    /// and the MIS-weighted value.
+    /// `cray` (its randomness from the sampler's current stream), a light subpath of exactly
+    /// `s` (from stream 1), joined with randomness from stream 2 (the subpaths built in
+    /// `paths`); the film position (the camera ray's, or the light vertex's connection to
+    /// the lens for t = 1) and the MIS-weighted value.
     #[allow(clippy::too_many_arguments)]
-    pub fn strategy<S: Samples>(
+    pub fn strategy(
         &self,
         scene: &Scene,
         cray: &CameraRay,
         p_film: Vec2,
         s: usize,
         t: usize,
-        sampler: &mut S,
+        sampler: &mut impl Samples,
         paths: &mut Subpaths,
-        streams: impl Fn(&mut S, usize),
     ) -> Option<(Vec2, Vec3)> {
         let (cam, light) = paths.cleared();
         let hero = Self::hero(scene, sampler);
@@ -807,14 +809,14 @@ impl<'a> Bdpt<'a> {
         if cam.len() != t {
             return None;
         }
-        streams(sampler, 1);
+        sampler.start_stream(1);
         if s > 0 {
             self.light_subpath(scene, hero, sampler, s, light);
             if light.len() != s {
                 return None;
             }
         }
-        streams(sampler, 2);
+        sampler.start_stream(2);
         if t == 1 {
             return self
                 .connect_camera(scene, cam, light, s, sampler)

@@ -124,11 +124,6 @@ impl MltSampler {
         self.large_step = self.rng.next_f32() < self.large_step_p;
     }
 
-    fn start_stream(&mut self, stream: usize) {
-        self.stream = stream;
-        self.index = 0;
-    }
-
     fn accept(&mut self) {
         if self.large_step {
             self.last_large_step = self.iteration;
@@ -201,6 +196,10 @@ impl Samples for MltSampler {
         let a = self.next();
         Vec2::new(a, self.next())
     }
+    fn start_stream(&mut self, stream: usize) {
+        self.stream = stream;
+        self.index = 0;
+    }
 }
 
 fn luminance(c: Vec3) -> f32 {
@@ -228,9 +227,7 @@ fn state_value(
     let res = Vec2::new(f.width as f32, f.height as f32);
     let p_film = (sampler.next_2d() * res).min(res - Vec2::splat(1e-3));
     let cray = scene.camera.generate_ray(p_film, sampler.next_2d());
-    let (p, c) = bdpt.strategy(scene, &cray, p_film, s, t, sampler, paths, |smp, k| {
-        smp.start_stream(k)
-    })?;
+    let (p, c) = bdpt.strategy(scene, &cray, p_film, s, t, sampler, paths)?;
     let c = c * n as f32;
     (c.is_finite() && luminance(c) > 0.0).then_some((p, c))
 }
