@@ -83,6 +83,7 @@ pub fn integrator(
             visualize_weights,
         } => Integrator::Bdpt(BdptConfig {
             max_depth: *max_depth,
+            min_edges: 0,
             strategy_images: match (visualize_strategies, visualize_weights) {
                 (_, true) => Some(StrategyImages::Weighted),
                 (true, false) => Some(StrategyImages::Unweighted),

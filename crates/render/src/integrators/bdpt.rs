@@ -65,6 +65,10 @@ use super::volpath::{From, transmittance};
 pub struct BdptConfig {
     /// Longest path in edges, camera to light (−1: unbounded).
     pub max_depth: i32,
+    /// Shortest path in edges that [`Bdpt::li`] makes strategies for (0: every path): MLT's
+    /// Kelemen chains leave paths of one and two edges to a BDPT render of their own
+    /// (Mitsuba 0.6's `directSamples`).
+    pub min_edges: u32,
     /// Also render one image per strategy (pbrt-v4's `visualizestrategies` /
     /// `visualizeweights`); needs a finite `max_depth`.
     pub strategy_images: Option<StrategyImages>,
@@ -74,6 +78,7 @@ impl Default for BdptConfig {
     fn default() -> Self {
         BdptConfig {
             max_depth: -1,
+            min_edges: 0,
             strategy_images: None,
         }
     }
@@ -325,8 +330,10 @@ impl<'a> Bdpt<'a> {
         }
     }
 
+    /// Whether paths of `edges` edges are within `min_edges..=max_depth`.
     fn allows(&self, edges: usize) -> bool {
-        self.cfg.max_depth < 0 || edges <= self.cfg.max_depth as usize
+        edges >= self.cfg.min_edges as usize
+            && (self.cfg.max_depth < 0 || edges <= self.cfg.max_depth as usize)
     }
 
     fn light_of(&self, scene: &Scene, v: &Vertex) -> Option<LightRef> {
