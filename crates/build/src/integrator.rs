@@ -71,6 +71,7 @@ pub fn integrator(
             direct_samples,
         } => Integrator::Mlt(MltConfig {
             direct_samples: *direct_samples,
+            multiplexed: true,
             max_depth: if *max_depth < 0 { 6 } else { *max_depth as u32 },
             bootstrap: *bootstrap,
             chains: *chains,
