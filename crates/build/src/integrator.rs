@@ -69,9 +69,10 @@ pub fn integrator(
             large_step,
             sigma,
             direct_samples,
+            multiplexed,
         } => Integrator::Mlt(MltConfig {
             direct_samples: *direct_samples,
-            multiplexed: true,
+            multiplexed: *multiplexed,
             max_depth: if *max_depth < 0 { 6 } else { *max_depth as u32 },
             bootstrap: *bootstrap,
             chains: *chains,

@@ -247,6 +247,7 @@ fn same_image_for_one_and_two_threads() {
         large_step: 0.3,
         sigma: 0.01,
         direct_samples: 16,
+        multiplexed: true,
     };
     // Surfaces only, and media (a null-bounded smoke sphere, a glass cube holding a medium).
     for scene in ["cornell-box.xml", "media/smoky-box.xml"] {
@@ -363,6 +364,7 @@ fn mlt_converges_on_mitsuba_cbox() {
         large_step: 0.3,
         sigma: 0.01,
         direct_samples: -1,
+        multiplexed: true,
     };
     let render = |spp| {
         let opts = BuildOptions {
