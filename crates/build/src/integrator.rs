@@ -69,8 +69,10 @@ pub fn integrator(
             large_step,
             sigma,
             direct_samples,
+            multiplexed,
         } => Integrator::Mlt(MltConfig {
             direct_samples: *direct_samples,
+            multiplexed: *multiplexed,
             max_depth: if *max_depth < 0 { 6 } else { *max_depth as u32 },
             bootstrap: *bootstrap,
             chains: *chains,
@@ -83,6 +85,7 @@ pub fn integrator(
             visualize_weights,
         } => Integrator::Bdpt(BdptConfig {
             max_depth: *max_depth,
+            min_edges: 0,
             strategy_images: match (visualize_strategies, visualize_weights) {
                 (_, true) => Some(StrategyImages::Weighted),
                 (true, false) => Some(StrategyImages::Unweighted),

@@ -143,9 +143,16 @@ fn integrator(i: &IntegratorDesc) -> String {
             large_step,
             sigma,
             direct_samples,
+            multiplexed,
         } => format!(
-            "Metropolis light transport (mlt): max depth {max_depth}, {bootstrap} bootstrap \
-             samples per depth, {chains} chains, large steps {large_step}, sigma {sigma}, {}",
+            "Metropolis light transport (mlt, {}): max depth {max_depth}, {bootstrap} bootstrap \
+             samples{}, {chains} chains, large steps {large_step}, sigma {sigma}, {}",
+            if *multiplexed {
+                "multiplexed over BDPT's strategies"
+            } else {
+                "Kelemen's, whole BDPT samples"
+            },
+            if *multiplexed { " per depth" } else { "" },
             match direct_samples {
                 d if *d < 0 => "direct illumination by the chains too".to_string(),
                 0 => "direct illumination left out".to_string(),

@@ -127,10 +127,12 @@ struct RenderArgs {
     /// bdpt[:strategies|:weights] (bidirectional path tracing; with an argument it also
     /// writes one EXR per strategy (s, t) beside the first output, OUT_bdpt_dDD_sSS_tTT.exr,
     /// unweighted or MIS-weighted as pbrt-v4's visualizestrategies / visualizeweights; needs
-    /// --max-depth) or mlt[:direct_samples] (primary-sample-space Metropolis
+    /// --max-depth) or mlt[:direct_samples[,kelemen]] (primary-sample-space Metropolis
     /// over BDPT; --spp mutations per pixel; paths of one and two edges apart by BDPT at
     /// direct_samples per pixel, 16 by default as Mitsuba 0.6's pssmlt, -1: by the chains
-    /// too). The scene's max depth is kept.
+    /// too; multiplexed over BDPT's strategies as pbrt-v3's, or with kelemen a state is a
+    /// whole BDPT sample as in Mitsuba 0.6's pssmlt, e.g. mlt:,kelemen). The scene's max
+    /// depth is kept.
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<IntegratorDesc>,
     /// Which sensor of the scene to render (0-based).
@@ -647,23 +649,42 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
                 }
             },
         },
-        "mlt" => IntegratorDesc::Mlt {
-            max_depth: -1,
-            bootstrap: 100_000,
-            chains: 1000,
-            large_step: 0.3,
-            sigma: 0.01,
-            direct_samples: if arg.is_empty() {
-                16
+        "mlt" => {
+            // Positional fields, an empty one keeps its default.
+            let usage = "mlt[:DIRECT_SAMPLES[,kelemen|multiplexed]]";
+            let fields: Vec<&str> = if arg.is_empty() {
+                vec![]
             } else {
-                arg.parse().ok().filter(|&d: &i32| d >= -1).ok_or_else(|| {
-                    format!(
-                        "mlt[:DIRECT_SAMPLES]: DIRECT_SAMPLES must be a count ≥ 0 or -1, \
-                         found '{arg}'"
-                    )
-                })?
-            },
-        },
+                arg.split(',').collect()
+            };
+            if fields.len() > 2 {
+                return Err(format!("{usage}: too many fields in '{arg}'"));
+            }
+            let field = |k: usize| fields.get(k).copied().filter(|f| !f.is_empty());
+            IntegratorDesc::Mlt {
+                max_depth: -1,
+                bootstrap: 100_000,
+                chains: 1000,
+                large_step: 0.3,
+                sigma: 0.01,
+                direct_samples: match field(0) {
+                    None => 16,
+                    Some(d) => d.parse().ok().filter(|&d: &i32| d >= -1).ok_or_else(|| {
+                        format!("{usage}: DIRECT_SAMPLES must be a count ≥ 0 or -1, found '{d}'")
+                    })?,
+                },
+                multiplexed: match field(1) {
+                    None | Some("multiplexed") => true,
+                    Some("kelemen") => false,
+                    Some(v) => {
+                        return Err(format!(
+                            "{usage}: expected 'kelemen' (a state is a whole BDPT sample) or \
+                             'multiplexed' (one strategy, the default), found '{v}'"
+                        ));
+                    }
+                },
+            }
+        }
         "ptracer" if arg.is_empty() => IntegratorDesc::Ptracer {
             max_depth: -1,
             hide_emitters: false,
@@ -704,7 +725,7 @@ fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
                 "unknown integrator '{name}' (expected normals, albedo, depth, ao[:N], \
                  photon[:PHOTONS[,GATHER[,K]]], sppm[:PHOTONS[,RADIUS]], \
                  ppm[:PHOTONS[,RADIUS[,EYE_SAMPLES]]], path, volpath, ptracer, bdpt[:strategies|:weights], \
-                 mlt[:DIRECT_SAMPLES])"
+                 mlt[:DIRECT_SAMPLES[,kelemen|multiplexed]])"
             ));
         }
     })

@@ -1018,11 +1018,13 @@ pub enum IntegratorDesc {
         visualize_strategies: bool,
         visualize_weights: bool,
     },
-    /// Metropolis light transport over BDPT, multiplexed over strategies (pbrt-v3's `mlt`;
-    /// Mitsuba 0.6's `pssmlt`/`mlt` names): `max_depth` −1 means 6 edges (pbrt's
+    /// Metropolis light transport over BDPT (pbrt-v3's `mlt`; Mitsuba 0.6's `pssmlt`/`mlt`
+    /// names): `max_depth` −1 means 6 edges (pbrt's
     /// default `maxdepth` 5, which counts bounces);
     /// `direct_samples` (Mitsuba 0.6's `directSamples`): paths of one or two edges rendered
-    /// apart at that many samples per pixel (0: left out), −1: by the chains too.
+    /// apart at that many samples per pixel (0: left out), −1: by the chains too;
+    /// `multiplexed`: a state is one strategy (pbrt-v3's, Hachisuka 2014), else a whole
+    /// BDPT sample (Kelemen 2002, as Mitsuba 0.6's `pssmlt`).
     Mlt {
         max_depth: i32,
         bootstrap: u32,
@@ -1030,6 +1032,7 @@ pub enum IntegratorDesc {
         large_step: f32,
         sigma: f32,
         direct_samples: i32,
+        multiplexed: bool,
     },
     /// Whitted-style recursive ray tracer.
     Whitted { max_depth: u32 },

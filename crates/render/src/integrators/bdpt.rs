@@ -81,6 +81,10 @@ pub use record::{BdptConnection, BdptSample, BdptVertex, BdptVertexKind};
 pub struct BdptConfig {
     /// Longest path in edges, camera to light (−1: unbounded).
     pub max_depth: i32,
+    /// Shortest path in edges that [`Bdpt::li`] makes strategies for (0: every path): MLT's
+    /// Kelemen chains leave paths of one and two edges to a BDPT render of their own
+    /// (Mitsuba 0.6's `directSamples`).
+    pub min_edges: u32,
     /// Also render one image per strategy (pbrt-v4's `visualizestrategies` /
     /// `visualizeweights`); needs a finite `max_depth`.
     pub strategy_images: Option<StrategyImages>,
@@ -90,6 +94,7 @@ impl Default for BdptConfig {
     fn default() -> Self {
         BdptConfig {
             max_depth: -1,
+            min_edges: 0,
             strategy_images: None,
         }
     }
@@ -381,8 +386,10 @@ impl<'a> Bdpt<'a> {
         }
     }
 
+    /// Whether paths of `edges` edges are within `min_edges..=max_depth`.
     fn allows(&self, edges: usize) -> bool {
-        self.cfg.max_depth < 0 || edges <= self.cfg.max_depth as usize
+        edges >= self.cfg.min_edges as usize
+            && (self.cfg.max_depth < 0 || edges <= self.cfg.max_depth as usize)
     }
 
     fn light_of(&self, scene: &Scene, v: &Vertex) -> Option<LightRef> {
@@ -837,7 +844,8 @@ impl<'a> Bdpt<'a> {
 
     /// The radiance of one camera sample (its subpaths built in `paths`); light-tracing
     /// contributions (t = 1) go to `splats` as (film position, value); `sink` is told of
-    /// every strategy's.
+    /// every strategy's. The camera subpath draws from the sampler's current stream, the
+    /// light subpath from stream 1, the connections from stream 2 ([`Samples::start_stream`]).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn li(
         &self,
@@ -855,7 +863,9 @@ impl<'a> Bdpt<'a> {
         };
         let hero = Self::hero(scene, sampler);
         self.camera_subpath(scene, cray, hero, sampler, max_cam, cam);
+        sampler.start_stream(1);
         self.light_subpath(scene, hero, sampler, max_light, light);
+        sampler.start_stream(2);
         let mut l = Vec3::ZERO;
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
@@ -885,21 +895,20 @@ impl<'a> Bdpt<'a> {
     }
 
     /// One strategy's contribution for MLT: a camera subpath of exactly `t` vertices from
-    /// `cray` (its randomness from `camera`), a light subpath of exactly `s` (from `light`),
-    /// joined with randomness from `connect` (the subpaths built in `paths`); the film
-    /// position (the camera ray's, or the light vertex's connection to the lens for t = 1)
-    /// and the MIS-weighted value.
+    /// `cray` (its randomness from the sampler's current stream), a light subpath of exactly
+    /// `s` (from stream 1), joined with randomness from stream 2 (the subpaths built in
+    /// `paths`); the film position (the camera ray's, or the light vertex's connection to
+    /// the lens for t = 1) and the MIS-weighted value.
     #[allow(clippy::too_many_arguments)]
-    pub fn strategy<S: Samples>(
+    pub fn strategy(
         &self,
         scene: &Scene,
         cray: &CameraRay,
         p_film: Vec2,
         s: usize,
         t: usize,
-        sampler: &mut S,
+        sampler: &mut impl Samples,
         paths: &mut Subpaths,
-        streams: impl Fn(&mut S, usize),
     ) -> Option<(Vec2, Vec3)> {
         let (cam, light) = paths.cleared();
         let hero = Self::hero(scene, sampler);
@@ -907,14 +916,14 @@ impl<'a> Bdpt<'a> {
         if cam.len() != t {
             return None;
         }
-        streams(sampler, 1);
+        sampler.start_stream(1);
         if s > 0 {
             self.light_subpath(scene, hero, sampler, s, light);
             if light.len() != s {
                 return None;
             }
         }
-        streams(sampler, 2);
+        sampler.start_stream(2);
         if t == 1 {
             return self
                 .connect_camera(scene, cam, light, s, hero, sampler, &mut ())

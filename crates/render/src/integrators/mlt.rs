@@ -1,12 +1,13 @@
-//! Metropolis light transport in primary sample space over BDPT, multiplexed over the
-//! strategies (Kelemen et al. 2002; Hachisuka, Kaplanyan & Dachsbacher 2014; pbrt-v3's
-//! `MLTIntegrator` and its parameters).
+//! Metropolis light transport in primary sample space over BDPT (Kelemen et al. 2002),
+//! multiplexed over the strategies by default (Hachisuka, Kaplanyan & Dachsbacher 2014;
+//! pbrt-v3's `MLTIntegrator` and its parameters), or Kelemen's own, a state being a whole
+//! BDPT sample (Mitsuba 0.6's `pssmlt` with `bidirectional`; see "Kelemen" below).
 //!
 //! A state is a vector of uniform numbers in three streams (camera subpath, light subpath,
-//! connection), drawn lazily. It fixes a path depth d (per chain), a strategy (s, t) with
-//! s + t = d + 2 (the first camera-stream number), a film position, and through BDPT's
-//! sampling the whole path; its value is that one strategy's MIS-weighted contribution times
-//! the number of strategies of depth d. Mutations: with probability `large_step` every
+//! connection), drawn lazily. Multiplexed (the default), it fixes a path depth d (per
+//! chain), a strategy (s, t) with s + t = d + 2 (the first camera-stream number), a film
+//! position, and through BDPT's sampling the whole path; its value is that one strategy's
+//! MIS-weighted contribution times the number of strategies of depth d. Mutations: with probability `large_step` every
 //! number is drawn afresh, else each is moved by a normal step of deviation `sigma` (wrapping
 //! around [0, 1)); a proposal is accepted with probability min(1, y(new) / y(current)), y the
 //! luminance, and both states are splatted with their expected weights (Veach's
@@ -28,9 +29,19 @@
 //! came out 36 % dark with the chains doing every depth (the image mean −1.6 % at 1024
 //! mutations per pixel; −0.5 % with them apart).
 //!
+//! Kelemen (`MltConfig::multiplexed` false): a state is one whole BDPT sample, a film
+//! position and lens sample, then [`Bdpt::li`]'s camera subpath, light subpath and every
+//! (s, t) connection. Its contributions are the camera sample's MIS-weighted radiance at its
+//! film position and the light-tracing (t = 1) splats at theirs, and y is the sum of their
+//! luminances (Mitsuba 0.6's `SplatList`); an accepted or rejected state splats all of them,
+//! each times its expected-value weight / y. One population of chains covers every depth,
+//! b is the mean of y over the independent states (bootstrap and large steps), and with
+//! `direct_samples` ≥ 0 `li` leaves out the strategies of paths of one and two edges
+//! (`BdptConfig::min_edges`), which BDPT renders apart as above.
+//!
 //! Determinism: bootstrap state k and chain c draw from their own seeds; chains run in
-//! fixed blocks whose splats are added in chain order, so the image does not depend on the
-//! thread count.
+//! blocks whose splats are added in chain order, so the image does not depend on the thread
+//! count (nor on the block size).
 
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -38,6 +49,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::bdpt::{self, Bdpt, BdptConfig, Subpaths};
+use crate::camera::CameraRay;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::{Distribution1D, ONE_MINUS_EPSILON, Samples};
 use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, Silent};
@@ -50,7 +62,7 @@ pub struct MltConfig {
     /// Longest path in edges, camera to light, as for every other integrator here (pbrt's
     /// `maxdepth` 5 counts bounces: 6 edges, the default).
     pub max_depth: u32,
-    /// States per depth for the normalisation and the chains' starts.
+    /// States per depth (Kelemen: in all) for the normalisation and the chains' starts.
     pub bootstrap: u32,
     /// Markov chains.
     pub chains: u32,
@@ -62,6 +74,9 @@ pub struct MltConfig {
     /// seen directly, direct illumination) apart, by BDPT at this many samples per pixel (0:
     /// not at all), and leaves the chains the longer ones; −1: the chains take every depth.
     pub direct_samples: i32,
+    /// A state is one strategy of one depth (true, pbrt-v3's) or a whole BDPT sample
+    /// (false, Kelemen's, Mitsuba 0.6's `pssmlt`).
+    pub multiplexed: bool,
 }
 
 impl Default for MltConfig {
@@ -73,6 +88,7 @@ impl Default for MltConfig {
             large_step: 0.3,
             sigma: 0.01,
             direct_samples: 16,
+            multiplexed: true,
         }
     }
 }
@@ -122,11 +138,6 @@ impl MltSampler {
     fn start_iteration(&mut self) {
         self.iteration += 1;
         self.large_step = self.rng.next_f32() < self.large_step_p;
-    }
-
-    fn start_stream(&mut self, stream: usize) {
-        self.stream = stream;
-        self.index = 0;
     }
 
     fn accept(&mut self) {
@@ -201,38 +212,92 @@ impl Samples for MltSampler {
         let a = self.next();
         Vec2::new(a, self.next())
     }
+    fn start_stream(&mut self, stream: usize) {
+        self.stream = stream;
+        self.index = 0;
+    }
 }
 
 fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.212_671, 0.715_160, 0.072_169))
 }
 
-/// The value of the state `sampler` holds at depth `depth`: its film position and
-/// contribution (pbrt-v3's `MLTIntegrator::L`); its subpaths are built in `paths`.
-fn state_value(
-    scene: &Scene,
-    bdpt: &Bdpt,
-    sampler: &mut MltSampler,
-    paths: &mut Subpaths,
-    depth: usize,
-) -> Option<(Vec2, Vec3)> {
-    sampler.start_stream(0);
-    let (s, t, n) = if depth == 0 {
-        (0, 2, 1)
-    } else {
-        let n = depth + 2;
-        let s = ((sampler.next_1d() * n as f32) as usize).min(n - 1);
-        (s, n - s, n)
-    };
+/// What the chains explore: the scene, the BDPT whose samples are the states, and the
+/// variant.
+struct Target<'a> {
+    scene: &'a Scene,
+    bdpt: &'a Bdpt<'a>,
+    kelemen: bool,
+}
+
+impl Target<'_> {
+    /// The value of the state `sampler` holds: its contributions (film position, value) in
+    /// `out`, and y, the sum of their luminances (0, and `out` empty, for a state that makes
+    /// nothing or something not finite). Multiplexed, `slot` is the depth d, and the state
+    /// one strategy of d (pbrt-v3's `MLTIntegrator::L`); Kelemen, `slot` is 0, and the state
+    /// a whole BDPT sample. Its subpaths are built in `paths`.
+    ///
+    /// Streams (`Samples::start_stream`): both variants draw the film position, lens and
+    /// camera subpath from stream 0, the light subpath from 1 and the connections from 2.
+    /// For Kelemen's states too they matter: `li` draws everything from one `Samples`, and
+    /// with one stream a small step that makes the camera subpath a vertex longer or shorter
+    /// (Russian roulette, a direction that now leaves the scene) would move every number of
+    /// the light subpath to another coordinate, a large step for it in effect. (Mitsuba
+    /// 0.6's `pssmlt` likewise keeps three samplers: sensor, emitter and direct.)
+    fn value(
+        &self,
+        sampler: &mut MltSampler,
+        paths: &mut Subpaths,
+        slot: usize,
+        out: &mut Vec<(Vec2, Vec3)>,
+    ) -> f32 {
+        let scene = self.scene;
+        out.clear();
+        sampler.start_stream(0);
+        if self.kelemen {
+            let (p_film, cray) = film_sample(scene, sampler);
+            let l = self.bdpt.li(scene, &cray, sampler, paths, out, &mut ());
+            if l != Vec3::ZERO {
+                out.push((p_film, l));
+            }
+            let y: f32 = out.iter().map(|&(_, c)| luminance(c)).sum();
+            if y.is_finite() && y > 0.0 {
+                return y;
+            }
+            out.clear();
+            return 0.0;
+        }
+        let (s, t, n) = if slot == 0 {
+            (0, 2, 1)
+        } else {
+            let n = slot + 2;
+            let s = ((sampler.next_1d() * n as f32) as usize).min(n - 1);
+            (s, n - s, n)
+        };
+        let (p_film, cray) = film_sample(scene, sampler);
+        let Some((p, c)) = self
+            .bdpt
+            .strategy(scene, &cray, p_film, s, t, sampler, paths)
+        else {
+            return 0.0;
+        };
+        let c = c * n as f32;
+        let y = luminance(c);
+        if c.is_finite() && y > 0.0 {
+            out.push((p, c));
+            y
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A film position uniform over the image and the camera ray through it.
+fn film_sample(scene: &Scene, sampler: &mut MltSampler) -> (Vec2, CameraRay) {
     let f = &scene.film;
     let res = Vec2::new(f.width as f32, f.height as f32);
     let p_film = (sampler.next_2d() * res).min(res - Vec2::splat(1e-3));
-    let cray = scene.camera.generate_ray(p_film, sampler.next_2d());
-    let (p, c) = bdpt.strategy(scene, &cray, p_film, s, t, sampler, paths, |smp, k| {
-        smp.start_stream(k)
-    })?;
-    let c = c * n as f32;
-    (c.is_finite() && luminance(c) > 0.0).then_some((p, c))
+    (p_film, scene.camera.generate_ray(p_film, sampler.next_2d()))
 }
 
 /// Render `scene` with MLT: `opts.spp` mutations per pixel.
@@ -263,40 +328,69 @@ pub fn render(
     } else {
         f.film()
     };
+    let kelemen = !cfg.multiplexed;
     let bcfg = BdptConfig {
         max_depth: cfg.max_depth as i32,
+        // Kelemen's states are whole BDPT samples: without the paths rendered apart.
+        min_edges: if kelemen && first > 0 {
+            first as u32 + 1
+        } else {
+            0
+        },
         ..BdptConfig::default()
     };
     let bdpt = Bdpt::new(scene, &bcfg);
+    let target = Target {
+        scene,
+        bdpt: &bdpt,
+        kelemen,
+    };
     let seed = scene.sampler.seed;
-    // Depth d: paths of d + 1 edges; the chains take depths `first..depths`.
-    let depths = (cfg.max_depth as usize).max(first);
-    let n_depths = depths - first;
+    // Populations of chains, each with its own bootstrap states, b and splat layer, in
+    // slots `first..slots`. Multiplexed: slot d holds depth d (paths of d + 1 edges), those
+    // below `first` rendered apart. Kelemen: one slot for every depth.
+    let (first, slots) = if kelemen {
+        (0, 1)
+    } else {
+        (first, (cfg.max_depth as usize).max(first))
+    };
+    let n_slots = slots - first;
     let n_boot = cfg.bootstrap.max(1) as usize;
-    // 1. Bootstrap: state k has depth first + k mod n_depths.
-    let weights: Vec<f32> = (0..n_boot * n_depths)
+    // 1. Bootstrap: state k is in slot first + k mod n_slots.
+    let weights: Vec<f32> = (0..n_boot * n_slots)
         .into_par_iter()
-        .map_init(Subpaths::default, |paths, k| {
-            let mut sampler = MltSampler::new(seed_of(seed, k as u64), cfg.sigma, cfg.large_step);
-            state_value(scene, &bdpt, &mut sampler, paths, first + k % n_depths)
-                .map_or(0.0, |(_, c)| luminance(c))
-        })
+        .map_init(
+            || (Subpaths::default(), Vec::new()),
+            |(paths, out), k| {
+                let mut sampler =
+                    MltSampler::new(seed_of(seed, k as u64), cfg.sigma, cfg.large_step);
+                target.value(&mut sampler, paths, first + k % n_slots, out)
+            },
+        )
         .collect();
-    // Per depth: Σ y and the number of independent states (none below `first`).
-    let mut sums = vec![(0.0f64, n_boot as u64); depths];
+    // Per slot: Σ y and the number of independent states (none below `first`).
+    let mut sums = vec![(0.0f64, n_boot as u64); slots];
     for (k, &w) in weights.iter().enumerate() {
-        sums[first + k % n_depths].0 += w as f64;
+        sums[first + k % n_slots].0 += w as f64;
     }
     let b_boot = sums.iter().map(|&(s, n)| s / n as f64).sum::<f64>();
     let pixels = f.width as u64 * f.height as u64;
     let mpp = opts.spp.max(1) as u64;
     let total = mpp * pixels;
     let chains = (cfg.chains.max(1) as u64).min(total);
+    // Splats a mutation makes at most, for the block size: a state's contributions, the
+    // current's and the proposal's (Kelemen: the camera sample's and up to max_depth − 1
+    // light-tracing ones).
+    let per_mutation = 2 * if kelemen {
+        cfg.max_depth.max(1) as u64
+    } else {
+        1
+    };
     let mut done_mutations = 0u64;
     let mut cancelled = false;
     if b_boot > 0.0 {
-        // 2. The chains, depth by depth: each depth gets chains and mutations in proportion
-        // to its b (largest remainders), and its own splat layer normalised by its own b and
+        // 2. The chains, slot by slot: each slot gets chains and mutations in proportion to
+        // its b (largest remainders), and its own splat layer normalised by its own b and
         // mutations, so that no depth's share of the image hangs on how many chains happened
         // to start there (drawing every chain's start from all depths left `veach-plates`'
         // directly seen lights 3 % dark at any mutation count).
@@ -321,13 +415,13 @@ pub fn render(
         let chains_d = alloc(chains);
         let mutations_d = alloc(total);
         let mut chain_id = 0u64;
-        for d in 0..depths {
+        for d in 0..slots {
             let (n_chains, m_total) = (chains_d[d].max(1), mutations_d[d]);
             if b_d[d] <= 0.0 || m_total == 0 || cancelled {
                 continue;
             }
-            // This depth's bootstrap states and their weights.
-            let ks: Vec<usize> = (d - first..weights.len()).step_by(n_depths).collect();
+            // This slot's bootstrap states and their weights.
+            let ks: Vec<usize> = (d - first..weights.len()).step_by(n_slots).collect();
             let starts = Distribution1D::new(&ks.iter().map(|&k| weights[k]).collect::<Vec<_>>());
             // Systematic resampling: chain c starts at quantile (c + offset) / chains of the
             // weights, so each bootstrap state gets its share of chains to within one (drawn
@@ -335,9 +429,18 @@ pub fn render(
             // chains hardly leave a small bright emitter).
             let offset =
                 Pcg32::new(seed_of(seed, 0x5354_4152_5400 + d as u64), 7).next_f32() as f64;
+            // Chains run in blocks, their splats held until the block is merged: at most 64,
+            // fewer if their splats would take more than about 256 MiB, at least one per
+            // thread (the image does not depend on it).
+            let chain_bytes = (m_total / n_chains + 1)
+                * per_mutation
+                * std::mem::size_of::<(Vec2, Vec3)>() as u64;
+            let block = (256u64 << 20)
+                .div_ceil(chain_bytes)
+                .min(64)
+                .max(rayon::current_num_threads() as u64);
             let mut layer = f.film();
             let mut made = 0u64;
-            let block = 64u64;
             let mut c0 = 0u64;
             while c0 < n_chains {
                 if opts.cancel.load(Ordering::Relaxed) {
@@ -352,10 +455,10 @@ pub fn render(
                         let start = Start {
                             starts: &starts,
                             ks: &ks,
-                            depth: d,
+                            slot: d,
                             u: ((c as f64 + offset) / n_chains as f64) as f32,
                         };
-                        run_chain(scene, &bdpt, cfg, &start, seed, chain_id + c, m)
+                        run_chain(&target, cfg, &start, seed, chain_id + c, m)
                     })
                     .collect();
                 for chain in lists {
@@ -376,7 +479,7 @@ pub fn render(
                 });
             }
             chain_id += n_chains;
-            // Splats are L / y(L): b_d / (this depth's mutations per pixel) makes them
+            // Splats are L / y(L): b_d / (this slot's mutations per pixel) makes them
             // radiance.
             let b = sums[d].0 / sums[d].1 as f64;
             film.add_splat_layer(&layer, b * pixels as f64 / made.max(1) as f64);
@@ -395,12 +498,12 @@ pub fn render(
     }
 }
 
-/// Where a chain of one depth starts: a bootstrap state of that depth, chosen in proportion
+/// Where a chain of one slot starts: a bootstrap state of that slot, chosen in proportion
 /// to its luminance (`ks` its indices among all bootstrap states) by the quantile `u`.
 struct Start<'a> {
     starts: &'a Distribution1D,
     ks: &'a [usize],
-    depth: usize,
+    slot: usize,
     u: f32,
 }
 
@@ -409,7 +512,7 @@ fn seed_of(seed: u64, k: u64) -> u64 {
 }
 
 /// What a chain hands back: its splats, and the luminance sum and count of the large steps
-/// it proposed (for b at its depth).
+/// it proposed (for b in its slot).
 struct Chain {
     splats: Vec<(Vec2, Vec3)>,
     large_sum: f64,
@@ -417,10 +520,8 @@ struct Chain {
 }
 
 /// One chain.
-#[allow(clippy::too_many_arguments)]
 fn run_chain(
-    scene: &Scene,
-    bdpt: &Bdpt,
+    target: &Target,
     cfg: &MltConfig,
     start: &Start,
     seed: u64,
@@ -430,7 +531,7 @@ fn run_chain(
     let mut rng = Pcg32::new(seed_of(seed, 0x4348_4149_4E00 + chain), 7);
     let (i, _, _) = start.starts.sample_discrete(start.u.min(ONE_MINUS_EPSILON));
     let k = start.ks[i];
-    let depth = start.depth;
+    let slot = start.slot;
     // The chain starts in bootstrap state k (same seed: the same numbers).
     let mut sampler = MltSampler::new(seed_of(seed, k as u64), cfg.sigma, cfg.large_step);
     let mut out = Chain {
@@ -439,31 +540,32 @@ fn run_chain(
         large_count: 0,
     };
     let mut paths = Subpaths::default();
-    let Some(mut current) = state_value(scene, bdpt, &mut sampler, &mut paths, depth) else {
+    let (mut current, mut proposed) = (Vec::new(), Vec::new());
+    let mut y_cur = target.value(&mut sampler, &mut paths, slot, &mut current);
+    if y_cur <= 0.0 {
         return out;
-    };
+    }
     out.splats.reserve(2 * mutations as usize);
     for _ in 0..mutations {
         sampler.start_iteration();
-        let proposed = state_value(scene, bdpt, &mut sampler, &mut paths, depth);
+        let y = target.value(&mut sampler, &mut paths, slot, &mut proposed);
         if sampler.large_step {
             out.large_count += 1;
-            out.large_sum += proposed.map_or(0.0, |(_, c)| luminance(c) as f64);
+            out.large_sum += y as f64;
         }
-        let y_cur = luminance(current.1);
-        let (accept, proposed) = match proposed {
-            Some(p) => ((luminance(p.1) / y_cur).min(1.0), Some(p)),
-            None => (0.0, None),
-        };
-        if let Some((p, c)) = proposed
-            && accept > 0.0
-        {
-            out.splats.push((p, c * (accept / luminance(c))));
+        let accept = if y > 0.0 { (y / y_cur).min(1.0) } else { 0.0 };
+        // Both states splatted with their expected weights (zero ones left out).
+        if accept > 0.0 {
+            let w = accept / y;
+            out.splats.extend(proposed.iter().map(|&(p, c)| (p, c * w)));
         }
-        out.splats
-            .push((current.0, current.1 * ((1.0 - accept) / y_cur)));
+        if accept < 1.0 {
+            let w = (1.0 - accept) / y_cur;
+            out.splats.extend(current.iter().map(|&(p, c)| (p, c * w)));
+        }
         if rng.next_f32() < accept {
-            current = proposed.expect("accepted proposals exist");
+            std::mem::swap(&mut current, &mut proposed);
+            y_cur = y;
             sampler.accept();
         } else {
             sampler.reject();

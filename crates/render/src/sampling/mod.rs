@@ -18,6 +18,13 @@ use crate::math::Vec2;
 pub trait Samples {
     fn next_1d(&mut self) -> f32;
     fn next_2d(&mut self) -> Vec2;
+    /// The numbers drawn from here on come from stream `stream` (0 until told otherwise).
+    /// BDPT draws its camera subpath from stream 0, its light subpath from 1 and its
+    /// connections from 2, so that a Markov chain's primary sample vector can keep them
+    /// apart (a mutation that makes one part draw more or fewer numbers then does not shift
+    /// another part's); a pixel sample's [`Sampler`] has one stream and ignores this.
+    #[inline(always)]
+    fn start_stream(&mut self, _stream: usize) {}
 }
 
 impl Samples for Sampler {

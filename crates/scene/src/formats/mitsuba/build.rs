@@ -1902,6 +1902,9 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             // Mitsuba 0.6's pssmlt/mlt (maxDepth, pLarge, luminanceSamples as the bootstrap,
             // directSamples, chains as ours; its other mutation settings are read and do not apply: ours
             // are primary-sample-space mutations of every strategy) and pbrt-v3's names.
+            // `multiplexed` (ours): true, the default, multiplexes the chains over BDPT's
+            // strategies (pbrt-v3's MLTIntegrator); false makes a state a whole BDPT sample
+            // (Kelemen 2002), which is what Mitsuba 0.6's own pssmlt does.
             "pssmlt" | "mlt" => {
                 pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)?;
                 pl.props.bool("bidirectional", true)?;
@@ -1913,6 +1916,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     chains: pl.props.int_in("chains", 1000, 1, 1 << 24)? as u32,
                     large_step: pl.props.float("p_large", 0.3)?.clamp(0.0, 1.0),
                     sigma: pl.props.float("sigma", 0.01)?.max(1e-6),
+                    multiplexed: pl.props.bool("multiplexed", true)?,
                 }
             }
             "ptracer" => {
