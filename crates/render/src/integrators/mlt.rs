@@ -7,11 +7,11 @@
 //! connection), drawn lazily. Multiplexed (the default), it fixes a path depth d (per
 //! chain), a strategy (s, t) with s + t = d + 2 (the first camera-stream number), a film
 //! position, and through BDPT's sampling the whole path; its value is that one strategy's
-//! MIS-weighted contribution times the number of strategies of depth d. Mutations: with probability `large_step` every
-//! number is drawn afresh, else each is moved by a normal step of deviation `sigma` (wrapping
-//! around [0, 1)); a proposal is accepted with probability min(1, y(new) / y(current)), y the
-//! luminance, and both states are splatted with their expected weights (Veach's
-//! expected-values trick).
+//! MIS-weighted contribution times the number of strategies of depth d. Mutations: with
+//! probability `large_step` every number is drawn afresh, else each is moved by a normal
+//! step of deviation `sigma` (wrapping around [0, 1)); a proposal is accepted with
+//! probability min(1, y(new) / y(current)), y the luminance, and both states are splatted
+//! with their expected weights (Veach's expected-values trick).
 //!
 //! Normalisation: b, the image's mean luminance summed over the depths, is estimated per
 //! depth from independent states: the `bootstrap` ones, and every large step the chains of
