@@ -362,40 +362,7 @@ fn mitsuba_pssmlt_parameters() {
 /// many samples.
 #[test]
 fn mlt_converges_on_mitsuba_cbox() {
-    let Some(shared) = scene::testing::shared_dir("references").map(|r| r.join("..")) else {
-        return;
-    };
-    let desc = load(&shared.join(CBOX), &[("res", "128")]);
-    let reference = load_reference(&shared.join("references/mitsuba-cbox")).expect("reference");
-    let mlt = IntegratorDesc::Mlt {
-        max_depth: max_depth(&desc),
-        bootstrap: 100_000,
-        chains: 1000,
-        large_step: 0.3,
-        sigma: 0.01,
-        direct_samples: -1,
-        multiplexed: true,
-    };
-    let render = |spp| {
-        let opts = BuildOptions {
-            spp: Some(spp),
-            seed: Some(0),
-            integrator: Some(mlt.clone()),
-            ..Default::default()
-        };
-        render_desc(&desc, &opts).expect("builds").film.develop()
-    };
-    let (lo, hi) = (render(64), render(4096));
-    let e_lo = render::compare::rel_mse(&lo, &reference.mean).unwrap();
-    let e_hi = render::compare::rel_mse(&hi, &reference.mean).unwrap();
-    println!("mlt mitsuba-cbox relMSE: 64 mutations/pixel {e_lo:.3e}, 4096 {e_hi:.3e}");
-    assert!(e_hi < 0.1 * e_lo, "relMSE {e_lo} → {e_hi}");
-    let (a, b) = (mean_rgb(&hi), mean_rgb(&reference.mean));
-    let ratio: Vec<f64> = (0..3).map(|c| a[c] / b[c]).collect();
-    println!("mlt mitsuba-cbox mean ÷ reference at 4096: {ratio:.4?}");
-    for (c, r) in ratio.iter().enumerate() {
-        assert!((r - 1.0).abs() < 0.01, "channel {c}: {r}");
-    }
+    check_mlt_convergence("mlt", true, |_| -1, (64, 4096), 0.1);
 }
 
 /// Kelemen's MLT (a state a whole BDPT sample) on Mitsuba's Cornell box at 128², with the
@@ -407,6 +374,20 @@ fn mlt_converges_on_mitsuba_cbox() {
 /// 1 % of the reference in every channel (measured +0.04/+0.09/+0.08 %); about 20 s.
 #[test]
 fn kelemen_mlt_converges_on_mitsuba_cbox() {
+    check_mlt_convergence("kelemen", false, |spp| spp as i32, (16, 256), 0.2);
+}
+
+/// MLT on Mitsuba's Cornell box at 128², seed 0 (`multiplexed` or Kelemen's, `direct` the
+/// direct samples at a mutation count), at `lo` and `hi` mutations per pixel: the relMSE
+/// against the reference at `hi` is below `factor` times that at `lo`, and the image mean at
+/// `hi` is within 1 % of the reference in every channel.
+fn check_mlt_convergence(
+    label: &str,
+    multiplexed: bool,
+    direct: fn(u32) -> i32,
+    (lo, hi): (u32, u32),
+    factor: f64,
+) {
     let Some(shared) = scene::testing::shared_dir("references").map(|r| r.join("..")) else {
         return;
     };
@@ -419,8 +400,8 @@ fn kelemen_mlt_converges_on_mitsuba_cbox() {
             chains: 1000,
             large_step: 0.3,
             sigma: 0.01,
-            direct_samples: spp as i32,
-            multiplexed: false,
+            direct_samples: direct(spp),
+            multiplexed,
         };
         let opts = BuildOptions {
             spp: Some(spp),
@@ -430,16 +411,16 @@ fn kelemen_mlt_converges_on_mitsuba_cbox() {
         };
         render_desc(&desc, &opts).expect("builds").film.develop()
     };
-    let (lo, hi) = (render(16), render(256));
-    let e_lo = render::compare::rel_mse(&lo, &reference.mean).unwrap();
-    let e_hi = render::compare::rel_mse(&hi, &reference.mean).unwrap();
-    println!("kelemen mitsuba-cbox relMSE: 16 mutations/pixel {e_lo:.3e}, 256 {e_hi:.3e}");
-    assert!(e_hi < 0.2 * e_lo, "relMSE {e_lo} → {e_hi}");
-    let (a, b) = (mean_rgb(&hi), mean_rgb(&reference.mean));
+    let e_lo = render::compare::rel_mse(&render(lo), &reference.mean).unwrap();
+    let img = render(hi);
+    let e_hi = render::compare::rel_mse(&img, &reference.mean).unwrap();
+    println!("{label} mitsuba-cbox relMSE: {lo} mutations/pixel {e_lo:.3e}, {hi} {e_hi:.3e}");
+    assert!(e_hi < factor * e_lo, "{label}: relMSE {e_lo} → {e_hi}");
+    let (a, b) = (mean_rgb(&img), mean_rgb(&reference.mean));
     let ratio: Vec<f64> = (0..3).map(|c| a[c] / b[c]).collect();
-    println!("kelemen mitsuba-cbox mean ÷ reference at 256: {ratio:.4?}");
+    println!("{label} mitsuba-cbox mean ÷ reference at {hi}: {ratio:.4?}");
     for (c, r) in ratio.iter().enumerate() {
-        assert!((r - 1.0).abs() < 0.01, "channel {c}: {r}");
+        assert!((r - 1.0).abs() < 0.01, "{label} channel {c}: {r}");
     }
 }
 
