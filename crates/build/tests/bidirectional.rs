@@ -273,6 +273,22 @@ fn same_image_for_one_and_two_threads() {
     }
 }
 
+/// A minimal Mitsuba scene of `version` (an 8 × 8 film, a glowing sphere) with
+/// `integrator` (its XML element), built.
+fn built_with(version: &str, integrator: &str) -> build::Built {
+    let xml = format!(
+        r#"<scene version="{version}">
+             {integrator}
+             <sensor type="perspective">
+               <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+             </sensor>
+             <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+           </scene>"#
+    );
+    let desc = scene::load_xml_text("integrator.xml", &xml).expect("loads");
+    build::build(&desc, &BuildOptions::default()).expect("builds")
+}
+
 /// Mitsuba 3's `ptracer` parameters (and Mitsuba 0.6's names): max_depth and hide_emitters
 /// reach the integrator; rr_depth and samples_per_pass are read.
 #[test]
@@ -291,17 +307,10 @@ fn mitsuba_ptracer_parameters() {
                <boolean name="bruteForce" value="false"/>"#,
         ),
     ] {
-        let xml = format!(
-            r#"<scene version="{version}">
-                 <integrator type="ptracer">{params}</integrator>
-                 <sensor type="perspective">
-                   <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
-                 </sensor>
-                 <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
-               </scene>"#
+        let built = built_with(
+            version,
+            &format!(r#"<integrator type="ptracer">{params}</integrator>"#),
         );
-        let desc = scene::load_xml_text("ptracer.xml", &xml).expect("loads");
-        let built = build::build(&desc, &BuildOptions::default()).expect("builds");
         let Integrator::Ptracer(cfg) = built.integrator else {
             panic!("{:?}", built.integrator)
         };
@@ -327,17 +336,10 @@ fn mitsuba_pssmlt_parameters() {
         ),
         ("", (6, 0.3, 100_000, 16, 0.01, 1000, true)),
     ] {
-        let xml = format!(
-            r#"<scene version="0.6.0">
-                 <integrator type="pssmlt">{params}</integrator>
-                 <sensor type="perspective">
-                   <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
-                 </sensor>
-                 <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
-               </scene>"#
+        let built = built_with(
+            "0.6.0",
+            &format!(r#"<integrator type="pssmlt">{params}</integrator>"#),
         );
-        let desc = scene::load_xml_text("pssmlt.xml", &xml).expect("loads");
-        let built = build::build(&desc, &BuildOptions::default()).expect("builds");
         let Integrator::Mlt(c) = built.integrator else {
             panic!("{:?}", built.integrator)
         };
@@ -541,18 +543,13 @@ fn mitsuba_bdpt_parameters() {
             Some(StrategyImages::Weighted),
         ),
     ] {
-        let xml = format!(
-            r#"<scene version="0.6.0">
-                 <integrator type="bdpt"><integer name="maxDepth" value="4"/>
-                   <boolean name="lightImage" value="true"/>{params}</integrator>
-                 <sensor type="perspective">
-                   <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
-                 </sensor>
-                 <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
-               </scene>"#
+        let built = built_with(
+            "0.6.0",
+            &format!(
+                r#"<integrator type="bdpt"><integer name="maxDepth" value="4"/>
+                     <boolean name="lightImage" value="true"/>{params}</integrator>"#
+            ),
         );
-        let desc = scene::load_xml_text("bdpt.xml", &xml).expect("loads");
-        let built = build::build(&desc, &BuildOptions::default()).expect("builds");
         let Integrator::Bdpt(cfg) = built.integrator else {
             panic!("{:?}", built.integrator)
         };
