@@ -73,25 +73,13 @@ fn render_one(desc: &SceneDesc, integrator: Choice, seed: u64, mode: RenderMode)
 
 /// 16 batches of 32 spp of `integrator` against the reference `name`.
 fn check(integrator: Choice, name: &str, scene_rel: &str, res: bool, mode: RenderMode) {
-    check_batches(integrator, name, scene_rel, res, mode, 16);
-}
-
-/// [`check`] with `n` batches.
-fn check_batches(
-    integrator: Choice,
-    name: &str,
-    scene_rel: &str,
-    res: bool,
-    mode: RenderMode,
-    n: u64,
-) {
     let Some(shared) = scene::testing::shared_dir("references").map(|r| r.join("..")) else {
         return;
     };
     let defines: &[(&str, &str)] = if res { &[("res", "128")] } else { &[] };
     let desc = load(&shared.join(scene_rel), defines);
     let reference = load_reference(&shared.join("references").join(name)).expect("reference");
-    let batches: Vec<Image> = (0..n)
+    let batches: Vec<Image> = (0..16)
         .map(|seed| render_one(&desc, integrator, seed, mode))
         .collect();
     let result = compare(&reference, &TestImages::Batches(batches)).expect("comparable");
