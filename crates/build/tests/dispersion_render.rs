@@ -20,7 +20,7 @@ use glam::{DVec3, UVec2};
 use rayon::prelude::*;
 use render::integrators::{Integrator, path};
 use render::math::Vec3;
-use render::sampling::Sampler;
+use render::sampling::{Sampler, Samples};
 use render::spectral::lanes::{ColorMode, PathMode, SpectralMode};
 use render::spectral::{
     RgbIlluminantSpectrum, RgbToSpectrumTable, SampledSpectrum, SampledWavelengths, Spectrum,
@@ -31,6 +31,7 @@ use scene::{Dispersion, Document, LoadOptions, RenderMode};
 
 /// Spectral mode with the path's wavelengths uniform in [LO, HI] nm; its estimate, as every
 /// channel of the "colour", is the band's energy ∫ L(λ) dλ.
+#[derive(Clone)]
 struct Band<const LO: u32, const HI: u32>(SpectralMode<'static>);
 
 impl<const LO: u32, const HI: u32> ColorMode for Band<LO, HI> {
@@ -67,7 +68,7 @@ impl<const LO: u32, const HI: u32> ColorMode for Band<LO, HI> {
 }
 
 impl<const LO: u32, const HI: u32> PathMode for Band<LO, HI> {
-    fn start(sampler: &mut Sampler) -> Self {
+    fn start(sampler: &mut impl Samples) -> Self {
         Self::from_u(sampler.next_1d())
     }
     fn from_u(u: f32) -> Self {

@@ -49,7 +49,21 @@
 //! per (s, t) when asked), and [`Bdpt::record`] (`bdpt/record.rs`, for `debug-paths`),
 //! which also keeps both subpaths.
 //!
-//! Not yet: spectral mode (refused).
+//! Colour: [`Bdpt`] is generic over the [`PathMode`] (RGB or spectral; `render` picks the
+//! scene's). In spectral mode the camera sample draws its wavelengths (after the camera's
+//! dimensions) and both subpaths carry them. A smooth dispersive interface terminates the
+//! secondary wavelengths of its own subpath only (each subpath walks with its own copy of the
+//! mode); a vertex records whether its subpath was terminated by then, and a strategy counts
+//! the hero wavelength alone exactly when a vertex it uses was: every strategy that makes a
+//! path through such an interface has that interface's vertex on one of its subpaths (a
+//! delta vertex is never a connection's end), so all of them count the same wavelengths.
+//! (Terminating for the whole camera sample instead, as one shared mode would, makes the
+//! choice depend on the other subpath, which in chromatic media depends on the hero
+//! wavelength; counting every wavelength after a termination smears a prism's spectrum.)
+//! One case is left: a path through both a smooth and a rough dispersive interface, whose
+//! rough vertex's density is the mixture over the wavelengths on one subpath and the hero's on
+//! the other, so the weights of its strategies need not sum to one. Strategies are converted
+//! to linear sRGB one by one (`PathMode::to_rgb`), so the sinks, splats and MLT see RGB.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -67,9 +81,10 @@ use crate::media::{Flight, MediumKind, Phase};
 use crate::sampling::{Distribution1D, Sampler, Samples};
 use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
 use crate::shapes::SurfaceInteraction;
-use crate::spectral::lanes::{PathMode, RgbMode};
+use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
 use crate::world::Scene;
-use base::TransmittanceEstimator;
+use base::{RenderMode, TransmittanceEstimator};
+use std::marker::PhantomData;
 
 use super::volpath::{From, transmittance};
 
@@ -131,19 +146,19 @@ impl StrategyImages {
 
 /// Told of the strategies [`Bdpt::li`] evaluates (the per-strategy images, `debug-paths`'
 /// record); `()` is told nothing, and its calls compile away.
-pub(crate) trait StrategySink {
+pub(crate) trait StrategySink<C: Color> {
     /// Strategy (s, t) is joined at `joint` (for s = 1 the light point and for t = 1 the
     /// lens point sampled) with MIS weight `w`; its value follows through `add` if nonzero.
     #[inline(always)]
-    fn joint(&mut self, _s: usize, _t: usize, _joint: &Joint, _w: f32) {}
+    fn joint(&mut self, _s: usize, _t: usize, _joint: &Joint<C>, _w: f32) {}
 
-    /// Strategy (s, t) made the nonzero MIS-weighted `value` with weight `weight`, splatted
+    /// Strategy (s, t) made the nonzero MIS-weighted `value` (linear sRGB) with weight `weight`, splatted
     /// at `splat_at` (t = 1; `None`: at the camera sample's film position).
     #[inline(always)]
     fn add(&mut self, _s: usize, _t: usize, _splat_at: Option<Vec2>, _value: Vec3, _weight: f32) {}
 }
 
-impl StrategySink for () {}
+impl<C: Color> StrategySink<C> for () {}
 
 /// What a strategy that makes nothing returns.
 const NONE: (Vec3, f32) = (Vec3::ZERO, 0.0);
@@ -164,13 +179,13 @@ enum Kind {
 }
 
 #[derive(Clone)]
-struct Vertex {
+struct Vertex<C: Color = Vec3> {
     kind: Kind,
     p: Vec3,
     /// Geometric normal (zero for points and infinity).
     ng: Vec3,
     si: Option<SurfaceInteraction>,
-    bsdf: Option<(Bsdf, Frame)>,
+    bsdf: Option<(Bsdf<C>, Frame)>,
     /// The phase function of a medium vertex.
     phase: Phase,
     /// Towards the previous vertex of its subpath, in the BSDF's frame (surface vertices with
@@ -183,9 +198,9 @@ struct Vertex {
     medium: Option<u32>,
     /// The subpath's density ratios p_c / p_hero over the colour channels up to here (free
     /// flights in media; 1 elsewhere).
-    ratio: Vec3,
+    ratio: C,
     /// Throughput from the subpath's start to here (its own estimate's factor).
-    beta: Vec3,
+    beta: C,
     /// The free-flight factor of the segment from the previous vertex of its subpath to
     /// this one in the MIS densities: e^{−σt·d} in the hero channel over the homogeneous
     /// media it crosses (1 without media, or where `Bdpt::flight_densities` is off). The
@@ -198,7 +213,10 @@ struct Vertex {
     /// Emission towards the previous vertex of a camera subpath (emitters it reached); at a
     /// medium vertex, the collision estimate of the medium's emission there, the
     /// throughput before the collision included.
-    le: Vec3,
+    le: C,
+    /// Spectral mode: the subpath's secondary wavelengths were terminated here or before (a
+    /// dispersive smooth interface); a strategy that uses this vertex counts the hero only.
+    terminated: bool,
     delta: bool,
     /// A vertex at infinity (the environment, or a light subpath's origin on an infinite
     /// light): densities towards it stay per unit solid angle.
@@ -207,8 +225,8 @@ struct Vertex {
     pdf_rev: f32,
 }
 
-impl Vertex {
-    fn new(kind: Kind, p: Vec3, beta: Vec3) -> Vertex {
+impl<C: Color> Vertex<C> {
+    fn new(kind: Kind, p: Vec3, beta: C) -> Vertex<C> {
         Vertex {
             kind,
             p,
@@ -218,11 +236,12 @@ impl Vertex {
             phase: Phase::Isotropic,
             to_prev: Vec3::ZERO,
             medium: None,
-            ratio: Vec3::ONE,
+            ratio: C::ONE,
             beta,
             seg: 1.0,
             sigma: 1.0,
-            le: Vec3::ZERO,
+            le: C::ZERO,
+            terminated: false,
             delta: false,
             at_infinity: kind == Kind::Infinite,
             pdf_fwd: 0.0,
@@ -236,7 +255,7 @@ impl Vertex {
 
     /// The unit direction to `other` in this vertex's BSDF frame (in world space at a
     /// medium vertex; zero without a BSDF).
-    fn towards(&self, other: &Vertex) -> Vec3 {
+    fn towards(&self, other: &Vertex<C>) -> Vec3 {
         match (&self.bsdf, self.kind) {
             (_, Kind::Medium) => (other.p - self.p).normalize_or_zero(),
             (Some((_, frame)), _) => local_dir(frame, self.p, other.p),
@@ -260,17 +279,17 @@ impl Vertex {
 /// point sampled) and the light subpath's (`qs`: none for s = 0; for s = 1 the light point
 /// sampled), with the unit direction from each end to the other in the end's BSDF frame
 /// (zero at an end without a BSDF), which f·|cos| and the MIS weight share.
-pub(crate) struct Joint<'a> {
-    pt: &'a Vertex,
-    qs: Option<&'a Vertex>,
+pub(crate) struct Joint<'a, C: Color = Vec3> {
+    pt: &'a Vertex<C>,
+    qs: Option<&'a Vertex<C>>,
     pt_to_qs: Vec3,
     qs_to_pt: Vec3,
     /// The connection segment's free-flight factor (as a vertex's `seg`).
     seg: f32,
 }
 
-impl<'a> Joint<'a> {
-    fn new(pt: &'a Vertex, qs: Option<&'a Vertex>) -> Joint<'a> {
+impl<'a, C: Color> Joint<'a, C> {
+    fn new(pt: &'a Vertex<C>, qs: Option<&'a Vertex<C>>) -> Joint<'a, C> {
         let (pt_to_qs, qs_to_pt) = match qs {
             Some(q) => (pt.towards(q), q.towards(pt)),
             None => (Vec3::ZERO, Vec3::ZERO),
@@ -286,11 +305,13 @@ impl<'a> Joint<'a> {
 }
 
 /// Where a random walk goes on from a surface vertex ([`Bdpt::scatter`]).
-struct Scattered {
+struct Scattered<C> {
     /// The sampled direction (world).
     wi: Vec3,
     /// The throughput after the vertex (Russian roulette's survival included).
-    beta: Vec3,
+    beta: C,
+    /// The walk's η² factor after the vertex (see [`Bdpt::roulette`]).
+    eta2: f32,
     /// Solid-angle density of `wi` (1 for a delta lobe: the discrete measure).
     pdf_dir: f32,
     /// Solid-angle density of sampling `wo` from `wi`, the reverse way (1 for a delta lobe).
@@ -300,15 +321,23 @@ struct Scattered {
 
 /// The vertices of one camera sample's two subpaths, kept from sample to sample so that
 /// their storage is allocated once (per row of a pass, per Markov chain).
-#[derive(Default)]
-pub struct Subpaths {
-    camera: Vec<Vertex>,
-    light: Vec<Vertex>,
+pub struct Subpaths<C: Color = Vec3> {
+    camera: Vec<Vertex<C>>,
+    light: Vec<Vertex<C>>,
 }
 
-impl Subpaths {
+impl<C: Color> Default for Subpaths<C> {
+    fn default() -> Self {
+        Subpaths {
+            camera: Vec::new(),
+            light: Vec::new(),
+        }
+    }
+}
+
+impl<C: Color> Subpaths<C> {
     /// Both subpaths emptied, their storage kept.
-    fn cleared(&mut self) -> (&mut Vec<Vertex>, &mut Vec<Vertex>) {
+    fn cleared(&mut self) -> (&mut Vec<Vertex<C>>, &mut Vec<Vertex<C>>) {
         self.camera.clear();
         self.light.clear();
         (&mut self.camera, &mut self.light)
@@ -322,8 +351,8 @@ enum LightRef {
     Environment,
 }
 
-/// Bidirectional path tracer state shared by all samples.
-pub struct Bdpt<'a> {
+/// Bidirectional path tracer state shared by all samples, for paths in colour mode `M`.
+pub struct Bdpt<'a, M: PathMode = RgbMode> {
     cfg: &'a BdptConfig,
     /// Lights chosen by power.
     dist: Distribution1D,
@@ -334,10 +363,11 @@ pub struct Bdpt<'a> {
     /// leave them out (pbrt-v3's choice): either way one function of the path for every
     /// strategy.
     flight_densities: bool,
+    mode: PhantomData<fn() -> M>,
 }
 
 /// Area density of `pdf` (per unit solid angle at `from`) at `to`.
-fn convert_density(pdf: f32, from: &Vertex, to: &Vertex) -> f32 {
+fn convert_density<C: Color>(pdf: f32, from: &Vertex<C>, to: &Vertex<C>) -> f32 {
     if to.at_infinity {
         return pdf;
     }
@@ -362,8 +392,8 @@ fn remap0(x: f32) -> f32 {
     if x != 0.0 { x } else { 1.0 }
 }
 
-impl<'a> Bdpt<'a> {
-    pub fn new(scene: &Scene, cfg: &'a BdptConfig) -> Bdpt<'a> {
+impl<'a, M: PathMode> Bdpt<'a, M> {
+    pub fn new(scene: &Scene, cfg: &'a BdptConfig) -> Bdpt<'a, M> {
         let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(scene)).collect();
         Bdpt {
             cfg,
@@ -374,14 +404,17 @@ impl<'a> Bdpt<'a> {
                     .media
                     .iter()
                     .all(|m| matches!(m.kind, MediumKind::Homogeneous(_))),
+            mode: PhantomData,
         }
     }
 
-    /// σt of medium `medium` in channel `hero` if the free-flight densities enter the MIS
+    /// σt of medium `medium` in lane `hero` of `m` if the free-flight densities enter the MIS
     /// weights (else, and outside media, `None`).
-    fn flight_sigma(&self, scene: &Scene, medium: Option<u32>, hero: usize) -> Option<f32> {
-        match medium.map(|m| &scene.media[m as usize].kind) {
-            Some(MediumKind::Homogeneous(h)) if self.flight_densities => Some(h.sigma_t[hero]),
+    fn flight_sigma(&self, scene: &Scene, medium: Option<u32>, hero: usize, m: &M) -> Option<f32> {
+        match medium.map(|i| &scene.media[i as usize].kind) {
+            Some(MediumKind::Homogeneous(h)) if self.flight_densities => {
+                Some(m.unbounded(h.sigma_t).lane(hero))
+            }
             _ => None,
         }
     }
@@ -392,7 +425,7 @@ impl<'a> Bdpt<'a> {
             && (self.cfg.max_depth < 0 || edges <= self.cfg.max_depth as usize)
     }
 
-    fn light_of(&self, scene: &Scene, v: &Vertex) -> Option<LightRef> {
+    fn light_of(&self, scene: &Scene, v: &Vertex<M::C>) -> Option<LightRef> {
         match v.kind {
             Kind::Light(l) => Some(if scene.lights[l as usize].is_infinite() {
                 LightRef::Environment
@@ -412,7 +445,7 @@ impl<'a> Bdpt<'a> {
     /// Density of the light choice and of the origin `v` of a light subpath towards `next`
     /// (pbrt's `PdfLightOrigin`): per unit area, or for the environment per unit solid
     /// angle of the direction (summed over the infinite lights).
-    fn pdf_light_origin(&self, scene: &Scene, v: &Vertex, next: &Vertex) -> f32 {
+    fn pdf_light_origin(&self, scene: &Scene, v: &Vertex<M::C>, next: &Vertex<M::C>) -> f32 {
         let w = (next.p - v.p).normalize_or_zero();
         match self.light_of(scene, v) {
             Some(LightRef::One(l)) => {
@@ -437,7 +470,7 @@ impl<'a> Bdpt<'a> {
 
     /// Area density at `next` of a light subpath leaving the emitter vertex `v` towards it
     /// (pbrt's `PdfLight`).
-    fn pdf_light(&self, scene: &Scene, v: &Vertex, next: &Vertex) -> f32 {
+    fn pdf_light(&self, scene: &Scene, v: &Vertex<M::C>, next: &Vertex<M::C>) -> f32 {
         let w = next.p - v.p;
         let d2 = w.length_squared();
         if d2 == 0.0 {
@@ -459,7 +492,7 @@ impl<'a> Bdpt<'a> {
     /// Area density with which vertex `v` samples `next`: as a light subpath's origin, as the
     /// camera, or by its BSDF having been reached from the previous vertex of its subpath
     /// (`dir` the unit direction to `next` in the BSDF's frame, read only there).
-    fn pdf(&self, scene: &Scene, v: &Vertex, next: &Vertex, dir: Vec3) -> f32 {
+    fn pdf(&self, scene: &Scene, v: &Vertex<M::C>, next: &Vertex<M::C>, dir: Vec3) -> f32 {
         match v.kind {
             Kind::Light(_) | Kind::Infinite => self.pdf_light(scene, v, next),
             Kind::Camera => {
@@ -478,7 +511,7 @@ impl<'a> Bdpt<'a> {
     /// Area density with which surface or medium vertex `v`, reached instead from the unit
     /// direction `from` (in its BSDF's frame; world space in a medium), samples the previous
     /// vertex of its subpath, `prev`.
-    fn pdf_back(v: &Vertex, from: Vec3, prev: &Vertex) -> f32 {
+    fn pdf_back(v: &Vertex<M::C>, from: Vec3, prev: &Vertex<M::C>) -> f32 {
         match (&v.bsdf, v.kind) {
             (_, Kind::Medium) => convert_density(v.phase.eval(from, v.to_prev), v, prev),
             (Some((bsdf, _)), _) => convert_density(bsdf.pdf(from, v.to_prev), v, prev),
@@ -489,36 +522,39 @@ impl<'a> Bdpt<'a> {
     /// f·|cos| at surface vertex `v` (reached from the previous vertex of its subpath)
     /// towards the unit direction `wi` in its BSDF's frame, in `mode`; at a medium vertex
     /// the phase function towards `wi` in world space.
-    fn fcos(v: &Vertex, wi: Vec3, mode: TransportMode) -> Vec3 {
+    fn fcos(v: &Vertex<M::C>, wi: Vec3, mode: TransportMode) -> M::C {
         match (&v.bsdf, v.kind) {
-            (_, Kind::Medium) => Vec3::splat(v.phase.eval(v.to_prev, wi)),
+            (_, Kind::Medium) => M::C::splat(v.phase.eval(v.to_prev, wi)),
             (Some((bsdf, _)), _) => bsdf.eval(v.to_prev, wi, mode),
-            (None, _) => Vec3::ZERO,
+            (None, _) => M::C::ZERO,
         }
     }
 
     /// Extend `path` from `ray` (its last vertex the start), `beta` its throughput,
     /// `pdf_dir` the solid-angle density of `ray`'s direction and `medium` the medium it
-    /// starts in, up to `max_vertices`; free flights in media sample with channel `hero`.
+    /// starts in, up to `max_vertices`; free flights in media sample with lane `hero` of
+    /// `m`, the subpath's colour mode.
     #[allow(clippy::too_many_arguments)]
     fn random_walk(
         &self,
         scene: &Scene,
         mut ray: Ray,
         mut t_max: f32,
-        mut beta: Vec3,
+        mut beta: M::C,
         mut pdf_dir: f32,
         mut medium: Option<u32>,
         hero: usize,
         sampler: &mut impl Samples,
         mode: TransportMode,
         max_vertices: usize,
-        path: &mut Vec<Vertex>,
+        path: &mut Vec<Vertex<M::C>>,
+        m: &M,
     ) {
-        let m = &RgbMode;
-        let mut ratio = Vec3::ONE;
+        let mut ratio = M::C::ONE;
         // The free-flight factor since the last vertex.
         let mut seg = 1.0f32;
+        // Russian roulette's η² factor (`Self::roulette`).
+        let mut eta2 = 1.0f32;
         // Bounded: null crossings add no vertex.
         for _ in 0..(1 << 16) {
             if path.len() >= max_vertices {
@@ -528,7 +564,7 @@ impl<'a> Bdpt<'a> {
             if let Some(mi) = medium {
                 let med = &scene.media[mi as usize];
                 let d_surface = closest.t(&ray, t_max);
-                let sigma = self.flight_sigma(scene, medium, hero);
+                let sigma = self.flight_sigma(scene, medium, hero, m);
                 match med.sample_in(&ray, d_surface, hero, sampler, m) {
                     Flight::Scatter {
                         d,
@@ -542,7 +578,7 @@ impl<'a> Bdpt<'a> {
                             Some(e) if mode == TransportMode::Radiance => {
                                 beta * emit * e.radiance_in(ray.at(d), m)
                             }
-                            _ => Vec3::ZERO,
+                            _ => M::C::ZERO,
                         };
                         beta *= weight;
                         ratio *= r;
@@ -552,6 +588,7 @@ impl<'a> Bdpt<'a> {
                         v.ratio = ratio;
                         v.phase = med.phase;
                         v.le = emitted;
+                        v.terminated = m.terminated();
                         v.to_prev = -ray.d;
                         if let Some(s) = sigma {
                             v.seg = seg * (-s * d).exp();
@@ -559,7 +596,9 @@ impl<'a> Bdpt<'a> {
                         }
                         v.pdf_fwd = convert_density(pdf_dir, prev, &v) * v.seg * v.sigma;
                         let n = path.len() + 1;
-                        let Some(sc) = Self::scatter_medium(&v, n, max_vertices, sampler) else {
+                        let rr = (n, eta2);
+                        let Some(sc) = Self::scatter_medium(&v, rr, max_vertices, sampler, m)
+                        else {
                             path.push(v);
                             return;
                         };
@@ -570,6 +609,7 @@ impl<'a> Bdpt<'a> {
                         ray = Ray::at_time(v.p, sc.wi, ray.time);
                         t_max = f32::INFINITY;
                         beta = sc.beta;
+                        eta2 = sc.eta2;
                         pdf_dir = sc.pdf_dir;
                         path.push(v);
                         continue;
@@ -591,6 +631,7 @@ impl<'a> Bdpt<'a> {
                         v.le += scene.lights[i as usize].environment(ray.d, m);
                     }
                     v.ratio = ratio;
+                    v.terminated = m.terminated();
                     v.seg = seg;
                     v.pdf_fwd = pdf_dir * seg;
                     path.push(v);
@@ -609,6 +650,7 @@ impl<'a> Bdpt<'a> {
             v.ng = si.ng;
             v.medium = medium;
             v.ratio = ratio;
+            v.terminated = m.terminated();
             if mode == TransportMode::Radiance
                 && let Some(l) = scene.shape_light(&si)
             {
@@ -624,7 +666,8 @@ impl<'a> Bdpt<'a> {
                 if n >= max_vertices {
                     return None;
                 }
-                Self::scatter(bsdf, frame, si.wo, beta, ratio, n, sampler, mode)
+                let rr = (n, eta2);
+                Self::scatter(bsdf, frame, si.wo, beta, ratio, rr, sampler, mode, m)
             });
             let Some(sc) = scattered else {
                 v.bsdf = bsdf;
@@ -641,6 +684,7 @@ impl<'a> Bdpt<'a> {
             ray = si.spawn_ray(sc.wi);
             t_max = f32::INFINITY;
             beta = sc.beta;
+            eta2 = sc.eta2;
             pdf_dir = sc.pdf_dir;
             v.bsdf = bsdf;
             v.si = Some(si);
@@ -648,21 +692,23 @@ impl<'a> Bdpt<'a> {
         }
     }
 
-    /// The direction a walk leaves a surface vertex in (its `n`th) by sampling its BSDF
-    /// (`bsdf` in `frame`, `wo` the world direction back along the incoming ray), with the
-    /// throughput `beta` and channel density ratios `ratio` so far; none if sampling fails,
-    /// Russian roulette ends the path or the throughput is left zero or not finite.
+    /// The direction a walk leaves a surface vertex in (its `n`th, `eta2` the walk's η²
+    /// factor so far: `(n, eta2)`) by sampling its BSDF (`bsdf` in `frame`, `wo` the world
+    /// direction back along the incoming ray), with the throughput `beta` and channel density
+    /// ratios `ratio` so far; none if sampling fails, Russian roulette ends the path or the
+    /// throughput is left zero or not finite.
     #[allow(clippy::too_many_arguments)]
     fn scatter(
-        bsdf: &Bsdf,
+        bsdf: &Bsdf<M::C>,
         frame: &Frame,
         wo: Vec3,
-        mut beta: Vec3,
-        ratio: Vec3,
-        n: usize,
+        mut beta: M::C,
+        ratio: M::C,
+        (n, mut eta2): (usize, f32),
         sampler: &mut impl Samples,
         mode: TransportMode,
-    ) -> Option<Scattered> {
+        m: &M,
+    ) -> Option<Scattered<M::C>> {
         let wo = frame.to_local(wo);
         let u1 = sampler.next_1d();
         let bs = bsdf.sample(wo, u1, sampler.next_2d(), mode)?;
@@ -675,30 +721,37 @@ impl<'a> Bdpt<'a> {
             (bs.pdf, bsdf.pdf(bs.wi, wo))
         };
         beta *= bs.weight;
+        if mode == TransportMode::Radiance {
+            eta2 *= bs.eta * bs.eta;
+        }
         Some(Scattered {
             wi: frame.to_world(bs.wi),
-            beta: Self::roulette(beta, ratio, n, sampler)?,
+            beta: Self::roulette(beta, ratio, eta2, n, sampler, m)?,
+            eta2,
             pdf_dir,
             pdf_rev,
             delta: bs.delta,
         })
     }
 
-    /// The direction a walk leaves medium vertex `v` (its `n`th) in, by sampling its phase
-    /// function; none once the path is full or Russian roulette ends it.
+    /// The direction a walk leaves medium vertex `v` (its `n`th, the walk's η² factor
+    /// `eta2`) in, by sampling its phase function; none once the path is full or Russian
+    /// roulette ends it.
     fn scatter_medium(
-        v: &Vertex,
-        n: usize,
+        v: &Vertex<M::C>,
+        (n, eta2): (usize, f32),
         max_vertices: usize,
         sampler: &mut impl Samples,
-    ) -> Option<Scattered> {
+        m: &M,
+    ) -> Option<Scattered<M::C>> {
         if n >= max_vertices {
             return None;
         }
         let (wi, pdf) = v.phase.sample(v.to_prev, sampler.next_2d());
         Some(Scattered {
             wi,
-            beta: Self::roulette(v.beta, v.ratio, n, sampler)?,
+            beta: Self::roulette(v.beta, v.ratio, eta2, n, sampler, m)?,
+            eta2,
             pdf_dir: pdf,
             pdf_rev: pdf,
             delta: false,
@@ -706,16 +759,29 @@ impl<'a> Bdpt<'a> {
     }
 
     /// Russian roulette on the throughput `beta` leaving the `n`th vertex (by its effective
-    /// value, β over the mean channel density ratio): the survivor's throughput, or none.
-    fn roulette(mut beta: Vec3, ratio: Vec3, n: usize, sampler: &mut impl Samples) -> Option<Vec3> {
+    /// value, β over the mean channel density ratio, in the lanes that still count, times
+    /// `eta2`): the survivor's throughput, or none. A camera subpath's `eta2` is the product
+    /// of η² over the interfaces it crossed (pbrt-v4's `etaScale`): radiance is scaled by
+    /// 1/η² entering glass and back leaving it, so that inside a dense glass β alone would
+    /// end most paths that leave it again (in `tinted-glass.xml`, whose SF11 sphere has
+    /// η = 1.78, that made light found after several internal reflections a heavy tail).
+    /// Light subpaths' importance has no such factor: 1.
+    fn roulette(
+        mut beta: M::C,
+        ratio: M::C,
+        eta2: f32,
+        n: usize,
+        sampler: &mut impl Samples,
+        m: &M,
+    ) -> Option<M::C> {
         if n >= RR_FROM {
-            let q = (beta * RgbMode.hero_weight(ratio)).max_element().min(0.95);
+            let q = (m.live_max(beta * m.hero_weight(ratio)) * eta2).min(0.95);
             if sampler.next_1d() >= q || q.is_nan() {
                 return None;
             }
             beta /= q;
         }
-        (beta != Vec3::ZERO && beta.is_finite()).then_some(beta)
+        (!beta.is_black() && beta.is_finite()).then_some(beta)
     }
 
     /// The camera subpath of at most `max_vertices` vertices (the camera's included).
@@ -727,9 +793,10 @@ impl<'a> Bdpt<'a> {
         hero: usize,
         sampler: &mut impl Samples,
         max_vertices: usize,
-        path: &mut Vec<Vertex>,
+        path: &mut Vec<Vertex<M::C>>,
+        m: &M,
     ) {
-        let mut v = Vertex::new(Kind::Camera, cray.lens, Vec3::ONE);
+        let mut v = Vertex::new(Kind::Camera, cray.lens, M::C::ONE);
         v.medium = scene.camera_medium;
         path.push(v);
         let (_, pdf_dir) = scene.camera.pdf_we(cray.ray.d.normalize());
@@ -739,7 +806,7 @@ impl<'a> Bdpt<'a> {
             scene,
             ray,
             cray.t_max * len,
-            Vec3::ONE,
+            M::C::ONE,
             pdf_dir,
             scene.camera_medium,
             hero,
@@ -747,6 +814,7 @@ impl<'a> Bdpt<'a> {
             TransportMode::Radiance,
             max_vertices,
             path,
+            m,
         );
     }
 
@@ -757,7 +825,8 @@ impl<'a> Bdpt<'a> {
         hero: usize,
         sampler: &mut impl Samples,
         max_vertices: usize,
-        path: &mut Vec<Vertex>,
+        path: &mut Vec<Vertex<M::C>>,
+        m: &M,
     ) {
         let (li, pmf, _) = self.dist.sample_discrete(sampler.next_1d());
         let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
@@ -765,13 +834,13 @@ impl<'a> Bdpt<'a> {
             return;
         }
         let light = &scene.lights[li];
-        let Some(e) = light.sample_le(scene, u_pos, u_dir, &RgbMode) else {
+        let Some(e) = light.sample_le(scene, u_pos, u_dir, m) else {
             return;
         };
         if e.pdf_pos <= 0.0 || e.pdf_dir <= 0.0 {
             return;
         }
-        let mut v = Vertex::new(Kind::Light(li as u32), e.p, Vec3::ZERO);
+        let mut v = Vertex::new(Kind::Light(li as u32), e.p, M::C::ZERO);
         v.ng = e.n;
         v.medium = scene.light_media.get(li).copied().flatten();
         let infinite = light.is_infinite();
@@ -795,6 +864,7 @@ impl<'a> Bdpt<'a> {
             TransportMode::Importance,
             max_vertices,
             path,
+            m,
         );
         if infinite {
             // pbrt: the first surface's density is the disk's, times its cosine; the
@@ -807,64 +877,80 @@ impl<'a> Bdpt<'a> {
                 }
                 path[1].pdf_fwd = pdf * next.seg * next.sigma;
             }
-            let o = path[0].clone();
+            let (p, ng) = (path[0].p, path[0].ng);
             path[0].pdf_fwd = scene
                 .infinite_lights
                 .iter()
                 .map(|&i| {
-                    let (_, dir) = scene.lights[i as usize].pdf_le(scene, o.p, o.ng, e.ray.d);
+                    let (_, dir) = scene.lights[i as usize].pdf_le(scene, p, ng, e.ray.d);
                     self.dist.pmf(i as usize) * dir
                 })
                 .sum();
         }
     }
 
-    /// The channel whose densities sample free flights in media for one camera sample (both
-    /// subpaths); scenes without media draw nothing.
-    fn hero(scene: &Scene, sampler: &mut impl Samples) -> usize {
-        if scene.media.is_empty() {
+    /// One camera sample's colour mode (in spectral mode its wavelengths, drawn from the
+    /// sampler after the camera's dimensions; RGB mode draws nothing) and the lane whose
+    /// densities sample free flights in media along both subpaths (scenes without media draw
+    /// nothing for it).
+    fn start(scene: &Scene, sampler: &mut impl Samples) -> (Modes<M>, usize) {
+        let m = M::start(sampler);
+        let hero = if scene.media.is_empty() {
             0
         } else {
-            RgbMode.hero(sampler.next_1d())
-        }
+            m.hero(sampler.next_1d())
+        };
+        let terminated = m.terminate();
+        (
+            Modes {
+                full: m,
+                terminated,
+            },
+            hero,
+        )
     }
 
-    /// The radiance of one camera sample as a render adds it ([`Self::li`] telling no one);
-    /// light-tracing contributions go to `splats`.
+    /// The radiance of one camera sample as a render adds it ([`Self::li`] telling no one),
+    /// in linear sRGB; light-tracing contributions go to `splats`.
     pub fn estimate(
         &self,
         scene: &Scene,
         cray: &CameraRay,
         sampler: &mut impl Samples,
-        paths: &mut Subpaths,
+        paths: &mut Subpaths<M::C>,
         splats: &mut Vec<(Vec2, Vec3)>,
     ) -> Vec3 {
         self.li(scene, cray, sampler, paths, splats, &mut ())
     }
 
-    /// The radiance of one camera sample (its subpaths built in `paths`); light-tracing
-    /// contributions (t = 1) go to `splats` as (film position, value); `sink` is told of
-    /// every strategy's. The camera subpath draws from the sampler's current stream, the
-    /// light subpath from stream 1, the connections from stream 2 ([`Samples::start_stream`]).
+    /// The radiance of one camera sample in linear sRGB (its subpaths built in `paths`);
+    /// light-tracing contributions (t = 1) go to `splats` as (film position, value); `sink`
+    /// is told of every strategy's. The camera subpath draws from the sampler's current
+    /// stream, the light subpath from stream 1, the connections from stream 2
+    /// ([`Samples::start_stream`]). In spectral mode both subpaths share the wavelengths and
+    /// each terminates its own secondaries; a strategy counts the hero only if a vertex it
+    /// uses was reached after a termination.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn li(
         &self,
         scene: &Scene,
         cray: &CameraRay,
         sampler: &mut impl Samples,
-        paths: &mut Subpaths,
+        paths: &mut Subpaths<M::C>,
         splats: &mut Vec<(Vec2, Vec3)>,
-        sink: &mut impl StrategySink,
+        sink: &mut impl StrategySink<M::C>,
     ) -> Vec3 {
         let (cam, light) = paths.cleared();
         let (max_cam, max_light) = match self.cfg.max_depth {
             d if d < 0 => (usize::MAX, usize::MAX),
             d => (d as usize + 1, d as usize),
         };
-        let hero = Self::hero(scene, sampler);
-        self.camera_subpath(scene, cray, hero, sampler, max_cam, cam);
+        let (modes, hero) = Self::start(scene, sampler);
+        let m = modes.full.clone();
+        self.camera_subpath(scene, cray, hero, sampler, max_cam, cam, &m);
         sampler.start_stream(1);
-        self.light_subpath(scene, hero, sampler, max_light, light);
+        let m = modes.full.clone();
+        self.light_subpath(scene, hero, sampler, max_light, light, &m);
         sampler.start_stream(2);
         let mut l = Vec3::ZERO;
         for t in 1..=cam.len() {
@@ -875,7 +961,7 @@ impl<'a> Bdpt<'a> {
                 }
                 if t == 1 {
                     if let Some((p, c, w)) =
-                        self.connect_camera(scene, cam, light, s, hero, sampler, sink)
+                        self.connect_camera(scene, cam, light, s, hero, &modes, sampler, sink)
                     {
                         splats.push((p, c));
                         if w > 0.0 && c != Vec3::ZERO {
@@ -884,7 +970,7 @@ impl<'a> Bdpt<'a> {
                     }
                     continue;
                 }
-                let (c, w) = self.connect(scene, cam, light, s, t, hero, sampler, sink);
+                let (c, w) = self.connect(scene, cam, light, s, t, hero, &modes, sampler, sink);
                 if w > 0.0 && c != Vec3::ZERO {
                     sink.add(s, t, None, c, w);
                 }
@@ -898,7 +984,7 @@ impl<'a> Bdpt<'a> {
     /// `cray` (its randomness from the sampler's current stream), a light subpath of exactly
     /// `s` (from stream 1), joined with randomness from stream 2 (the subpaths built in
     /// `paths`); the film position (the camera ray's, or the light vertex's connection to
-    /// the lens for t = 1) and the MIS-weighted value.
+    /// the lens for t = 1) and the MIS-weighted value in linear sRGB.
     #[allow(clippy::too_many_arguments)]
     pub fn strategy(
         &self,
@@ -908,17 +994,19 @@ impl<'a> Bdpt<'a> {
         s: usize,
         t: usize,
         sampler: &mut impl Samples,
-        paths: &mut Subpaths,
+        paths: &mut Subpaths<M::C>,
     ) -> Option<(Vec2, Vec3)> {
         let (cam, light) = paths.cleared();
-        let hero = Self::hero(scene, sampler);
-        self.camera_subpath(scene, cray, hero, sampler, t, cam);
+        let (modes, hero) = Self::start(scene, sampler);
+        let m = modes.full.clone();
+        self.camera_subpath(scene, cray, hero, sampler, t, cam, &m);
         if cam.len() != t {
             return None;
         }
         sampler.start_stream(1);
         if s > 0 {
-            self.light_subpath(scene, hero, sampler, s, light);
+            let m = modes.full.clone();
+            self.light_subpath(scene, hero, sampler, s, light, &m);
             if light.len() != s {
                 return None;
             }
@@ -926,44 +1014,46 @@ impl<'a> Bdpt<'a> {
         sampler.start_stream(2);
         if t == 1 {
             return self
-                .connect_camera(scene, cam, light, s, hero, sampler, &mut ())
+                .connect_camera(scene, cam, light, s, hero, &modes, sampler, &mut ())
                 .map(|(p, c, _)| (p, c));
         }
-        let (c, _) = self.connect(scene, cam, light, s, t, hero, sampler, &mut ());
+        let (c, _) = self.connect(scene, cam, light, s, t, hero, &modes, sampler, &mut ());
         Some((p_film, c))
     }
 
-    /// Strategy (s, t ≥ 2): its MIS-weighted contribution and the weight (zero, 0 when
-    /// it makes none).
+    /// Strategy (s, t ≥ 2): its MIS-weighted contribution in linear sRGB and the weight
+    /// (zero, 0 when it makes none).
     #[allow(clippy::too_many_arguments)]
     fn connect(
         &self,
         scene: &Scene,
-        cam: &[Vertex],
-        light: &[Vertex],
+        cam: &[Vertex<M::C>],
+        light: &[Vertex<M::C>],
         s: usize,
         t: usize,
         hero: usize,
+        modes: &Modes<M>,
         sampler: &mut impl Samples,
-        sink: &mut impl StrategySink,
+        sink: &mut impl StrategySink<M::C>,
     ) -> (Vec3, f32) {
         let pt = &cam[t - 1];
+        let m = modes.of(pt.terminated);
         if s == 0 {
             // The camera subpath reached an emitter.
-            if pt.le == Vec3::ZERO {
+            if pt.le.is_black() {
                 return NONE;
             }
             if pt.kind == Kind::Medium {
                 // A medium's emission: no light subpath starts in a volume and s = 1 samples
                 // no volume point, so this is the one strategy that finds it (weight 1).
                 sink.joint(s, t, &Joint::new(pt, None), 1.0);
-                return (pt.le * RgbMode.hero_weight(pt.ratio), 1.0);
+                return (m.to_rgb(pt.le * m.hero_weight(pt.ratio)), 1.0);
             }
-            let c = pt.beta * pt.le * RgbMode.hero_weight(pt.ratio);
+            let c = pt.beta * pt.le * m.hero_weight(pt.ratio);
             let joint = Joint::new(pt, None);
             let w = self.mis_weight(scene, cam, light, &joint, s, t);
             sink.joint(s, t, &joint, w);
-            return (c * w, w);
+            return (m.to_rgb(c * w), w);
         }
         if !pt.connectible() || !matches!(pt.kind, Kind::Surface | Kind::Medium) {
             return NONE;
@@ -980,10 +1070,10 @@ impl<'a> Bdpt<'a> {
                 Some(si) => Receiver::from(si),
                 None => Receiver::at(pt.p),
             };
-            let Some(ls) = light_.sample_li(scene, &receiver, u, &RgbMode) else {
+            let Some(ls) = light_.sample_li(scene, &receiver, u, m) else {
                 return NONE;
             };
-            if ls.pdf <= 0.0 || ls.li == Vec3::ZERO {
+            if ls.pdf <= 0.0 || ls.li.is_black() {
                 return NONE;
             }
             let f = match (&pt.bsdf, &pt.si) {
@@ -994,38 +1084,39 @@ impl<'a> Bdpt<'a> {
                 ),
                 _ => Self::fcos(pt, ls.wi, TransportMode::Radiance),
             };
-            if f == Vec3::ZERO {
+            if f.is_black() {
                 return NONE;
             }
-            let tr = self.tr(scene, pt, &ls, sampler);
-            if tr == Vec3::ZERO {
+            let tr = self.tr(scene, pt, &ls, sampler, m);
+            if tr.is_black() {
                 return NONE;
             }
             let mut sampled = match ls.target {
                 ShadowTarget::Surface { p, n, .. } => {
-                    let mut v = Vertex::new(Kind::Light(li as u32), p, Vec3::ZERO);
+                    let mut v = Vertex::new(Kind::Light(li as u32), p, M::C::ZERO);
                     v.ng = n;
                     v
                 }
-                ShadowTarget::Point(p) => Vertex::new(Kind::Light(li as u32), p, Vec3::ZERO),
+                ShadowTarget::Point(p) => Vertex::new(Kind::Light(li as u32), p, M::C::ZERO),
                 ShadowTarget::Infinite => {
-                    let mut v = Vertex::new(Kind::Light(li as u32), pt.p + ls.wi, Vec3::ZERO);
+                    let mut v = Vertex::new(Kind::Light(li as u32), pt.p + ls.wi, M::C::ZERO);
                     v.at_infinity = true;
                     v
                 }
             };
             sampled.pdf_fwd = self.pdf_light_origin(scene, &sampled, pt);
-            let c = pt.beta * f * tr * ls.li / (ls.pdf * pmf) * RgbMode.hero_weight(pt.ratio);
+            let c = pt.beta * f * tr * ls.li / (ls.pdf * pmf) * m.hero_weight(pt.ratio);
             let mut joint = Joint::new(pt, Some(&sampled));
             joint.seg = self.connection_seg(tr, hero);
             let w = self.mis_weight(scene, cam, light, &joint, s, t);
             sink.joint(s, t, &joint, w);
-            return (c * w, w);
+            return (m.to_rgb(c * w), w);
         }
         let qs = &light[s - 1];
         if !qs.connectible() || !matches!(qs.kind, Kind::Surface | Kind::Medium) {
             return NONE;
         }
+        let m = modes.of(pt.terminated || qs.terminated);
         let d = qs.p - pt.p;
         let d2 = d.length_squared();
         if d2 == 0.0 {
@@ -1035,12 +1126,12 @@ impl<'a> Bdpt<'a> {
         let fq = Self::fcos(qs, joint.qs_to_pt, TransportMode::Importance);
         let fp = Self::fcos(pt, joint.pt_to_qs, TransportMode::Radiance);
         let c = qs.beta * fq * fp * pt.beta / d2;
-        if c == Vec3::ZERO {
+        if c.is_black() {
             return NONE;
         }
         let query = LightSample {
             wi: d / d2.sqrt(),
-            li: Vec3::ZERO,
+            li: M::C::ZERO,
             pdf: 1.0,
             delta: true,
             target: match &qs.si {
@@ -1052,57 +1143,59 @@ impl<'a> Bdpt<'a> {
                 _ => ShadowTarget::Point(qs.p),
             },
         };
-        let tr = self.tr(scene, pt, &query, sampler);
-        if tr == Vec3::ZERO {
+        let tr = self.tr(scene, pt, &query, sampler, m);
+        if tr.is_black() {
             return NONE;
         }
         joint.seg = self.connection_seg(tr, hero);
-        let hero = RgbMode.hero_weight(pt.ratio * qs.ratio);
+        let hero = m.hero_weight(pt.ratio * qs.ratio);
         let w = self.mis_weight(scene, cam, light, &joint, s, t);
         sink.joint(s, t, &joint, w);
-        (c * tr * (hero * w), w)
+        (m.to_rgb(c * tr * (hero * w)), w)
     }
 
     /// Strategy t = 1: light vertex s − 1 seen by the lens; the film position, the
-    /// MIS-weighted contribution and the weight.
+    /// MIS-weighted contribution in linear sRGB and the weight.
     #[allow(clippy::too_many_arguments)]
     fn connect_camera(
         &self,
         scene: &Scene,
-        cam: &[Vertex],
-        light: &[Vertex],
+        cam: &[Vertex<M::C>],
+        light: &[Vertex<M::C>],
         s: usize,
         hero: usize,
+        modes: &Modes<M>,
         sampler: &mut impl Samples,
-        sink: &mut impl StrategySink,
+        sink: &mut impl StrategySink<M::C>,
     ) -> Option<(Vec2, Vec3, f32)> {
         let qs = &light[s - 1];
         if !matches!(qs.kind, Kind::Surface | Kind::Medium) || !qs.connectible() {
             return None;
         }
+        let m = modes.of(qs.terminated);
         let c = scene.camera.sample_wi(qs.p, sampler.next_2d())?;
-        let lens_v = Vertex::new(Kind::Camera, c.p_lens, Vec3::ONE);
+        let lens_v = Vertex::new(Kind::Camera, c.p_lens, M::C::ONE);
         let mut joint = Joint::new(&lens_v, Some(qs));
         let f = Self::fcos(qs, joint.qs_to_pt, TransportMode::Importance);
-        if f == Vec3::ZERO {
+        if f.is_black() {
             return None;
         }
         let query = LightSample {
             wi: c.wi,
-            li: Vec3::ZERO,
+            li: M::C::ZERO,
             pdf: 1.0,
             delta: true,
             target: ShadowTarget::Point(c.p_lens),
         };
-        let tr = self.tr(scene, qs, &query, sampler);
-        if tr == Vec3::ZERO {
+        let tr = self.tr(scene, qs, &query, sampler, m);
+        if tr.is_black() {
             return None;
         }
         joint.seg = self.connection_seg(tr, hero);
-        let value = qs.beta * f * tr * (c.weight * RgbMode.hero_weight(qs.ratio));
+        let value = qs.beta * f * tr * (c.weight * m.hero_weight(qs.ratio));
         let w = self.mis_weight(scene, cam, light, &joint, s, 1);
         sink.joint(s, 1, &joint, w);
-        Some((c.p_film, value * w, w))
+        Some((c.p_film, m.to_rgb(value * w), w))
     }
 
     /// The transmittance from surface or medium vertex `v` to the query's target: 0 if a
@@ -1112,18 +1205,19 @@ impl<'a> Bdpt<'a> {
     fn tr(
         &self,
         scene: &Scene,
-        v: &Vertex,
-        query: &LightSample,
+        v: &Vertex<M::C>,
+        query: &LightSample<M::C>,
         sampler: &mut impl Samples,
-    ) -> Vec3 {
+        m: &M,
+    ) -> M::C {
         let (from, medium) = match (&v.si, v.kind) {
             (Some(si), Kind::Surface) => {
                 if !scene.has_nulls && scene.media.is_empty() {
                     let (ray, t_max) = query.target.ray_from(si, query.wi);
                     return if scene.occluded(&ray, t_max) {
-                        Vec3::ZERO
+                        M::C::ZERO
                     } else {
-                        Vec3::ONE
+                        M::C::ONE
                     };
                 }
                 (
@@ -1140,14 +1234,18 @@ impl<'a> Bdpt<'a> {
             medium,
             TransmittanceEstimator::default(),
             sampler,
-            &RgbMode,
+            m,
         )
     }
 
     /// A connection's free-flight factor from its transmittance `tr` (exact where
     /// `flight_densities` holds: homogeneous media only).
-    fn connection_seg(&self, tr: Vec3, hero: usize) -> f32 {
-        if self.flight_densities { tr[hero] } else { 1.0 }
+    fn connection_seg(&self, tr: M::C, hero: usize) -> f32 {
+        if self.flight_densities {
+            tr.lane(hero)
+        } else {
+            1.0
+        }
     }
 
     /// The power-heuristic weight of strategy (s, t), joined at `joint` (whose ends replace
@@ -1156,9 +1254,9 @@ impl<'a> Bdpt<'a> {
     fn mis_weight(
         &self,
         scene: &Scene,
-        cam: &[Vertex],
-        light: &[Vertex],
-        joint: &Joint,
+        cam: &[Vertex<M::C>],
+        light: &[Vertex<M::C>],
+        joint: &Joint<M::C>,
         s: usize,
         t: usize,
     ) -> f32 {
@@ -1244,6 +1342,25 @@ impl<'a> Bdpt<'a> {
     }
 }
 
+/// One camera sample's colour modes: its wavelengths as drawn (RGB mode: nothing), and with
+/// the secondaries terminated.
+struct Modes<M> {
+    full: M,
+    terminated: M,
+}
+
+impl<M> Modes<M> {
+    /// The mode of a strategy whose vertices were reached after a termination or not.
+    #[inline(always)]
+    fn of(&self, terminated: bool) -> &M {
+        if terminated {
+            &self.terminated
+        } else {
+            &self.full
+        }
+    }
+}
+
 /// The per-strategy images' part of one camera sample: (s, t, film position, value).
 struct StrategyRecord<'a> {
     p_film: Vec2,
@@ -1251,7 +1368,7 @@ struct StrategyRecord<'a> {
     out: &'a mut Vec<(u16, u16, Vec2, Vec3)>,
 }
 
-impl StrategySink for StrategyRecord<'_> {
+impl<C: Color> StrategySink<C> for StrategyRecord<'_> {
     fn add(&mut self, s: usize, t: usize, splat_at: Option<Vec2>, value: Vec3, weight: f32) {
         let v = if self.weighted { value } else { value / weight };
         self.out
@@ -1283,12 +1400,24 @@ pub fn render(
     opts: &RenderOptions,
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
+    match scene.mode {
+        RenderMode::Rgb => render_in::<RgbMode>(scene, cfg, opts, observer),
+        RenderMode::Spectral => render_in::<SpectralMode<'static>>(scene, cfg, opts, observer),
+    }
+}
+
+fn render_in<M: PathMode>(
+    scene: &Scene,
+    cfg: &BdptConfig,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
     let start = Instant::now();
     let f = &scene.film;
     let mut film = f.film();
     let (pmin, pmax) = film.pixel_bounds();
     let pixel_count = film.pixel_count();
-    let bdpt = Bdpt::new(scene, cfg);
+    let bdpt = Bdpt::<M>::new(scene, cfg);
     let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
     // The camera's importance is normalised over the full image: light paths per pixel of
     // it, per pass.

@@ -39,6 +39,11 @@
 //! `direct_samples` ≥ 0 `li` leaves out the strategies of paths of one and two edges
 //! (`BdptConfig::min_edges`), which BDPT renders apart as above.
 //!
+//! Spectral mode: BDPT draws the camera sample's wavelengths from the camera stream, so they
+//! are one more coordinate of the state, moved by small steps like the others; y is the
+//! luminance of the contributions' linear sRGB. A chain that finds a dispersive caustic
+//! keeps its hue for a while (colour noise, as chains keep their brightness).
+//!
 //! Determinism: bootstrap state k and chain c draw from their own seeds; chains run in
 //! blocks whose splats are added in chain order, so the image does not depend on the thread
 //! count (nor on the block size).
@@ -53,8 +58,10 @@ use crate::camera::CameraRay;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::{Distribution1D, ONE_MINUS_EPSILON, Samples};
 use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, Silent};
+use crate::spectral::lanes::{PathMode, RgbMode, SpectralMode};
 use crate::stats::Pcg32;
 use crate::world::Scene;
+use base::RenderMode;
 
 /// The parameters of [`render`] (pbrt-v3's names and defaults).
 #[derive(Clone, Debug, PartialEq)]
@@ -224,13 +231,13 @@ fn luminance(c: Vec3) -> f32 {
 
 /// What the chains explore: the scene, the BDPT whose samples are the states, and the
 /// variant.
-struct Target<'a> {
+struct Target<'a, M: PathMode> {
     scene: &'a Scene,
-    bdpt: &'a Bdpt<'a>,
+    bdpt: &'a Bdpt<'a, M>,
     kelemen: bool,
 }
 
-impl Target<'_> {
+impl<M: PathMode> Target<'_, M> {
     /// The value of the state `sampler` holds: its contributions (film position, value) in
     /// `out`, and y, the sum of their luminances (0, and `out` empty, for a state that makes
     /// nothing or something not finite). Multiplexed, `slot` is the depth d, and the state
@@ -247,7 +254,7 @@ impl Target<'_> {
     fn value(
         &self,
         sampler: &mut MltSampler,
-        paths: &mut Subpaths,
+        paths: &mut Subpaths<M::C>,
         slot: usize,
         out: &mut Vec<(Vec2, Vec3)>,
     ) -> f32 {
@@ -307,6 +314,18 @@ pub fn render(
     opts: &RenderOptions,
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
+    match scene.mode {
+        RenderMode::Rgb => render_in::<RgbMode>(scene, cfg, opts, observer),
+        RenderMode::Spectral => render_in::<SpectralMode<'static>>(scene, cfg, opts, observer),
+    }
+}
+
+fn render_in<M: PathMode>(
+    scene: &Scene,
+    cfg: &MltConfig,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
     let start = Instant::now();
     let f = &scene.film;
     // 0. Paths of one and two edges apart (Mitsuba 0.6's `directSamples`): BDPT limited to
@@ -339,7 +358,7 @@ pub fn render(
         },
         ..BdptConfig::default()
     };
-    let bdpt = Bdpt::new(scene, &bcfg);
+    let bdpt = Bdpt::<M>::new(scene, &bcfg);
     let target = Target {
         scene,
         bdpt: &bdpt,
@@ -520,8 +539,8 @@ struct Chain {
 }
 
 /// One chain.
-fn run_chain(
-    target: &Target,
+fn run_chain<M: PathMode>(
+    target: &Target<M>,
     cfg: &MltConfig,
     start: &Start,
     seed: u64,

@@ -104,8 +104,8 @@ impl Integrator {
     }
 
     /// Why `scene` cannot be rendered with this integrator (yet): SPPM and PPM have no
-    /// media so far, light tracing and the photon mapper no emitting media, BDPT and MLT no
-    /// spectral mode; light paths cannot reach an orthographic camera.
+    /// media so far, light tracing and the photon mapper no emitting media; light paths
+    /// cannot reach an orthographic camera.
     pub fn unsupported(&self, scene: &Scene) -> Option<String> {
         if self.per_sample() {
             return None;
@@ -128,13 +128,6 @@ impl Integrator {
                  pbrt-v4's default maxdepth 5 is 6 edges)"
                     .to_string(),
             );
-        }
-        if matches!(self, Integrator::Bdpt(_) | Integrator::Mlt(_)) && scene.mode != RenderMode::Rgb
-        {
-            return Some(format!(
-                "{}: spectral mode is not implemented yet (use --mode rgb)",
-                self.name()
-            ));
         }
         if matches!(
             self,

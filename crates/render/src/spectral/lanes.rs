@@ -15,7 +15,7 @@ use super::declared::DeclaredSpectrum;
 use super::rgb::{RgbAlbedoSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum};
 use super::sampled::{N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, Spectrum};
 use crate::math::{Mat4, Vec3, Vec4};
-use crate::sampling::Sampler;
+use crate::sampling::Samples;
 use crate::textures::{ColorRef, Params, TexCoord};
 use std::cell::Cell;
 use std::fmt::Debug;
@@ -60,6 +60,8 @@ pub trait Color:
     /// selection weights) keep working as heuristics but change their noise, not their mean.
     fn mean(self) -> f32;
     fn is_black(self) -> bool;
+    /// Whether every lane is finite.
+    fn is_finite(self) -> bool;
     /// e^x per lane.
     fn exp(self) -> Self;
 }
@@ -92,6 +94,10 @@ impl Color for Vec3 {
     #[inline(always)]
     fn is_black(self) -> bool {
         self == Vec3::ZERO
+    }
+    #[inline(always)]
+    fn is_finite(self) -> bool {
+        Vec3::is_finite(self)
     }
     #[inline(always)]
     fn exp(self) -> Self {
@@ -127,6 +133,10 @@ impl Color for SampledSpectrum {
     #[inline(always)]
     fn is_black(self) -> bool {
         SampledSpectrum::is_black(self)
+    }
+    #[inline(always)]
+    fn is_finite(self) -> bool {
+        self.as_vec4().is_finite()
     }
     #[inline(always)]
     fn exp(self) -> Self {
@@ -229,6 +239,7 @@ impl ColorMode for RgbMode {
 
 /// Spectral mode for one path: its wavelengths (terminated in place through a `Cell`, since
 /// parameter evaluation takes `&self`) and the RGB → spectrum table.
+#[derive(Clone)]
 pub struct SpectralMode<'a> {
     wavelengths: Cell<SampledWavelengths>,
     table: &'a RgbToSpectrumTable,
@@ -353,9 +364,10 @@ impl ColorMode for SpectralMode<'_> {
 /// A [`ColorMode`] an integrator runs a whole path in: it is set up per camera sample (the
 /// spectral mode draws the path's wavelengths from the sampler, after the camera's
 /// dimensions; RGB mode draws nothing, so its sample streams are unchanged) and turns the
-/// path's estimate into linear sRGB for the film.
-pub trait PathMode: ColorMode + Sized {
-    fn start(sampler: &mut Sampler) -> Self;
+/// path's estimate into linear sRGB for the film. A clone is the same wavelengths with its
+/// own termination (BDPT's two subpaths each terminate their own).
+pub trait PathMode: ColorMode + Clone + Sized {
+    fn start(sampler: &mut impl Samples) -> Self;
     /// The mode `start` makes when the sampler's next number is `u` (the photon-mapping
     /// family shares one set of wavelengths across an iteration's paths).
     fn from_u(u: f32) -> Self;
@@ -380,7 +392,7 @@ pub trait PathMode: ColorMode + Sized {
 
 impl PathMode for RgbMode {
     #[inline(always)]
-    fn start(_sampler: &mut Sampler) -> Self {
+    fn start(_sampler: &mut impl Samples) -> Self {
         RgbMode
     }
     #[inline(always)]
@@ -415,7 +427,7 @@ impl PathMode for RgbMode {
 
 impl PathMode for SpectralMode<'static> {
     #[inline]
-    fn start(sampler: &mut Sampler) -> Self {
+    fn start(sampler: &mut impl Samples) -> Self {
         Self::from_u(sampler.next_1d())
     }
     #[inline]

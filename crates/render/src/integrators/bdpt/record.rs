@@ -6,6 +6,7 @@ use super::{Bdpt, Joint, Kind, StrategySink, Subpaths, Vertex};
 use crate::camera::CameraRay;
 use crate::math::{Vec2, Vec3};
 use crate::sampling::Samples;
+use crate::spectral::lanes::RgbMode;
 use crate::world::Scene;
 
 /// What kind of point a [`BdptVertex`] is.
@@ -112,7 +113,7 @@ struct StrategyLog {
     connections: Vec<BdptConnection>,
 }
 
-impl StrategySink for StrategyLog {
+impl StrategySink<Vec3> for StrategyLog {
     fn joint(&mut self, s: usize, t: usize, joint: &Joint, _w: f32) {
         let (from, to) = (BdptVertex::of(joint.pt), joint.qs.map(BdptVertex::of));
         self.joint = Some((s, t, from, to));
@@ -137,7 +138,7 @@ impl StrategySink for StrategyLog {
     }
 }
 
-impl<'a> Bdpt<'a> {
+impl<'a> Bdpt<'a, RgbMode> {
     /// [`Self::li`] for one camera sample, recorded: the subpaths (built in `paths`), every
     /// strategy with a nonzero contribution, the estimate and the splats. Given the sampler
     /// of a render's camera sample, the same numbers as that render's (`li` itself runs).
