@@ -152,8 +152,8 @@ pub(crate) trait StrategySink<C: Color> {
     #[inline(always)]
     fn joint(&mut self, _s: usize, _t: usize, _joint: &Joint<C>, _w: f32) {}
 
-    /// Strategy (s, t) made the nonzero MIS-weighted `value` (linear sRGB) with weight `weight`, splatted
-    /// at `splat_at` (t = 1; `None`: at the camera sample's film position).
+    /// Strategy (s, t) made the nonzero MIS-weighted `value` (linear sRGB) with weight
+    /// `weight`, splatted at `splat_at` (t = 1; `None`: at the camera sample's film position).
     #[inline(always)]
     fn add(&mut self, _s: usize, _t: usize, _splat_at: Option<Vec2>, _value: Vec3, _weight: f32) {}
 }
