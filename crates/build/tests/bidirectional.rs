@@ -266,28 +266,19 @@ fn render_threads(
 
 #[test]
 fn same_image_for_one_and_two_threads() {
-    let mlt = IntegratorDesc::Mlt {
+    let mlt = |multiplexed| IntegratorDesc::Mlt {
         max_depth: 4,
         bootstrap: 2000,
         chains: 100,
         large_step: 0.3,
         sigma: 0.01,
         direct_samples: 16,
-        multiplexed: true,
-    };
-    let kelemen = IntegratorDesc::Mlt {
-        max_depth: 4,
-        bootstrap: 2000,
-        chains: 100,
-        large_step: 0.3,
-        sigma: 0.01,
-        direct_samples: 16,
-        multiplexed: false,
+        multiplexed,
     };
     // Surfaces only, and media (a null-bounded smoke sphere, a glass cube holding a medium).
     for scene in ["cornell-box.xml", "media/smoky-box.xml"] {
         let desc = load(&ours(scene), &[("res", "24")]);
-        for integrator in [ptracer(&desc), bdpt(&desc), mlt.clone(), kelemen.clone()] {
+        for integrator in [ptracer(&desc), bdpt(&desc), mlt(true), mlt(false)] {
             for mode in [RGB, RenderMode::Spectral] {
                 let a = render_threads(&desc, integrator.clone(), mode, 3, 1);
                 let b = render_threads(&desc, integrator.clone(), mode, 3, 2);
