@@ -86,7 +86,7 @@ use crate::world::Scene;
 use base::{RenderMode, TransmittanceEstimator};
 use std::marker::PhantomData;
 
-use super::volpath::{From, transmittance};
+use super::transport::{Connection, From, transmittance};
 
 mod record;
 pub use record::{BdptConnection, BdptSample, BdptVertex, BdptVertexKind};
@@ -1210,7 +1210,7 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
         sampler: &mut impl Samples,
         m: &M,
     ) -> M::C {
-        let (from, medium) = match (&v.si, v.kind) {
+        let from = match (&v.si, v.kind) {
             (Some(si), Kind::Surface) => {
                 if !scene.has_nulls && scene.media.is_empty() {
                     let (ray, t_max) = query.target.ray_from(si, query.wi);
@@ -1220,22 +1220,17 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
                         M::C::ONE
                     };
                 }
-                (
-                    From::Surface(si),
-                    scene.medium_after(si, query.wi, v.medium),
-                )
+                From::Surface(si)
             }
-            _ => (From::Medium(v.p, 0.0), v.medium),
+            _ => From::Medium(v.p, 0.0),
         };
-        transmittance(
-            scene,
+        let c = Connection {
             from,
-            query,
-            medium,
-            TransmittanceEstimator::default(),
-            sampler,
-            m,
-        )
+            wi: query.wi,
+            target: query.target,
+            medium: v.medium,
+        };
+        transmittance(scene, &c, TransmittanceEstimator::default(), sampler, m)
     }
 
     /// A connection's free-flight factor from its transmittance `tr` (exact where

@@ -13,6 +13,7 @@ pub mod photon;
 pub mod photons;
 pub mod ptracer;
 pub mod sppm;
+pub mod transport;
 pub mod volpath;
 
 use self::path::PathConfig;

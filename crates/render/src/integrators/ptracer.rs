@@ -32,11 +32,11 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::photons::{self, PhotonHit, PhotonLights};
-use super::volpath::{From, transmittance};
+use super::transport::{Connection, From, transmittance};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
-use crate::lights::{LightSample, ShadowTarget};
+use crate::lights::ShadowTarget;
 use crate::math::{UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
 use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
@@ -216,7 +216,7 @@ fn connect<M: PathMode>(
         return None;
     }
     let c = scene.camera.sample_wi(hit.p, sampler.next_2d())?;
-    let (f, from, medium) = match hit.si {
+    let (f, from) = match hit.si {
         Some(si) => {
             let (bsdf, frame) = scene.bsdf_at_in(si, m)?;
             let f = bsdf.eval(
@@ -224,37 +224,24 @@ fn connect<M: PathMode>(
                 frame.to_local(c.wi),
                 TransportMode::Importance,
             );
-            (
-                f,
-                From::Surface(si),
-                scene.medium_after(si, c.wi, hit.medium),
-            )
+            (f, From::Surface(si))
         }
         None => {
             let med = &scene.media[hit.medium? as usize];
             let p = med.phase.eval(c.wi, hit.wi);
-            (M::C::splat(p), From::Medium(hit.p, 0.0), hit.medium)
+            (M::C::splat(p), From::Medium(hit.p, 0.0))
         }
     };
     if f.is_black() {
         return None;
     }
-    let query = LightSample {
-        wi: c.wi,
-        li: M::C::ZERO,
-        pdf: 1.0,
-        delta: true,
-        target: ShadowTarget::Point(c.p_lens),
-    };
-    let tr = transmittance(
-        scene,
+    let query = Connection {
         from,
-        &query,
-        medium,
-        TransmittanceEstimator::default(),
-        sampler,
-        m,
-    );
+        wi: c.wi,
+        target: ShadowTarget::Point(c.p_lens),
+        medium: hit.medium,
+    };
+    let tr = transmittance(scene, &query, TransmittanceEstimator::default(), sampler, m);
     if tr.is_black() {
         return None;
     }
