@@ -47,6 +47,7 @@ pub use self::record::{
     Scatter, VertexKind, Via,
 };
 use self::vertex::{PathState, Tracer};
+use super::transport::Heuristic;
 use crate::camera::CameraRay;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
@@ -64,6 +65,18 @@ pub enum Combine {
     EmitterOnly,
     /// Only BSDF sampling counts (no emitter sampling at all).
     BsdfOnly,
+}
+
+impl Combine {
+    /// The heuristic of the two MIS combinations (`None` for the one-strategy ones).
+    #[inline(always)]
+    pub fn heuristic(self) -> Option<Heuristic> {
+        match self {
+            Combine::Power => Some(Heuristic::Power),
+            Combine::Balance => Some(Heuristic::Balance),
+            Combine::EmitterOnly | Combine::BsdfOnly => None,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -15,26 +15,13 @@ use base::DirectionSampling;
 use super::batched::ShadowQuery;
 use super::record::{Contribution, PathRecorder};
 use super::scatter::direction_pdf;
-use super::vertex::{Previous, Shading, Tracer};
+use super::vertex::{Shading, Tracer};
 use super::{Combine, PathConfig};
 use crate::bsdf::TransportMode;
-use crate::lights::{Light, Receiver};
+use crate::integrators::transport::{self, EmitterSample, Previous, mis};
+use crate::lights::Receiver;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
-
-/// The MIS weight of a strategy with density `a` against one with density `b`.
-#[inline]
-fn mis(combine: Combine, a: f32, b: f32) -> f32 {
-    let w = match combine {
-        Combine::Power => {
-            let (a2, b2) = (a * a, b * b);
-            a2 / (a2 + b2)
-        }
-        Combine::Balance => a / (a + b),
-        Combine::EmitterOnly | Combine::BsdfOnly => 1.0,
-    };
-    if w.is_finite() { w } else { 0.0 }
-}
 
 /// Weight of emission reached by the ray sampled at `prev` (`None`: a camera ray), given the
 /// density with which next-event estimation would have produced the same direction from
@@ -47,11 +34,10 @@ pub(super) fn emission_weight(
 ) -> f32 {
     match prev {
         None => 1.0,
-        Some(p) if p.delta => 1.0,
-        Some(p) => match cfg.combine {
-            Combine::BsdfOnly => 1.0,
-            Combine::EmitterOnly => 0.0,
-            c => mis(c, p.dir_pdf, nee_pdf(&p.receiver)),
+        Some(p) => match cfg.combine.heuristic() {
+            Some(h) => p.weight(h, nee_pdf),
+            None if p.delta || cfg.combine == Combine::BsdfOnly => 1.0,
+            None => 0.0,
         },
     }
 }
@@ -91,10 +77,12 @@ pub(super) struct NeeContext<'a, C: Color> {
 }
 
 impl<C: Color> NeeContext<'_, C> {
-    /// Emitter sampling at the vertex, by the strategy `t.cfg` asks for (see the module docs).
-    /// Without a smooth lobe or with BSDF sampling only, nothing is sampled, but the
-    /// one-emitter strategy still draws its sample dimensions, so that the stream stays aligned
-    /// whatever the material.
+    /// Emitter sampling at the vertex, by the strategy `t.cfg` asks for (see the module docs):
+    /// `light_samples` samples of one emitter chosen by the scene's light selection each
+    /// (`per_light` = `light_samples`), or of every emitter in turn (`all_lights`: delta
+    /// emitters once). Without a smooth lobe or with BSDF sampling only, nothing is sampled,
+    /// but the one-emitter strategy still draws its sample dimensions, so that the stream
+    /// stays aligned whatever the material.
     #[inline]
     pub(super) fn estimate<R: PathRecorder<C>, M: PathMode<C = C>>(
         &self,
@@ -103,90 +91,55 @@ impl<C: Color> NeeContext<'_, C> {
         let (scene, cfg) = (t.scene, t.cfg);
         let nee = self.at.bsdf.has_smooth() && cfg.combine != Combine::BsdfOnly;
         if cfg.all_lights {
-            if nee {
-                for i in 0..scene.lights.len() as u32 {
-                    self.sample(t, i, 1.0);
+            if !nee {
+                return;
+            }
+            for i in 0..scene.lights.len() as u32 {
+                let n = if scene.lights[i as usize].is_delta() {
+                    1
+                } else {
+                    cfg.light_samples
+                };
+                for _ in 0..n {
+                    let u = t.sampler.next_2d();
+                    if let Some(e) = transport::sample_towards(scene, i, &self.receiver, u, t.mode)
+                    {
+                        self.one(t, &e, n as f32);
+                    }
                 }
             }
         } else {
             for _ in 0..cfg.light_samples {
-                let u = t.sampler.next_1d();
-                let picked = if nee {
-                    scene.sample_light(u, &self.receiver)
-                } else {
-                    None
-                };
-                match picked {
-                    Some((i, _, pmf)) => {
-                        self.sample(t, i, pmf);
-                    }
+                if !nee {
                     // Keep the sample dimensions aligned whatever the material.
-                    None => {
-                        t.sampler.next_2d();
-                    }
+                    t.sampler.next_1d();
+                    t.sampler.next_2d();
+                } else if let Some(e) =
+                    transport::sample_emitter(scene, &self.receiver, t.sampler, t.mode)
+                {
+                    self.one(t, &e, cfg.light_samples as f32);
                 }
             }
         }
     }
 
-    /// Next-event estimation towards light `i`: throughput · f·L·w / (p · selection) per
-    /// sample, each handed to the shadow sink with its shadow ray (`light_samples` are
-    /// averaged through the MIS densities). `selection` is the probability with which `i` was
-    /// chosen (1 when all lights are sampled): the MIS density needs it, and recomputing it
-    /// would walk the light BVH a second time.
-    #[inline]
-    fn sample<R: PathRecorder<C>, M: PathMode<C = C>>(
-        &self,
-        t: &mut Tracer<'_, R, M>,
-        i: u32,
-        selection: f32,
-    ) {
-        let (scene, cfg) = (t.scene, t.cfg);
-        let light = &scene.lights[i as usize];
-        let n = if cfg.all_lights && light.is_delta() {
-            1
-        } else if cfg.all_lights {
-            cfg.light_samples
-        } else {
-            1
-        };
-        let per_light = if cfg.all_lights { n } else { cfg.light_samples } as f32;
-        // One sample is the common case (always, unless every light is visited): without the
-        // loop, nothing of the loop body is hoisted ahead of it for nothing.
-        if n == 1 {
-            self.one(t, light, selection, per_light);
-        } else {
-            for _ in 0..n {
-                self.one(t, light, selection, per_light);
-            }
-        }
-    }
-
-    /// One emitter sample towards `light`, of `per_light` for this light.
+    /// The emitter sample `e` (chosen with probability `e.pmf`: 1 when every light is
+    /// sampled), one of `per_light` for its light, as a candidate contribution.
     #[inline(always)]
     fn one<R: PathRecorder<C>, M: PathMode<C = C>>(
         &self,
         t: &mut Tracer<'_, R, M>,
-        light: &Light,
-        selection: f32,
+        e: &EmitterSample<C>,
         per_light: f32,
     ) {
-        let (scene, cfg) = (t.scene, t.cfg);
+        let cfg = t.cfg;
         let Shading {
             si,
             bsdf,
             frame,
             wo,
         } = self.at;
-        let u = t.sampler.next_2d();
-        // Borrowed, not moved out of the `Option`: a light sample is 112 bytes.
-        let ls = light.sample_li(scene, &self.receiver, u, t.mode);
-        let Some(ls) = &ls else {
-            return;
-        };
-        if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
-            return;
-        }
+        let (ls, selection) = (&e.ls, e.pmf);
         let wi = frame.to_local(ls.wi);
         let mode = TransportMode::Radiance;
         // The BSDF's density only when MIS needs it.
@@ -204,7 +157,9 @@ impl<C: Color> NeeContext<'_, C> {
         }
         // Density of this strategy for MIS: all samples of all lights considered.
         let w = if weighted {
-            mis(cfg.combine, nee_density(cfg, selection, ls.pdf), pdf_bsdf)
+            cfg.combine.heuristic().map_or(1.0, |h| {
+                mis::weight(h, nee_density(cfg, selection, ls.pdf), pdf_bsdf)
+            })
         } else {
             1.0
         };

@@ -6,8 +6,9 @@ use base::{DirectionSampling, RussianRoulette};
 
 use super::PathConfig;
 use super::record::{PathEnd, PathRecorder, RecordedScatter, Scatter};
-use super::vertex::{PathState, Previous, Shading, Tracer};
+use super::vertex::{PathState, Shading, Tracer};
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
+use crate::integrators::transport::{Previous, roulette};
 use crate::lights::Receiver;
 use crate::math::{Vec2, Vec3};
 use crate::sampling::warp;
@@ -97,7 +98,7 @@ impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
         next.ray = si.spawn_ray(wi);
         next.prev = Some(Previous {
             receiver: Receiver::from(si),
-            dir_pdf: bs.pdf,
+            pdf: bs.pdf,
             delta: bs.delta,
         });
         let scatter = Scatter {
@@ -114,13 +115,10 @@ impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
             return false;
         }
         let u_rr = self.sampler.next_1d();
-        let q = roulette(cfg, next, t_max_component);
-        if q < 1.0 {
-            if u_rr >= q {
-                self.rec.end(PathEnd::Roulette);
-                return false;
-            }
-            next.throughput /= q;
+        let q = continuation(cfg, next, t_max_component);
+        if !roulette::survive(&mut next.throughput, q, u_rr) {
+            self.rec.end(PathEnd::Roulette);
+            return false;
         }
         self.rec.scatter(&RecordedScatter {
             scatter,
@@ -135,11 +133,11 @@ impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
 /// Probability that the path `next`, whose largest throughput component is
 /// `t_max_component`, continues (1: no roulette at this depth).
 #[inline]
-fn roulette<C>(cfg: &PathConfig, next: &PathState<C>, t_max_component: f32) -> f32 {
+fn continuation<C>(cfg: &PathConfig, next: &PathState<C>, t_max_component: f32) -> f32 {
     match cfg.rr {
         RussianRoulette::Off => 1.0,
         RussianRoulette::Throughput { from_depth } if next.depth >= from_depth => {
-            (t_max_component * next.eta * next.eta).min(0.95)
+            roulette::throughput(t_max_component, next.eta)
         }
         RussianRoulette::Fixed { after, q } if next.depth >= after => 1.0 - q,
         _ => 1.0,

@@ -18,6 +18,7 @@ use super::record::{
 use crate::bsdf::Bsdf;
 use crate::camera::CameraRay;
 use crate::geometry::Ray;
+use crate::integrators::transport::{self, Previous};
 use crate::lights::Receiver;
 use crate::math::{Frame, Vec3};
 use crate::sampling::Sampler;
@@ -25,16 +26,6 @@ use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::textures::TexCoord;
 use crate::world::Scene;
-
-/// Where the previous vertex was and how its direction sample was drawn.
-#[derive(Clone, Copy)]
-pub(super) struct Previous {
-    pub(super) receiver: Receiver,
-    /// Density of the direction sample (including the number of direction samples, which is
-    /// always 1 here).
-    pub(super) dir_pdf: f32,
-    pub(super) delta: bool,
-}
 
 /// The state of a path between two segments (throughput in the colour type `C` of its mode).
 #[derive(Clone, Copy)]
@@ -206,18 +197,11 @@ impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
     fn escaped(&mut self, st: &PathState<M::C>) {
         let (scene, cfg, m) = (self.scene, self.cfg, self.mode);
         if !(st.depth == 0 && cfg.hide_emitters) {
-            let mut l = M::C::ZERO;
-            for &i in &scene.infinite_lights {
-                let light = &scene.lights[i as usize];
-                let le = light.environment(st.ray.d, m);
-                if le.is_black() {
-                    continue;
-                }
-                let w = emission_weight(cfg, st.prev.as_ref(), |r| {
+            let mut l = transport::environment(scene, st.ray.d, m, st.throughput, |i, light| {
+                emission_weight(cfg, st.prev.as_ref(), |r| {
                     nee_pdf(scene, cfg, r, i, light.pdf_li(scene, r, st.ray.d, None))
-                });
-                l += st.throughput * le * w;
-            }
+                })
+            });
             if st.depth == 0 {
                 if let Some(bg) = scene.background {
                     l += m.illuminant(bg);
@@ -240,20 +224,17 @@ impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
     #[inline]
     fn emission(&mut self, st: &PathState<M::C>, si: &SurfaceInteraction) {
         let (scene, cfg) = (self.scene, self.cfg);
-        if let Some(li) = scene.shape_light(si)
-            && !(st.depth == 0 && cfg.hide_emitters)
+        if !(st.depth == 0 && cfg.hide_emitters)
             && (cfg.caustics || !st.caustic())
+            && let Some((li, le)) = transport::emitter_hit(scene, si, self.mode)
         {
-            let light = &scene.lights[li as usize];
-            let le = light.le(scene, si, self.mode);
-            if !le.is_black() {
-                let w = emission_weight(cfg, st.prev.as_ref(), |r| {
-                    let pdf = light.pdf_li(scene, r, st.ray.d.normalize(), Some(si));
-                    nee_pdf(scene, cfg, r, li, pdf)
-                });
-                let l = st.throughput * le * w;
-                self.add(l, st.contribution(Via::Emission, st.depth + 1));
-            }
+            let w = emission_weight(cfg, st.prev.as_ref(), |r| {
+                let light = &scene.lights[li as usize];
+                let pdf = light.pdf_li(scene, r, st.ray.d.normalize(), Some(si));
+                nee_pdf(scene, cfg, r, li, pdf)
+            });
+            let l = st.throughput * le * w;
+            self.add(l, st.contribution(Via::Emission, st.depth + 1));
         }
     }
 
