@@ -289,6 +289,24 @@ impl Scene {
         if from_front { s.interior } else { s.exterior }
     }
 
+    /// The medium at the point `p`, as the first surface that bounds media along a probe ray
+    /// from `p` tells (the side of it `p` is on); `None` when no such surface lies along the
+    /// probe (`p` is in whatever surrounds the scene's media).
+    pub fn medium_at(&self, p: Vec3) -> Option<Option<u32>> {
+        // An oblique direction: probes along an axis would run along the faces of boxes.
+        let d = Vec3::new(0.267_261_24, 0.801_783_7, 0.534_522_5);
+        let mut ray = Ray::new(p, d);
+        for _ in 0..256 {
+            let si = self.intersect(&ray, f32::INFINITY)?;
+            let s = &self.shapes[si.shape as usize];
+            if s.interior.is_some() || s.exterior.is_some() {
+                return Some(self.medium_after(&si, -d, None));
+            }
+            ray = si.spawn_ray(d);
+        }
+        None
+    }
+
     /// The colour an unlit surface shows at `si` (`None` for other materials).
     pub fn unlit_color(&self, si: &SurfaceInteraction) -> Option<Vec3> {
         let c = self.material(si)?.unlit.as_ref()?;

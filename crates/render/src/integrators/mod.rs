@@ -104,21 +104,18 @@ impl Integrator {
         )
     }
 
-    /// Why `scene` cannot be rendered with this integrator (yet): SPPM and PPM have no
-    /// media so far, light tracing and the photon mapper no emitting media; light paths
-    /// cannot reach an orthographic camera.
+    /// Why `scene` cannot be rendered with this integrator: light paths start only in
+    /// emitting media that fill bounded shapes, and cannot reach an orthographic camera.
     pub fn unsupported(&self, scene: &Scene) -> Option<String> {
         if self.per_sample() {
             return None;
         }
-        if matches!(self, Integrator::Ptracer(_) | Integrator::Photon(_))
-            && scene.media.iter().any(|m| m.emission.is_some())
+        if matches!(
+            self,
+            Integrator::Ptracer(_) | Integrator::Photon(_) | Integrator::Sppm(_)
+        ) && let Err(why) = photons::volume_emitters(scene)
         {
-            return Some(format!(
-                "{}: emitting media are not implemented (their light is neither traced nor \
-                 gathered; use volpath or bdpt)",
-                self.name()
-            ));
+            return Some(format!("{}: {why}", self.name()));
         }
         if let Integrator::Bdpt(cfg) = self
             && cfg.strategy_images.is_some()
@@ -137,12 +134,6 @@ impl Integrator {
         {
             return Some(format!(
                 "{}: light paths cannot be connected to an orthographic camera (use path)",
-                self.name()
-            ));
-        }
-        if !scene.media.is_empty() && matches!(self, Integrator::Sppm(_)) {
-            return Some(format!(
-                "{}: participating media are not implemented yet (use photon or volpath)",
                 self.name()
             ));
         }

@@ -31,11 +31,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::photons::{self, PhotonHit, PhotonLights};
+use super::photons::{self, CameraWalk, PhotonHit, PhotonJob, PhotonLights};
 use super::transport::{Connection, From, transmittance};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
-use crate::geometry::Ray;
 use crate::lights::ShadowTarget;
 use crate::math::{UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
@@ -119,13 +118,15 @@ fn render_in<M: PathMode>(
         }
         // 2. Light paths, their splats added in chunk order.
         if lights.any() {
+            let job = PhotonJob {
+                lights: &lights,
+                max_depth: cfg.max_depth,
+                seed,
+            };
             let lists = photons::trace_all(
                 scene,
-                &lights,
-                cfg.max_depth,
-                seed,
-                pass,
-                paths,
+                &job,
+                (pass, paths),
                 |j| M::from_u(photons::wavelength_set(seed, pass as u64 * paths + j)),
                 Vec::new,
                 |out: &mut Vec<(Vec2, Vec3)>, hit, m: &M, sampler: &mut Sampler| {
@@ -153,53 +154,27 @@ fn render_in<M: PathMode>(
     }
 }
 
-/// The emission a camera ray meets first (an emitter's surface, or the environment when it
-/// leaves the scene), attenuated by the media it crosses; null surfaces let it through.
+/// The emission a camera ray meets without scattering: an emitter's surface or the
+/// environment at the end of its free flights through media (attenuated by them; `null`
+/// surfaces let it through), or a medium's own emission at the collision that ends it (the
+/// collision estimator, as `volpath`'s). Light scattered on the way is the light paths'.
 fn seen_emission<M: PathMode>(
     scene: &Scene,
     cray: &CameraRay,
     sampler: &mut Sampler,
     m: &M,
 ) -> M::C {
-    let len = cray.ray.d.length();
-    let mut ray = Ray::at_time(cray.ray.o, cray.ray.d / len, cray.ray.time);
-    let mut t_max = cray.t_max * len;
-    let mut medium = scene.camera_medium;
-    let mut tr = M::C::ONE;
-    // Bounded: a ray crosses finitely many null surfaces.
-    for _ in 0..256 {
-        let closest = scene.closest(&ray, t_max);
-        if let Some(mi) = medium {
-            let end = closest.t(&ray, t_max);
-            tr *= scene.media[mi as usize].transmittance_in(
-                &ray,
-                end,
-                TransmittanceEstimator::default(),
-                sampler,
-                m,
-            );
-            if tr.is_black() {
-                return tr;
-            }
-        }
-        let Some(si) = closest.surface(scene, &ray, t_max) else {
-            let mut l = M::C::ZERO;
-            for &i in &scene.infinite_lights {
-                l += scene.lights[i as usize].environment(ray.d, m);
-            }
-            return tr * l;
-        };
-        if let Some(li) = scene.shape_light(&si) {
-            return tr * scene.lights[li as usize].le(scene, &si, m);
-        }
-        if !scene.is_null(&si) {
-            return M::C::ZERO;
-        }
-        medium = scene.medium_after(&si, ray.d, medium);
-        ray = si.spawn_ray(ray.d);
-        t_max = f32::INFINITY;
-    }
-    M::C::ZERO
+    let w = CameraWalk::camera_walker(scene, cray, m, sampler);
+    let walk = CameraWalk {
+        depth: 0,
+        see_emitters: true,
+        see_media: true,
+        max_depth: 1,
+        rr_depth: u32::MAX,
+    };
+    // Nothing is estimated at the first vertex: what it scatters comes from the light paths.
+    let mut nothing = |_: &photons::Vertex<M::C>, _: &mut Sampler| M::C::ZERO;
+    walk.run(scene, w, M::C::ONE, m, sampler, &mut nothing)
 }
 
 /// The splat of light path vertex `hit` connected to the camera: its film position and

@@ -104,6 +104,28 @@ impl ShapeGeom {
         }
     }
 
+    /// World-space bounds (`None` for planes; instances' prototypes are not at hand here,
+    /// so `None` for them too).
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        match self {
+            ShapeGeom::Mesh { positions, .. } => Some(
+                positions
+                    .iter()
+                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                        (lo.min(p), hi.max(p))
+                    }),
+            ),
+            ShapeGeom::Sphere { center, radius } => Some((
+                *center - Vec3::splat(*radius),
+                *center + Vec3::splat(*radius),
+            )),
+            // The unit disk lies in the unit sphere: its image's bounds hold it.
+            ShapeGeom::Disk { to_world, .. } => Some(crate::accel::ellipsoid_bounds(to_world)),
+            ShapeGeom::Ellipsoid(e) => Some(crate::accel::ellipsoid_bounds(&e.to_world)),
+            ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => None,
+        }
+    }
+
     /// Surface area in world space (infinite for planes).
     pub fn area(&self) -> f32 {
         match self {

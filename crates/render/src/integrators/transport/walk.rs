@@ -5,7 +5,7 @@
 //! [`Walker::next`] is the whole step; integrators that do something of their own between
 //! finding the surface ahead and sampling the free flight to it (`volpath`'s equiangular
 //! sampling towards point lights, the photon mapper's segment estimate in homogeneous
-//! media) take it in its three parts: [`Walker::ahead`], [`Walker::fly`], [`Walker::reach`].
+//! media) take it in its three parts: [`Walker::ahead`], [`Walker::fly`], [`Walker::event`].
 //! Free flights are sampled in the lane `hero` of the path's colour, and their weights and
 //! channel density ratios come back with the event for the caller's throughput (spectral
 //! MIS over the hero, see `media::Flight`). A `null` surface is reported
@@ -130,16 +130,11 @@ impl Walker {
         }
     }
 
-    /// The next event along the ray ([`Walker::ahead`], [`Walker::fly`], [`Walker::reach`]).
+    /// The event a free flight over the segment ahead makes: its collision, or the end of
+    /// the segment reached with its pass weight.
     #[inline]
-    pub fn next<M: ColorMode>(
-        &self,
-        scene: &Scene,
-        sampler: &mut impl Samples,
-        mode: &M,
-    ) -> Event<M::C> {
-        let ahead = self.ahead(scene);
-        match self.fly(scene, &ahead, sampler, mode) {
+    pub fn event<C>(&self, scene: &Scene, ahead: Ahead, flight: Flight<C>) -> Event<C> {
+        match flight {
             Flight::Scatter {
                 d,
                 weight,
@@ -157,6 +152,19 @@ impl Walker {
                 self.reach(scene, ahead, Pass { weight, ratio, d })
             }
         }
+    }
+
+    /// The next event along the ray ([`Walker::ahead`], [`Walker::fly`], [`Walker::event`]).
+    #[inline]
+    pub fn next<M: ColorMode>(
+        &self,
+        scene: &Scene,
+        sampler: &mut impl Samples,
+        mode: &M,
+    ) -> Event<M::C> {
+        let ahead = self.ahead(scene);
+        let flight = self.fly(scene, &ahead, sampler, mode);
+        self.event(scene, ahead, flight)
     }
 
     /// On through the `null` surface at `si`, into the medium beyond it.

@@ -34,7 +34,7 @@ use super::path::{
     VertexKind, Via,
 };
 use super::transport::{
-    self, Connection, Event, From, Heuristic, Pass, Previous, Scatterer, Walker, mis, roulette,
+    self, Connection, Event, From, Heuristic, Previous, Scatterer, Walker, mis, roulette,
 };
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
@@ -229,37 +229,31 @@ impl<M: PathMode, R: PathRecorder<M::C>> VolPath<'_, M, R> {
             let l = self.throughput * b * self.hero_weight();
             self.add(l, Via::EmitterSample, self.depth + 1, self.first);
         }
-        let pass = match self.walker.fly(scene, &ahead, self.sampler, self.mode) {
-            crate::media::Flight::Scatter {
+        let flight = self.walker.fly(scene, &ahead, self.sampler, self.mode);
+        match self.walker.event(scene, ahead, flight) {
+            Event::Collision {
                 d,
                 weight,
                 ratio,
                 emit,
-            } => return self.collision(d, weight, ratio, emit, segment.as_mut()),
-            crate::media::Flight::Pass { weight, ratio } => Pass {
-                weight,
-                ratio,
-                d: ahead.end,
-            },
-        };
-        if self.walker.medium.is_some() {
-            pass.apply(&mut self.throughput, &mut self.ratio);
-        }
-        match self.walker.reach(scene, ahead, pass) {
-            Event::Escape(_) => {
+                ..
+            } => self.collision(d, weight, ratio, emit, segment.as_mut()),
+            Event::Escape(pass) => {
+                pass.apply(&mut self.throughput, &mut self.ratio);
                 self.escape();
                 Step::End(PathEnd::Escaped)
             }
-            Event::Null(si, _) => {
+            Event::Null(si, pass) => {
+                pass.apply(&mut self.throughput, &mut self.ratio);
                 self.emission(&si);
                 self.cross_null(&si);
                 Step::Continue
             }
-            Event::Surface(si, _) => {
+            Event::Surface(si, pass) => {
+                pass.apply(&mut self.throughput, &mut self.ratio);
                 self.emission(&si);
                 self.surface(&si)
             }
-            Event::Collision { .. } => unreachable!("reach reports surfaces only"),
         }
     }
 
