@@ -3,20 +3,21 @@
 //! that is not one — a surface with a non-delta lobe or a collision in a medium — and read
 //! the maps there.
 //!
-//! At that vertex x: next-event estimates (direct light from the lights, through media),
-//! the caustic map's estimate (surfaces), and either final gathering — rays sampled from x's
-//! BSDF or phase function, each walking to its own first non-delta vertex y and reading the
-//! map of y's kind there (every photon) — or the map of x's kind read at x (photons that are
-//! not direct light, or caustic). Direct light from emitting media is in the maps alone.
-//! A map estimate in a medium is σs times the in-scattered radiance: the camera
-//! throughput there, which holds σs, is divided by it. In a homogeneous medium without
-//! emission, with point or spot lights about, the in-scattering of a camera segment is
-//! estimated at one distance from [`SegmentMixture`] instead of a free flight — next-event
-//! estimation and the volume map there — and the walk crosses the segment with its exact
-//! transmittance.
+//! At a surface x: next-event estimates (direct light from the lights, through media), the
+//! caustic map's estimate, and either final gathering — BSDF rays from x, each walking to
+//! its own first vertex y that is not a delta bounce and reading the map of y's kind there
+//! (every photon; the emission of media it collides in too) — or the global map read at x
+//! (photons that are neither direct light nor caustic). At a collision in a medium the
+//! volume map is read where it is (final gathering from every collision would be far
+//! slower, and noisier): every photon when the maps serve final gathering, else the photons
+//! that are not direct light plus a next-event estimate. Direct light from emitting media
+//! is in the maps alone. A map estimate in a medium is σs times the in-scattered radiance:
+//! the camera throughput there, which holds σs, is divided by it. In a homogeneous medium
+//! without emission, with point or spot lights about, the in-scattering of a camera segment
+//! is estimated at one distance (`photons::segment_point`) instead of a free flight, as at a
+//! collision, and the walk crosses the segment with its exact transmittance.
 
 use super::map::PhotonMap;
-use super::segment::SegmentMixture;
 use super::{Lookup, PhotonConfig, PhotonMaps};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
@@ -24,7 +25,6 @@ use crate::geometry::Ray;
 use crate::integrators::photons::{self, CameraWalk, Segment, Vertex, Visit};
 use crate::integrators::transport::{Scatterer, Walker};
 use crate::math::Vec3;
-use crate::media::MediumKind;
 use crate::sampling::Sampler;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
@@ -32,7 +32,7 @@ use crate::world::Scene;
 /// One camera sample's estimates: the maps of its wavelength set and its colour mode.
 pub(super) struct Gather<'a, M: PathMode> {
     pub(super) cfg: &'a PhotonConfig,
-    /// Where the point and spot lights are (for [`SegmentMixture`]).
+    /// Where the point and spot lights are (for `photons::segment_point`).
     pub(super) points: &'a [Vec3],
     pub(super) scene: &'a Scene,
     pub(super) maps: &'a PhotonMaps<M::C>,
@@ -116,6 +116,9 @@ impl<'a, M: PathMode> Gather<'a, M> {
         let (cfg, maps) = (self.cfg, self.maps);
         let depth = v.depth;
         let weight = self.weight(v, v.beta);
+        if v.si.is_none() {
+            return self.in_medium(v, sampler);
+        }
         let mut l = M::C::ZERO;
         if cfg.allows(depth + 1) {
             for _ in 0..cfg.direct_samples {
@@ -123,12 +126,9 @@ impl<'a, M: PathMode> Gather<'a, M> {
                     * (1.0 / cfg.direct_samples as f32);
             }
         }
-        if v.si.is_some() {
-            self.add(&maps.caustic, cfg.caustic, v, depth, weight);
-        }
+        self.add(&maps.caustic, cfg.caustic, v, depth, weight);
         if cfg.final_gather == 0 {
-            let (map, lookup) = self.map_at(v);
-            self.add(map, lookup, v, depth, weight);
+            self.add(&maps.global, cfg.global, v, depth, weight);
             return l;
         }
         if !cfg.allows(depth + 2) {
@@ -143,27 +143,36 @@ impl<'a, M: PathMode> Gather<'a, M> {
         l
     }
 
-    /// A final gathering ray from `v` by its BSDF or phase function, and its weight; `None`
-    /// when sampling fails or picks a delta lobe (the camera path's to follow).
-    fn gather_ray(&self, v: &Vertex<M::C>, sampler: &mut Sampler) -> Option<(Walker, M::C)> {
-        match (v.at, v.si) {
-            (Scatterer::Surface { bsdf, frame, wo }, Some(si)) => {
-                let u1 = sampler.next_1d();
-                let bs = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance)?;
-                if bs.delta {
-                    return None;
-                }
-                let mut w = Walker::new(Ray::new(si.p, bs.wi), f32::INFINITY, v.medium, v.hero);
-                w.leave(self.scene, si, frame.to_world(bs.wi));
-                Some((w, bs.weight))
-            }
-            (Scatterer::Medium { phase, wo }, _) => {
-                let (wi, _) = phase.sample(wo, sampler.next_2d());
-                let ray = Ray::at_time(v.p, wi, v.time);
-                Some((Walker::new(ray, f32::INFINITY, v.medium, v.hero), M::C::ONE))
-            }
-            _ => None,
+    /// The estimate at a camera vertex `v` in a medium: the volume map read there — every
+    /// photon when the maps serve final gathering, else those that are not direct light plus
+    /// a next-event estimate (returned, not yet times `v.beta`).
+    fn in_medium(&mut self, v: &Vertex<M::C>, sampler: &mut Sampler) -> M::C {
+        let (cfg, maps) = (self.cfg, self.maps);
+        if !cfg.allows(v.depth + 1) {
+            return M::C::ZERO;
         }
+        let weight = self.weight(v, v.beta);
+        self.add(&maps.volume, maps.volume_lookup, v, v.depth, weight);
+        if cfg.final_gather > 0 {
+            return M::C::ZERO;
+        }
+        photons::next_event(self.scene, v, sampler, self.m)
+    }
+
+    /// A final gathering ray from the surface vertex `v` by its BSDF, and its weight;
+    /// `None` when sampling fails or picks a delta lobe (the camera path's to follow).
+    fn gather_ray(&self, v: &Vertex<M::C>, sampler: &mut Sampler) -> Option<(Walker, M::C)> {
+        let (Scatterer::Surface { bsdf, frame, wo }, Some(si)) = (v.at, v.si) else {
+            return None;
+        };
+        let u1 = sampler.next_1d();
+        let bs = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Radiance)?;
+        if bs.delta {
+            return None;
+        }
+        let mut w = Walker::new(Ray::new(si.p, bs.wi), f32::INFINITY, v.medium, v.hero);
+        w.leave(self.scene, si, frame.to_world(bs.wi));
+        Some((w, bs.weight))
     }
 
     /// A final gathering walk from a vertex `depth` edges from the camera (throughput
@@ -196,47 +205,21 @@ impl<'a, M: PathMode> Gather<'a, M> {
         )
     }
 
-    /// The segment estimate of [`SegmentMixture`] (see the module docs): the in-scattered
-    /// radiance at one distance (next-event estimation, returned, and the volume map's, added
-    /// to `rgb`), and the segment's exact transmittance; `None` where it does not apply.
+    /// The segment estimate (see the module docs): the in-scattered radiance at one
+    /// distance (next-event estimation, returned, and the volume map's, added to `rgb`), and
+    /// the segment's exact transmittance; `None` where it does not apply.
     fn segment(&mut self, seg: &Segment<M::C>, sampler: &mut Sampler) -> Option<(M::C, M::C)> {
-        let (cfg, maps, m) = (self.cfg, self.maps, self.m);
-        let MediumKind::Homogeneous(h) = &seg.medium.kind else {
-            return None;
-        };
-        if self.points.is_empty() || seg.medium.emission.is_some() {
-            return None;
-        }
-        let ray = &seg.walker.ray;
-        let sigma_bar = m.unbounded(h.sigma_t).mean();
-        let (u, v) = (sampler.next_1d(), sampler.next_1d());
-        let mut l = M::C::ZERO;
-        if sigma_bar > 0.0
-            && cfg.allows(seg.depth + 1)
-            && let Some((t, pdf)) =
-                SegmentMixture::new(self.points, ray.o, ray.d, seg.end, sigma_bar).sample(u, v)
-        {
-            let (_, sigma_s) = h.coefficients(m);
-            let x = Vertex {
-                at: Scatterer::Medium {
-                    phase: &seg.medium.phase,
-                    wo: -ray.d,
-                },
-                si: None,
-                p: ray.at(t),
-                medium: seg.walker.medium,
-                depth: seg.depth + 1,
-                beta: seg.beta * h.transmittance_in(t, m) * (1.0 / pdf),
-                time: ray.time,
-                hero: seg.walker.hero,
-            };
-            if cfg.allows(x.depth + 1) {
-                l += x.beta * sigma_s * photons::next_event(self.scene, &x, sampler, m);
+        let room = self.cfg.allows(seg.depth + 1);
+        let sp = photons::segment_point(self.points, seg, room, sampler, self.m)?;
+        let l = match &sp.x {
+            // The point's throughput holds no σs; at a collision it would.
+            Some(x) => {
+                let beta = x.beta * sp.sigma_s;
+                beta * self.in_medium(&Vertex { beta, ..*x }, sampler)
             }
-            let weight = x.beta * (1.0 / maps.emitted as f32);
-            self.add(&maps.volume, maps.volume_lookup, &x, x.depth, weight);
-        }
-        Some((h.transmittance_in(seg.end, m), l))
+            None => M::C::ZERO,
+        };
+        Some((sp.tr, l))
     }
 }
 

@@ -38,7 +38,6 @@
 
 mod gather;
 mod map;
-mod segment;
 
 pub use map::{PhotonMap, StoredPhoton};
 

@@ -12,9 +12,11 @@
 //! for any thread count.
 
 mod camera;
+mod segment;
 mod sources;
 
 pub use camera::{CameraWalk, Segment, Vertex, Visit, next_event};
+pub use segment::{SegmentMixture, SegmentPoint, segment_point};
 pub use sources::{PathStart, PhotonLights, VolumeEmitter, volume_emitters};
 
 use rayon::prelude::*;

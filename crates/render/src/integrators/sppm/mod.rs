@@ -49,7 +49,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use self::grid::Grid;
-use self::visible::{CameraSample, Gatherers, VisiblePoint, camera_path};
+use self::visible::{CameraPass, CameraSample, Gatherers, VisiblePoint};
 use super::photons::{self, PhotonHit, PhotonJob, PhotonLights};
 use crate::film::{Film, Filter};
 use crate::math::{PI, UVec2, Vec2, Vec3};
@@ -264,6 +264,8 @@ struct Sppm<'a, M: PathMode> {
     /// The visible points of each group.
     vps: Vec<Vec<VisiblePoint<M::C>>>,
     lights: PhotonLights,
+    /// Where the point and spot lights are (segment estimates in media).
+    points: Vec<Vec3>,
     camera_template: Sampler,
 }
 
@@ -313,6 +315,7 @@ impl<'a, M: PathMode + Send> Sppm<'a, M> {
             slots: vec![slot; pixel_count * eye as usize],
             vps: (0..groups).map(|_| Vec::new()).collect(),
             lights: PhotonLights::new(scene),
+            points: scene.lights.iter().filter_map(|l| l.position()).collect(),
             camera_template: Sampler::new(
                 scene.sampler.kind,
                 opts.spp.max(eye),
@@ -332,7 +335,12 @@ impl<'a, M: PathMode + Send> Sppm<'a, M> {
 
     /// The camera pass, one row per task: every iteration (SPPM) or once (PPM).
     fn camera_pass(&mut self, iteration: u32) {
-        let (scene, cfg, size, eye) = (self.scene, self.cfg, self.size, self.eye);
+        let (size, eye) = (self.size, self.eye);
+        let pass = CameraPass {
+            scene: self.scene,
+            cfg: self.cfg,
+            points: &self.points,
+        };
         let rows: Vec<CameraRow<M::C>> = (0..size.y)
             .into_par_iter()
             .map(|y| {
@@ -356,7 +364,7 @@ impl<'a, M: PathMode + Send> Sppm<'a, M> {
                             nee: self.nee,
                         };
                         let m = M::from_u(self.set_u(set));
-                        ld.push(camera_path(scene, cfg, &mut sampler, &c, &m, &mut vps));
+                        ld.push(pass.camera_path(&mut sampler, &c, &m, &mut vps));
                     }
                 }
                 (ld, vps)

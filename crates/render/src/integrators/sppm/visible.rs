@@ -5,7 +5,7 @@
 use super::SppmConfig;
 use super::grid::Grid;
 use crate::bsdf::{Bsdf, TransportMode};
-use crate::integrators::photons::{self, CameraWalk, PhotonHit, Vertex};
+use crate::integrators::photons::{self, CameraWalk, PhotonHit, Segment, Vertex, Visit};
 use crate::integrators::transport::Scatterer;
 use crate::math::{Frame, UVec2, Vec3};
 use crate::media::Phase;
@@ -35,8 +35,9 @@ pub(super) struct VisiblePoint<C: Color> {
     pub(super) depth: u32,
     pub(super) p: Vec3,
     pub(super) at: Scattering<C>,
-    /// Camera path throughput up to here; in a medium divided by σs there, which the
-    /// photons' density holds (their power after a collision is σs/σt of it).
+    /// The camera path's weight: times the photons' density around the point it is the
+    /// radiance the point stands for (at a collision the throughput divided by σs, which the
+    /// photons' density holds).
     pub(super) beta: C,
     /// Whether the camera path's secondary wavelengths were terminated (spectral mode).
     pub(super) terminated: bool,
@@ -59,80 +60,126 @@ pub(super) struct CameraSample {
     pub(super) nee: bool,
 }
 
-/// Camera pass for one camera sample: the estimate `ld` (emission seen along delta bounces and
-/// the next-event estimates at the visible point, linear sRGB) and its visible points.
-pub(super) fn camera_path<M: PathMode>(
-    scene: &Scene,
-    cfg: &SppmConfig,
-    sampler: &mut Sampler,
-    c: &CameraSample,
-    m: &M,
-    vps: &mut Vec<VisiblePoint<M::C>>,
-) -> Vec3 {
-    let (_, cray) = camera_sample(scene, sampler, c.pixel, c.sample);
-    // The shortest photon path that can reach a visible point: 2 edges when next-event
-    // estimation has the direct light, else 1.
-    let first = if c.nee { 2 } else { 1 };
-    let w = CameraWalk::camera_walker(scene, &cray, m, sampler);
-    let walk = CameraWalk {
-        depth: 0,
-        see_emitters: true,
-        see_media: true,
-        max_depth: cfg.max_depth,
-        rr_depth: cfg.rr_depth,
-    };
-    let ld = walk.run(
-        scene,
-        w,
-        M::C::ONE,
-        m,
-        sampler,
-        &mut |v: &Vertex<M::C>, s: &mut Sampler| {
-            if cfg.allows(v.depth + first)
-                && let Some(vp) = visible_point(scene, v, c.slot, m)
-            {
-                vps.push(vp);
-            }
-            if c.nee && cfg.allows(v.depth + 1) {
-                photons::next_event(scene, v, s, m)
-            } else {
-                M::C::ZERO
-            }
-        },
-    );
-    m.to_rgb(ld)
+/// What the camera pass needs besides a sample: the scene, the configuration, and where the
+/// point and spot lights are (segment estimates in media, `photons::segment_point`).
+pub(super) struct CameraPass<'a> {
+    pub(super) scene: &'a Scene,
+    pub(super) cfg: &'a SppmConfig,
+    pub(super) points: &'a [Vec3],
 }
 
-/// The visible point a camera walk's vertex `v` makes for measurement `slot`.
+impl CameraPass<'_> {
+    /// One camera sample: the estimate `ld` (emission seen along delta bounces and the
+    /// next-event estimates at the visible points, linear sRGB) and its visible points.
+    pub(super) fn camera_path<M: PathMode>(
+        &self,
+        sampler: &mut Sampler,
+        c: &CameraSample,
+        m: &M,
+        vps: &mut Vec<VisiblePoint<M::C>>,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let (_, cray) = camera_sample(scene, sampler, c.pixel, c.sample);
+        let w = CameraWalk::camera_walker(scene, &cray, m, sampler);
+        let walk = CameraWalk {
+            depth: 0,
+            see_emitters: true,
+            see_media: true,
+            max_depth: self.cfg.max_depth,
+            rr_depth: self.cfg.rr_depth,
+        };
+        let mut visit = Visits {
+            pass: self,
+            c,
+            m,
+            vps,
+        };
+        let ld = walk.run(scene, w, M::C::ONE, m, sampler, &mut visit);
+        m.to_rgb(ld)
+    }
+}
+
+/// A camera path's visits: visible points where it stops being a delta chain and at segment
+/// estimates in media, and the next-event estimates there.
+struct Visits<'p, 'a, M: PathMode> {
+    pass: &'p CameraPass<'a>,
+    c: &'p CameraSample,
+    m: &'p M,
+    vps: &'p mut Vec<VisiblePoint<M::C>>,
+}
+
+impl<M: PathMode> Visits<'_, '_, M> {
+    /// The shortest photon path that can reach a visible point: 2 edges when next-event
+    /// estimation has the direct light, else 1.
+    fn first(&self) -> u32 {
+        if self.c.nee { 2 } else { 1 }
+    }
+
+    /// A visible point at `v` (its camera throughput `beta` such that times the photons'
+    /// density it is radiance) and the next-event estimate there, not yet times `v.beta`.
+    fn visit(&mut self, v: &Vertex<M::C>, beta: M::C, sampler: &mut Sampler) -> M::C {
+        let (scene, cfg) = (self.pass.scene, self.pass.cfg);
+        if cfg.allows(v.depth + self.first())
+            && let Some(vp) = visible_point(v, beta, self.c.slot, self.m)
+        {
+            self.vps.push(vp);
+        }
+        if self.c.nee && cfg.allows(v.depth + 1) {
+            photons::next_event(scene, v, sampler, self.m)
+        } else {
+            M::C::ZERO
+        }
+    }
+}
+
+impl<M: PathMode> Visit<M> for Visits<'_, '_, M> {
+    fn vertex(&mut self, v: &Vertex<M::C>, sampler: &mut Sampler) -> M::C {
+        // In a medium the photons' density holds σs (their power after a collision is σs/σt
+        // of it), which the collision's throughput holds too: divided out once.
+        let beta = match (v.at, v.medium) {
+            (Scatterer::Medium { .. }, Some(i)) => {
+                let sigma_s = self.pass.scene.media[i as usize].sigma_s_in(v.p, self.m);
+                v.beta
+                    * M::C::from_fn(|k| {
+                        let s = sigma_s.lane(k);
+                        if s > 0.0 { 1.0 / s } else { 0.0 }
+                    })
+            }
+            _ => v.beta,
+        };
+        self.visit(v, beta, sampler)
+    }
+
+    fn segment(&mut self, seg: &Segment<M::C>, sampler: &mut Sampler) -> Option<(M::C, M::C)> {
+        let room = self.pass.cfg.allows(seg.depth + 1);
+        let sp = photons::segment_point(self.pass.points, seg, room, sampler, self.m)?;
+        let l = match &sp.x {
+            Some(x) => x.beta * sp.sigma_s * self.visit(x, x.beta, sampler),
+            None => M::C::ZERO,
+        };
+        Some((sp.tr, l))
+    }
+}
+
+/// The visible point a camera walk's vertex `v` makes for measurement `slot`, its camera
+/// throughput `beta`.
 fn visible_point<M: PathMode>(
-    scene: &Scene,
     v: &Vertex<M::C>,
+    beta: M::C,
     slot: u32,
     m: &M,
 ) -> Option<VisiblePoint<M::C>> {
-    let (at, beta) = match v.at {
-        Scatterer::Surface { bsdf, frame, wo } => (
-            Scattering::Surface {
-                bsdf: bsdf.clone(),
-                frame: *frame,
-                wo,
-            },
-            v.beta,
-        ),
-        Scatterer::Medium { phase, wo } => {
-            let medium = v.medium?;
-            let sigma_s = scene.media[medium as usize].sigma_s_in(v.p, m);
-            let inv_s = M::C::from_fn(|i| {
-                let s = sigma_s.lane(i);
-                if s > 0.0 { 1.0 / s } else { 0.0 }
-            });
-            let at = Scattering::Medium {
-                phase: *phase,
-                wo,
-                medium,
-            };
-            (at, v.beta * inv_s)
-        }
+    let at = match v.at {
+        Scatterer::Surface { bsdf, frame, wo } => Scattering::Surface {
+            bsdf: bsdf.clone(),
+            frame: *frame,
+            wo,
+        },
+        Scatterer::Medium { phase, wo } => Scattering::Medium {
+            phase: *phase,
+            wo,
+            medium: v.medium?,
+        },
     };
     Some(VisiblePoint {
         slot,

@@ -1,7 +1,69 @@
-//! The photon mapper's estimate of in-scattering along a segment of a homogeneous medium.
+//! The photon-mapping family's estimate of in-scattering along a camera segment through a
+//! homogeneous medium without emission, with point or spot lights about: one distance from
+//! [`SegmentMixture`], where the integrator estimates the in-scattered radiance (next-event
+//! estimation, the volume photons), and the segment crossed with its exact transmittance
+//! ([`segment_point`]).
 
+use super::camera::{Segment, Vertex};
+use crate::integrators::transport::Scatterer;
 use crate::math::Vec3;
-use crate::sampling::Equiangular;
+use crate::media::MediumKind;
+use crate::sampling::{Equiangular, Sampler};
+use crate::spectral::lanes::{Color, PathMode};
+
+/// Where a camera segment is estimated (see [`segment_point`]).
+pub struct SegmentPoint<'a, C: Color> {
+    /// The point at the sampled distance, a medium vertex whose throughput is the segment's
+    /// times T(t)/pdf(t) (`None` when none was sampled or the path has no room for it).
+    pub x: Option<Vertex<'a, C>>,
+    /// σs at the point.
+    pub sigma_s: C,
+    /// The transmittance of the whole segment: the weight the walk crosses it with.
+    pub tr: C,
+}
+
+/// The segment estimate of walk segment `seg` (in a homogeneous medium without emission,
+/// with the point lights at `points`; `None` elsewhere): two 1D numbers drawn, a distance
+/// from [`SegmentMixture`] if `room` (the path may grow by the point's edge).
+pub fn segment_point<'a, M: PathMode>(
+    points: &[Vec3],
+    seg: &Segment<'a, M::C>,
+    room: bool,
+    sampler: &mut Sampler,
+    m: &M,
+) -> Option<SegmentPoint<'a, M::C>> {
+    let MediumKind::Homogeneous(h) = &seg.medium.kind else {
+        return None;
+    };
+    if points.is_empty() || seg.medium.emission.is_some() {
+        return None;
+    }
+    let ray = &seg.walker.ray;
+    let sigma_bar = m.unbounded(h.sigma_t).mean();
+    let (u, v) = (sampler.next_1d(), sampler.next_1d());
+    let (_, sigma_s) = h.coefficients(m);
+    let x = (sigma_bar > 0.0 && room)
+        .then(|| SegmentMixture::new(points, ray.o, ray.d, seg.end, sigma_bar).sample(u, v))
+        .flatten()
+        .map(|(t, pdf)| Vertex {
+            at: Scatterer::Medium {
+                phase: &seg.medium.phase,
+                wo: -ray.d,
+            },
+            si: None,
+            p: ray.at(t),
+            medium: seg.walker.medium,
+            depth: seg.depth + 1,
+            beta: seg.beta * h.transmittance_in(t, m) * (1.0 / pdf),
+            time: ray.time,
+            hero: seg.walker.hero,
+        });
+    Some(SegmentPoint {
+        x,
+        sigma_s,
+        tr: h.transmittance_in(seg.end, m),
+    })
+}
 
 /// The in-scattered light along a segment of a homogeneous medium without emission, towards
 /// point lights: one distance from a mixture of free-flight sampling (σt averaged over the
@@ -10,7 +72,7 @@ use crate::sampling::Equiangular;
 /// single scattering is, which free flights alone almost never do (in `media-fog` a
 /// quarter of the light sat in the few pixels around the spot light, found by rare
 /// collisions).
-pub(super) struct SegmentMixture<'a> {
+pub struct SegmentMixture<'a> {
     points: &'a [Vec3],
     o: Vec3,
     d: Vec3,
@@ -62,7 +124,7 @@ impl<'a> SegmentMixture<'a> {
 
     /// A distance and its density, from uniform `u` (strategy and free flight) and `v`
     /// (equiangular).
-    pub(super) fn sample(&self, u: f32, v: f32) -> Option<(f32, f32)> {
+    pub fn sample(&self, u: f32, v: f32) -> Option<(f32, f32)> {
         let t = if u < self.p_ff {
             // F(t) = (1 − e^{−σt})/mass, inverted.
             -(-(u / self.p_ff * self.mass)).ln_1p() / self.sigma
