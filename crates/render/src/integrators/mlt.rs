@@ -284,7 +284,7 @@ impl<M: PathMode> Target<'_, M> {
         let (p_film, cray) = film_sample(scene, sampler);
         let Some((p, c)) = self
             .bdpt
-            .strategy(scene, &cray, p_film, s, t, sampler, paths)
+            .strategy(scene, (&cray, p_film), (s, t), sampler, paths)
         else {
             return 0.0;
         };
