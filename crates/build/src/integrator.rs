@@ -7,7 +7,7 @@ use render::integrators::photon::{Lookup, PhotonConfig};
 use render::integrators::ptracer::PtracerConfig;
 use render::integrators::sppm::{Progressive, SppmConfig};
 use render::integrators::volpath::VolPathConfig;
-use render::integrators::{Integrator, UnsupportedIntegrator};
+use render::integrators::{Aov, DirectConfig, Integrator, UnsupportedIntegrator};
 use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
 
 /// The integrator a scene description asks for.
@@ -17,13 +17,15 @@ pub fn integrator(
     scene_radius: f32,
 ) -> Result<Integrator, UnsupportedIntegrator> {
     Ok(match desc {
-        IntegratorDesc::Normals => Integrator::Normals,
-        IntegratorDesc::Albedo => Integrator::Albedo,
-        IntegratorDesc::Depth => Integrator::Depth,
-        IntegratorDesc::AmbientOcclusion { samples, length } => Integrator::AmbientOcclusion {
-            samples: (*samples).max(1),
-            length: length.unwrap_or(f32::INFINITY),
-        },
+        IntegratorDesc::Normals => Integrator::Aov(Aov::Normals),
+        IntegratorDesc::Albedo => Integrator::Aov(Aov::Albedo),
+        IntegratorDesc::Depth => Integrator::Aov(Aov::Depth),
+        IntegratorDesc::AmbientOcclusion { samples, length } => {
+            Integrator::Aov(Aov::AmbientOcclusion {
+                samples: (*samples).max(1),
+                length: length.unwrap_or(f32::INFINITY),
+            })
+        }
         IntegratorDesc::Path(d) => Integrator::Path(path_config(d)),
         IntegratorDesc::VolPath {
             max_depth,
@@ -47,10 +49,10 @@ pub fn integrator(
         IntegratorDesc::Direct {
             emitter_samples,
             bsdf_samples,
-        } => Integrator::Direct {
+        } => Integrator::Direct(DirectConfig {
             emitter_samples: *emitter_samples,
             bsdf_samples: *bsdf_samples,
-        },
+        }),
         IntegratorDesc::Sppm(d) => Integrator::Sppm(SppmConfig {
             max_depth: d.max_depth,
             rr_depth: d.rr_depth,

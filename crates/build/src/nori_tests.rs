@@ -96,7 +96,8 @@ fn scene_estimate(desc: &SceneDesc, n: u64, seed: u64) -> Result<MeanVar, TestEr
                     (pick.next_u32() % h).min(h - 1),
                 );
                 let (_, cray) = render::render::camera_sample(&scene, &mut sampler, px, k as u32);
-                let v = luminance(integrator.li(&scene, &cray, &mut sampler));
+                let l = render::render::li(&scene, &integrator, &cray, &mut sampler);
+                let v = luminance(l.unwrap_or(Vec3::ZERO));
                 mv.push(if v.is_finite() { v } else { 0.0 });
             }
             mv

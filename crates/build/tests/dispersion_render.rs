@@ -68,6 +68,8 @@ impl<const LO: u32, const HI: u32> ColorMode for Band<LO, HI> {
 }
 
 impl<const LO: u32, const HI: u32> PathMode for Band<LO, HI> {
+    const SPECTRAL: bool = true;
+
     fn start(sampler: &mut impl Samples) -> Self {
         Self::from_u(sampler.next_1d())
     }

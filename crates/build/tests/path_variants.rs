@@ -18,6 +18,7 @@ use render::film::Image;
 use render::math::{UVec2, Vec3};
 use render::render::camera_sample;
 use render::sampling::Sampler;
+use render::spectral::lanes::RgbMode;
 use scene::{
     DirectionSampling, Document, IntegratorDesc, LoadOptions, MisHeuristic, PathDesc,
     RussianRoulette, SceneDesc,
@@ -215,8 +216,8 @@ fn a_biased_variant_is_rejected() {
 }
 
 /// The render loop keeps several paths in flight and tests their shadow rays together
-/// (`Integrator::li_stream`); every estimate must be the one the single-path loop
-/// (`Integrator::li`) gives for the same sample, bit for bit: the same random numbers in the
+/// (`Estimator::li_stream`); every estimate must be the one the single-path loop
+/// (`Estimator::li`) gives for the same sample, bit for bit: the same random numbers in the
 /// same order, the same sums. With splitting the split-off paths' contributions are added in a
 /// different order, so there the estimates agree to rounding.
 #[test]
@@ -259,12 +260,12 @@ fn batched_paths_equal_one_at_a_time() {
             .iter()
             .map(|&(pixel, index)| {
                 let (_, cray) = camera_sample(&scene, &mut sampler, pixel, index);
-                integrator.li(&scene, &cray, &mut sampler)
+                render::render::li(&scene, &integrator, &cray, &mut sampler).unwrap()
             })
             .collect();
         let mut batched = vec![None; samples.len()];
         let mut next = samples.iter().enumerate();
-        integrator.li_stream(
+        let per_sample = integrator.li_stream_in::<RgbMode, _>(
             &scene,
             &template,
             |sampler| {
@@ -275,6 +276,10 @@ fn batched_paths_equal_one_at_a_time() {
                 assert!(batched[k].is_none(), "{name}: sample {k} reported twice");
                 batched[k] = Some(l);
             },
+        );
+        assert!(
+            per_sample,
+            "{name}: the path tracer is a per-sample integrator"
         );
         let mut nonzero = 0;
         for (k, (a, b)) in single.iter().zip(&batched).enumerate() {

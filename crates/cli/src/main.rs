@@ -16,10 +16,10 @@ use std::time::Duration;
 
 use build::{BuildOptions, build};
 use clap::{Parser, Subcommand};
-use render::adaptive::{AdaptiveSettings, render_adaptive};
+use render::adaptive::AdaptiveSettings;
 use render::film::{Film, Image};
 use render::image_io::{write_image, write_image_tonemapped};
-use render::render::{Progress, RenderObserver, RenderOptions, render};
+use render::render::{Progress, RenderObserver, RenderOptions, render, render_adaptive};
 use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
 
 #[derive(Parser)]
@@ -1063,7 +1063,7 @@ pub(crate) fn render_scene_with(
         &format!("a {}x{} film", scene.film.width, scene.film.height),
         render::render::memory_needed(&scene, &ropts),
     )?;
-    if let Some((what, bytes)) = render::render::integrator_memory(&scene, &integrator) {
+    if let Some((what, bytes)) = integrator.memory(&scene) {
         memory::check(what, bytes)?;
     }
     let pool = rayon::ThreadPoolBuilder::new()
@@ -1087,8 +1087,9 @@ pub(crate) fn render_scene_with(
                     "--time and adaptive sampling do not combine",
                 ));
             }
-            let a =
-                pool.install(|| render_adaptive(&scene, &integrator, &ropts, settings, &reporter));
+            let a = pool
+                .install(|| render_adaptive(&scene, &integrator, &ropts, settings, &reporter))
+                .expect("checked above: a per-sample integrator");
             let (mean_spp, rate_image) = (a.mean_spp(), a.rate_image());
             let outcome = render::render::RenderOutcome {
                 spp: a.max_spp,
@@ -1120,7 +1121,11 @@ pub(crate) fn render_scene_with(
     }
     // A depth AOV holds distances: as 8-bit PNG anything beyond 1 was white. PNGs get the
     // depths divided by the largest one (said once); EXR, PFM and HDR keep the distances.
-    let depth_png = matches!(integrator, render::integrators::Integrator::Depth).then(|| {
+    let depth_png = matches!(
+        integrator,
+        render::integrators::Integrator::Aov(render::integrators::Aov::Depth)
+    )
+    .then(|| {
         let far = image
             .pixels
             .iter()

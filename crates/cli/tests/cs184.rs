@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use build::{BuildOptions, build};
-use render::adaptive::{AdaptiveSettings, render_adaptive};
+use render::adaptive::AdaptiveSettings;
 use render::compare::{Reference, TestImages, compare};
 use render::film::Image;
-use render::render::{RenderOptions, Silent, render};
+use render::render::{RenderOptions, Silent, render, render_adaptive};
 use scene::formats::collada::cs184_path;
 use scene::{Document, IntegratorDesc, LoadOptions, SceneDesc};
 
@@ -124,7 +124,7 @@ fn adaptive_sampling_reaches_the_same_mean() {
                 spp: 64,
                 ..Default::default()
             };
-            let out = render_adaptive(&scene, &integrator, &opts, &settings, &Silent);
+            let out = render_adaptive(&scene, &integrator, &opts, &settings, &Silent).unwrap();
             assert!(out.samples.iter().all(|&n| (1..=64).contains(&n)));
             total += out.total_samples;
             out.film.develop()
@@ -173,7 +173,9 @@ fn adaptive_sampling_is_deterministic_across_thread_counts() {
             .num_threads(threads)
             .build()
             .unwrap();
-        let out = pool.install(|| render_adaptive(&scene, &integ, &opts, &settings, &Silent));
+        let out = pool
+            .install(|| render_adaptive(&scene, &integ, &opts, &settings, &Silent))
+            .unwrap();
         (out.film.develop(), out.samples, out.total_samples)
     };
     let (a, na, ta) = run(1);
@@ -190,11 +192,9 @@ fn adaptive_sampling_is_deterministic_across_thread_counts() {
                 sampler.start_pixel_sample(pixel, n);
                 let p_film = pixel.as_vec2() + sampler.next_2d();
                 let u_lens = sampler.next_2d();
-                let v = render::adaptive::illuminance(integ.li(
-                    &scene,
-                    &scene.camera.generate_ray(p_film, u_lens),
-                    &mut sampler,
-                ));
+                let cray = scene.camera.generate_ray(p_film, u_lens);
+                let l = render::render::li(&scene, &integ, &cray, &mut sampler).unwrap();
+                let v = render::adaptive::illuminance(l);
                 if v.is_finite() {
                     s1 += v;
                     s2 += v * v;

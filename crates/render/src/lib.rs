@@ -1,14 +1,15 @@
 //! Penumbra's renderer: everything that runs per ray.
 //!
 //! Data flow: the `penumbra-build` crate turns a scene description into a [`world::Scene`] (BVH, textures,
-//! camera, film settings), `render` runs an integrator over tiles and passes into a film.
+//! camera, film settings), `render` picks the colour mode and runs an integrator, whose loops
+//! (`drive`) fill a film.
 
 pub mod accel;
-pub mod adaptive;
 pub mod bsdf;
 
 pub mod camera;
 pub mod compare;
+pub mod drive;
 pub mod film;
 pub mod geometry;
 pub mod image_io;
@@ -28,3 +29,5 @@ pub mod spectral;
 pub mod stats;
 pub mod textures;
 pub mod world;
+
+pub use drive::adaptive;

@@ -1,21 +1,12 @@
-//! The render driver: tiles × passes on the current rayon pool.
-//!
-//! A pass adds samples `[s0, s1)` to every pixel. Tiles of a pass run in parallel and are
-//! merged into the film after the pass in a fixed order, so the image is bit-identical for any
-//! thread count (a different split into passes changes only the f64 rounding of the sums). Passes are
-//! sized from the measured speed (about a second each), so a time budget, Ctrl-C (the
-//! `cancel` flag) or a progressive writer stops at a pass boundary with a consistent image.
+//! The top of a render: the colour mode chosen once, as Mitsuba's variant is — every
+//! integrator, estimator and loop below runs monomorphised in it ([`in_mode`]) — and the
+//! entry points that run an integrator ([`render`], [`render_adaptive`], [`li`]).
 
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::Instant;
-
-use rayon::prelude::*;
-
+use crate::adaptive::{AdaptiveOutcome, AdaptiveSettings};
 use crate::camera::CameraRay;
-use crate::film::{Film, FilmTile};
+use crate::film::Film;
 use crate::integrators::Integrator;
-use crate::integrators::photon::{PhotonMapper, WAVELENGTH_SETS};
-use crate::math::{UVec2, Vec3};
+use crate::math::Vec3;
 use crate::sampling::Sampler;
 use crate::spectral::lanes::{PathMode, RgbMode, SpectralMode};
 use crate::world::Scene;
@@ -25,212 +16,115 @@ pub use crate::session::{
     Progress, RenderObserver, RenderOptions, RenderOutcome, Silent, camera_sample,
 };
 
-/// What estimates the radiance of a stream of camera samples: an [`Integrator`] that works
-/// per sample, or one with state built for the render first (the photon mapper's maps).
-pub trait Estimator: Sync {
-    /// See [`Integrator::li_stream`].
-    fn li_stream<T>(
-        &self,
-        scene: &Scene,
-        template: &Sampler,
-        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
-        done: impl FnMut(T, Vec3),
-    );
+/// Something run in a colour mode: RGB, or spectral with the built-in sRGB upsampling.
+pub trait InMode {
+    type Out;
+    fn run<M: PathMode + Send>(self) -> Self::Out;
 }
 
-impl Estimator for Integrator {
-    #[inline]
-    fn li_stream<T>(
-        &self,
-        scene: &Scene,
-        template: &Sampler,
-        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
-        done: impl FnMut(T, Vec3),
-    ) {
-        Integrator::li_stream(self, scene, template, next, done)
+/// Run `task` in the colour mode `mode`: the one place a mode becomes a type.
+pub fn in_mode<T: InMode>(mode: RenderMode, task: T) -> T::Out {
+    match mode {
+        RenderMode::Rgb => task.run::<RgbMode>(),
+        RenderMode::Spectral => task.run::<SpectralMode<'static>>(),
     }
 }
 
-impl<M: PathMode> Estimator for PhotonMapper<'_, M> {
-    fn li_stream<T>(
-        &self,
-        scene: &Scene,
-        template: &Sampler,
-        mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
-        mut done: impl FnMut(T, Vec3),
-    ) {
-        let mut sampler = template.clone();
-        while let Some((tag, cray)) = next(&mut sampler) {
-            done(tag, self.li(scene, &cray, &mut sampler));
-        }
-    }
-}
-
-/// Render sample indices `[s0, s1)` of every pixel of one tile (positions uniform in each
-/// pixel, splatted by the film's filter).
-fn render_tile<E: Estimator>(
-    scene: &Scene,
-    integrator: &E,
-    template: &Sampler,
-    tile: &mut FilmTile,
-    (lo, hi): (UVec2, UVec2),
-    s0: u32,
-    s1: u32,
-) {
-    let mut samples = (lo.y..hi.y)
-        .flat_map(|y| (lo.x..hi.x).map(move |x| UVec2::new(x, y)))
-        .flat_map(|pixel| (s0..s1).map(move |index| (pixel, index)));
-    integrator.li_stream(
-        scene,
-        template,
-        |sampler| {
-            let (pixel, index) = samples.next()?;
-            Some(camera_sample(scene, sampler, pixel, index))
-        },
-        |p_film, l| tile.add_sample(p_film, l),
-    );
-}
-
-/// Peak bytes of the film state [`render`] allocates for `scene` (see [`Film::memory_needed`]).
+/// Peak bytes of the film state a render allocates for `scene` (see [`Film::memory_needed`]).
 pub fn memory_needed(scene: &Scene, opts: &RenderOptions) -> u64 {
     let f = &scene.film;
     Film::memory_needed(f.width, f.height, f.crop, &f.filter, opts.tile_size)
 }
 
-/// Peak bytes of what `integrator` keeps besides the film (photon maps, SPPM's visible
-/// points), with what it is called, if anything.
-pub fn integrator_memory(scene: &Scene, integrator: &Integrator) -> Option<(&'static str, u64)> {
-    match integrator {
-        Integrator::Photon(cfg) => Some((
-            "storing the photons",
-            crate::integrators::photon::memory_needed(cfg),
-        )),
-        Integrator::Sppm(cfg) => Some((
-            "keeping the visible points and photon contributions",
-            crate::integrators::sppm::memory_needed(scene, cfg),
-        )),
-        Integrator::Bdpt(cfg) if cfg.strategy_images.is_some() => Some((
-            "keeping one image per strategy",
-            crate::integrators::bdpt::memory_needed(scene, cfg),
-        )),
-        _ => None,
-    }
-}
-
-/// Render `scene` with `integrator` on the current rayon pool.
+/// Render `scene` with `integrator` on the current rayon pool, in the scene's colour mode.
 pub fn render(
     scene: &Scene,
     integrator: &Integrator,
     opts: &RenderOptions,
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
-    match integrator {
-        Integrator::Sppm(cfg) => crate::integrators::sppm::render(scene, cfg, opts, observer),
-        Integrator::Ptracer(cfg) => crate::integrators::ptracer::render(scene, cfg, opts, observer),
-        Integrator::Bdpt(cfg) => crate::integrators::bdpt::render(scene, cfg, opts, observer),
-        Integrator::Mlt(cfg) => crate::integrators::mlt::render(scene, cfg, opts, observer),
-        Integrator::Photon(cfg) => {
-            let start = Instant::now();
-            let seed = scene.sampler.seed;
-            let mut out = match scene.mode {
-                RenderMode::Rgb => {
-                    let mapper = PhotonMapper::<RgbMode>::build(scene, cfg, seed, 1);
-                    render_samples(scene, &mapper, opts, observer)
-                }
-                RenderMode::Spectral => {
-                    let mapper =
-                        PhotonMapper::<SpectralMode>::build(scene, cfg, seed, WAVELENGTH_SETS);
-                    render_samples(scene, &mapper, opts, observer)
-                }
-            };
-            out.elapsed = start.elapsed();
-            out
-        }
-        _ => render_samples(scene, integrator, opts, observer),
+    struct Task<'a> {
+        scene: &'a Scene,
+        integrator: &'a Integrator,
+        opts: &'a RenderOptions,
+        observer: &'a dyn RenderObserver,
     }
+    impl InMode for Task<'_> {
+        type Out = RenderOutcome;
+        fn run<M: PathMode + Send>(self) -> RenderOutcome {
+            self.integrator
+                .render_in::<M>(self.scene, self.opts, self.observer)
+        }
+    }
+    let task = Task {
+        scene,
+        integrator,
+        opts,
+        observer,
+    };
+    in_mode(scene.mode, task)
 }
 
-/// The tile and pass loop of [`render`] for an [`Estimator`].
-fn render_samples<E: Estimator>(
+/// CS184's adaptive sampling of `scene` with a per-sample `integrator` (`None` for the
+/// others), in the scene's colour mode.
+pub fn render_adaptive(
     scene: &Scene,
-    integrator: &E,
+    integrator: &Integrator,
     opts: &RenderOptions,
+    settings: &AdaptiveSettings,
     observer: &dyn RenderObserver,
-) -> RenderOutcome {
-    let start = Instant::now();
-    let f = &scene.film;
-    let mut film = f.film();
-    let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
-    let tile_list = film.tile_bounds(opts.tile_size.max(1));
-    // One tile per region for the whole render, cleared before each pass.
-    let mut tiles: Vec<FilmTile> = tile_list
-        .iter()
-        .map(|&(lo, hi)| film.tile(lo, hi))
-        .collect();
-    let (pmin, pmax) = film.pixel_bounds();
-    let pixels = (pmax - pmin).as_u64vec2();
-    let pixels = pixels.x * pixels.y;
-    let target = opts.spp.max(1);
-
-    let done = AtomicU64::new(0);
-    let mut spp_done = 0u32;
-    let mut passes = 0u32;
-    let mut pass_spp = 1u32;
-    let mut cancelled = false;
-    while spp_done < target {
-        if opts.cancel.load(Ordering::Relaxed) {
-            cancelled = true;
-            break;
-        }
-        let s0 = spp_done;
-        let s1 = (s0 + pass_spp).min(target);
-        let pass_start = Instant::now();
-        let samples_total = pixels * target as u64;
-        tile_list
-            .par_iter()
-            .zip(tiles.par_iter_mut())
-            .for_each(|(&bounds, tile)| {
-                tile.clear();
-                render_tile(scene, integrator, &template, tile, bounds, s0, s1);
-                let n = (bounds.1 - bounds.0).as_u64vec2();
-                let d = done.fetch_add(n.x * n.y * (s1 - s0) as u64, Ordering::Relaxed)
-                    + n.x * n.y * (s1 - s0) as u64;
-                observer.progress(&Progress {
-                    samples_done: d,
-                    samples_total,
-                    elapsed: start.elapsed(),
-                    spp_done: s0,
-                });
-            });
-        for t in &tiles {
-            film.merge(t);
-        }
-        spp_done = s1;
-        passes += 1;
-        observer.pass_done(&film, spp_done);
-
-        // Size the next pass from the measured speed.
-        let per_spp = pass_start.elapsed().as_secs_f64() / (s1 - s0) as f64;
-        let mut next = (opts.pass_duration.as_secs_f64() / per_spp.max(1e-9)).floor();
-        if let Some(budget) = opts.time_budget {
-            let left = budget.as_secs_f64() - start.elapsed().as_secs_f64();
-            if left <= 0.0 {
-                break;
-            }
-            next = next.min((left / per_spp.max(1e-9)).floor());
-            if next < 1.0 {
-                // Not even one more sample per pixel fits in the budget.
-                break;
-            }
-        }
-        pass_spp = next.clamp(1.0, (1u32 << 20) as f64) as u32;
+) -> Option<AdaptiveOutcome> {
+    struct Task<'a> {
+        scene: &'a Scene,
+        integrator: &'a Integrator,
+        opts: &'a RenderOptions,
+        settings: &'a AdaptiveSettings,
+        observer: &'a dyn RenderObserver,
     }
-    RenderOutcome {
-        film,
-        spp: spp_done,
-        passes,
-        elapsed: start.elapsed(),
-        cancelled,
-        extra: Vec::new(),
+    impl InMode for Task<'_> {
+        type Out = Option<AdaptiveOutcome>;
+        fn run<M: PathMode + Send>(self) -> Option<AdaptiveOutcome> {
+            let t = self;
+            t.integrator
+                .render_adaptive_in::<M>(t.scene, t.opts, t.settings, t.observer)
+        }
     }
+    let task = Task {
+        scene,
+        integrator,
+        opts,
+        settings,
+        observer,
+    };
+    in_mode(scene.mode, task)
+}
+
+/// One camera sample's estimate by a per-sample `integrator` (`None` for the others), in the
+/// scene's colour mode, as linear sRGB.
+pub fn li(
+    scene: &Scene,
+    integrator: &Integrator,
+    cray: &CameraRay,
+    sampler: &mut Sampler,
+) -> Option<Vec3> {
+    struct Task<'a> {
+        scene: &'a Scene,
+        integrator: &'a Integrator,
+        cray: &'a CameraRay,
+        sampler: &'a mut Sampler,
+    }
+    impl InMode for Task<'_> {
+        type Out = Option<Vec3>;
+        fn run<M: PathMode + Send>(self) -> Option<Vec3> {
+            self.integrator
+                .li_in::<M>(self.scene, self.cray, self.sampler)
+        }
+    }
+    let task = Task {
+        scene,
+        integrator,
+        cray,
+        sampler,
+    };
+    in_mode(scene.mode, task)
 }

@@ -1,5 +1,5 @@
-//! What a render is asked and what it reports, shared by every driver (the tile loop of
-//! `render.rs` and the whole-render integrators, SPPM): [`RenderOptions`], [`Progress`],
+//! What a render is asked and what it reports, shared by every driver (`drive/`) and the
+//! integrators: [`RenderOptions`], [`Progress`],
 //! [`RenderObserver`], [`RenderOutcome`], and how a camera sample starts
 //! ([`camera_sample`]). Here rather than in `render.rs` so that integrators that drive a
 //! render themselves do not import the driver that imports them.
@@ -61,6 +61,20 @@ pub struct RenderOutcome {
     pub extra: Vec<(String, Film)>,
 }
 
+impl RenderOutcome {
+    /// The outcome of `passes` whole passes (iterations) into `film`, begun at `start`.
+    pub fn of_passes(film: Film, passes: u32, start: std::time::Instant, cancelled: bool) -> Self {
+        RenderOutcome {
+            film,
+            spp: passes,
+            passes,
+            elapsed: start.elapsed(),
+            cancelled,
+            extra: Vec::new(),
+        }
+    }
+}
+
 /// Events reported while rendering.
 pub trait RenderObserver: Sync {
     /// Called often (after every tile) from worker threads.
@@ -72,42 +86,6 @@ pub trait RenderObserver: Sync {
 /// An observer that ignores everything.
 pub struct Silent;
 impl RenderObserver for Silent {}
-
-/// The pass loop of the renders that drive themselves (SPPM, light tracing, BDPT): runs
-/// `pass(k)` for k = 0, 1, … until `opts.spp` passes are done, the time budget is spent
-/// (after at least one pass) or the render is cancelled (between passes), reporting progress
-/// after each (`samples_per_pass` samples). Returns the passes done and whether it was
-/// cancelled.
-pub fn run_passes(
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-    start: std::time::Instant,
-    samples_per_pass: u64,
-    mut pass: impl FnMut(u32),
-) -> (u32, bool) {
-    let target = opts.spp.max(1);
-    let mut done = 0u32;
-    while done < target {
-        if opts.cancel.load(std::sync::atomic::Ordering::Relaxed) {
-            return (done, true);
-        }
-        if let Some(b) = opts.time_budget
-            && done > 0
-            && start.elapsed() >= b
-        {
-            break;
-        }
-        pass(done);
-        done += 1;
-        observer.progress(&Progress {
-            samples_done: done as u64 * samples_per_pass,
-            samples_total: target as u64 * samples_per_pass,
-            elapsed: start.elapsed(),
-            spp_done: done,
-        });
-    }
-    (done, false)
-}
 
 /// Sets `sampler` up for sample `index` of `pixel` and draws its film position (uniform in
 /// the pixel) and camera ray.

@@ -1,19 +1,70 @@
 //! Arbitrary-output-variable integrators: normals, albedo, depth, ambient occlusion.
 //! They prove loaders, geometry, cameras and film right before any light transport exists.
 
+use super::{IntegratorModel, render_per_sample};
 use crate::camera::CameraRay;
+use crate::drive::Estimator;
 use crate::math::{Frame, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::warp::square_to_cosine_hemisphere;
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
-pub fn normals(scene: &Scene, cray: &CameraRay) -> Vec3 {
+/// The arbitrary output variables: what is seen at the first hit (RGB whatever the colour
+/// mode).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Aov {
+    /// Shading normal at the first hit (world space, components in [-1,1]); 0 on a miss.
+    Normals,
+    /// Reflectance colour at the first hit; 0 on a miss.
+    Albedo,
+    /// Distance along the camera ray to the first hit; 0 on a miss.
+    Depth,
+    /// Fraction of the cosine-weighted hemisphere that is unoccluded within `length`.
+    AmbientOcclusion { samples: u32, length: f32 },
+}
+
+impl<M: PathMode> Estimator<M> for Aov {
+    fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        match *self {
+            Aov::Normals => normals(scene, cray),
+            Aov::Albedo => albedo(scene, cray),
+            Aov::Depth => depth(scene, cray),
+            Aov::AmbientOcclusion { samples, length } => {
+                ambient_occlusion(scene, cray, sampler, samples, length)
+            }
+        }
+    }
+}
+
+impl IntegratorModel for Aov {
+    fn name(&self) -> &'static str {
+        match self {
+            Aov::Normals => "normals",
+            Aov::Albedo => "albedo",
+            Aov::Depth => "depth",
+            Aov::AmbientOcclusion { .. } => "ao",
+        }
+    }
+
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        render_per_sample::<M, _>(self, scene, opts, observer)
+    }
+}
+
+fn normals(scene: &Scene, cray: &CameraRay) -> Vec3 {
     scene
         .intersect(&cray.ray, cray.t_max)
         .map_or(Vec3::ZERO, |si| si.shading.n)
 }
 
-pub fn albedo(scene: &Scene, cray: &CameraRay) -> Vec3 {
+fn albedo(scene: &Scene, cray: &CameraRay) -> Vec3 {
     scene
         .intersect(&cray.ray, cray.t_max)
         .map_or(Vec3::ZERO, |si| scene.albedo(&si))
@@ -21,7 +72,7 @@ pub fn albedo(scene: &Scene, cray: &CameraRay) -> Vec3 {
 
 /// Distance along the camera ray from its origin on the near-clip plane (Mitsuba's `depth`
 /// AOV; with `near_clip` 0 this is the distance from the camera centre).
-pub fn depth(scene: &Scene, cray: &CameraRay) -> Vec3 {
+fn depth(scene: &Scene, cray: &CameraRay) -> Vec3 {
     scene
         .intersect(&cray.ray, cray.t_max)
         .map_or(Vec3::ZERO, |si| Vec3::splat(si.t))
@@ -29,7 +80,7 @@ pub fn depth(scene: &Scene, cray: &CameraRay) -> Vec3 {
 
 /// Cosine-weighted visibility: with pdf cos θ / π the estimator of (1/π)∫V cos θ dω is the
 /// plain fraction of unoccluded rays. The hemisphere is the one the viewer sees.
-pub fn ambient_occlusion(
+fn ambient_occlusion(
     scene: &Scene,
     cray: &CameraRay,
     sampler: &mut Sampler,

@@ -2,61 +2,66 @@
 //! samples and `bsdf_samples` BSDF samples at the first hit, combined with the power heuristic
 //! on the sample-count-weighted densities.
 
+use super::transport::{self, mis};
+use super::{IntegratorModel, render_per_sample};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
+use crate::drive::Estimator;
 use crate::lights::Receiver;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
-use crate::spectral::lanes::{Color, PathMode, RgbMode};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 
-fn power(a: f32, b: f32) -> f32 {
-    let w = a * a / (a * a + b * b);
-    if w.is_finite() { w } else { 0.0 }
+/// Mitsuba's `direct` parameters: samples per camera sample of each strategy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DirectConfig {
+    pub emitter_samples: u32,
+    pub bsdf_samples: u32,
 }
 
-pub fn li(
-    scene: &Scene,
-    cray: &CameraRay,
-    sampler: &mut Sampler,
-    emitter_samples: u32,
-    bsdf_samples: u32,
-) -> Vec3 {
-    li_in::<RgbMode>(scene, cray, sampler, emitter_samples, bsdf_samples)
+impl<M: PathMode> Estimator<M> for DirectConfig {
+    fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        let m = M::start(sampler);
+        let l = estimate(scene, cray, sampler, &m, self);
+        m.to_rgb(l)
+    }
 }
 
-/// [`li`] in the colour mode `M` (set up for this camera sample from `sampler`), as linear
-/// sRGB.
-pub fn li_in<M: PathMode>(
-    scene: &Scene,
-    cray: &CameraRay,
-    sampler: &mut Sampler,
-    emitter_samples: u32,
-    bsdf_samples: u32,
-) -> Vec3 {
-    let m = M::start(sampler);
-    let l = estimate(scene, cray, sampler, &m, emitter_samples, bsdf_samples);
-    m.to_rgb(l)
+impl IntegratorModel for DirectConfig {
+    fn name(&self) -> &'static str {
+        "direct"
+    }
+
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        render_per_sample::<M, _>(self, scene, opts, observer)
+    }
 }
 
+/// Emission seen directly, then at the first hit `emitter_samples` emitter samples and
+/// `bsdf_samples` BSDF samples, each weighted by the power heuristic over the two
+/// strategies' sample-count-weighted densities (Mitsuba ignores media and lets any surface
+/// block a shadow ray, as its `path` does).
 fn estimate<M: PathMode>(
     scene: &Scene,
     cray: &CameraRay,
     sampler: &mut Sampler,
     m: &M,
-    emitter_samples: u32,
-    bsdf_samples: u32,
+    cfg: &DirectConfig,
 ) -> M::C {
+    let (emitter_samples, bsdf_samples) = (cfg.emitter_samples, cfg.bsdf_samples);
     let Some(si) = scene.intersect(&cray.ray, cray.t_max) else {
-        let mut r = M::C::ZERO;
-        for &i in &scene.infinite_lights {
-            r += scene.lights[i as usize].environment(cray.ray.d, m);
-        }
-        return r;
+        return transport::environment(scene, cray.ray.d, m, M::C::ONE, |_, _| 1.0);
     };
     let mut result = M::C::ZERO;
-    if let Some(l) = scene.shape_light(&si) {
-        result += scene.lights[l as usize].le(scene, &si, m);
+    if let Some((_, le)) = transport::emitter_hit(scene, &si, m) {
+        result += le;
     }
     let Some((bsdf, frame)) = scene.bsdf_at_in(&si, m) else {
         return result;
@@ -69,16 +74,10 @@ fn estimate<M: PathMode>(
 
     if bsdf.has_smooth() && !scene.lights.is_empty() {
         for _ in 0..emitter_samples {
-            let u = sampler.next_1d();
-            let Some((_, light, pmf)) = scene.sample_light(u, &receiver) else {
+            let Some(e) = transport::sample_emitter(scene, &receiver, sampler, m) else {
                 continue;
             };
-            let Some(ls) = light.sample_li(scene, &receiver, sampler.next_2d(), m) else {
-                continue;
-            };
-            if ls.pdf.is_nan() || ls.pdf <= 0.0 || ls.li.is_black() {
-                continue;
-            }
+            let ls = &e.ls;
             let wi = frame.to_local(ls.wi);
             let f = bsdf.eval(wo, wi, TransportMode::Radiance);
             if f.is_black() {
@@ -88,11 +87,11 @@ fn estimate<M: PathMode>(
             if scene.occluded(&ray, t_max) {
                 continue;
             }
-            let pdf = ls.pdf * pmf;
+            let pdf = ls.pdf * e.pmf;
             let w = if ls.delta {
                 1.0
             } else {
-                power(pdf * frac_em, bsdf.pdf(wo, wi) * frac_bsdf)
+                mis::power(pdf * frac_em, bsdf.pdf(wo, wi) * frac_bsdf)
             };
             result += f * ls.li * (w / (pdf * emitter_samples as f32));
         }
@@ -107,23 +106,19 @@ fn estimate<M: PathMode>(
         // Emission found and the density with which emitter sampling (selection included)
         // would have produced the same direction.
         let (le, light_pdf) = match scene.intersect(&ray, f32::INFINITY) {
-            Some(hit) => match scene.shape_light(&hit) {
-                Some(l) => {
-                    let light = &scene.lights[l as usize];
-                    let le = light.le(scene, &hit, m);
-                    let pmf = scene.light_pmf(&receiver, l);
-                    (le, pmf * light.pdf_li(scene, &receiver, wi, Some(&hit)))
-                }
+            Some(hit) => match transport::emitter_hit(scene, &hit, m) {
+                Some((l, le)) => (
+                    le,
+                    transport::emitter_density(scene, &receiver, l, wi, Some(&hit)),
+                ),
                 None => continue,
             },
             None => {
-                let mut le = M::C::ZERO;
                 let mut pdf = 0.0;
-                for &i in &scene.infinite_lights {
-                    let l = &scene.lights[i as usize];
-                    le += l.environment(wi, m);
-                    pdf += scene.light_pmf(&receiver, i) * l.pdf_li(scene, &receiver, wi, None);
-                }
+                let le = transport::environment(scene, wi, m, M::C::ONE, |i, _| {
+                    pdf += transport::emitter_density(scene, &receiver, i, wi, None);
+                    1.0
+                });
                 (le, pdf)
             }
         };
@@ -133,7 +128,7 @@ fn estimate<M: PathMode>(
         let w = if bs.delta || emitter_samples == 0 {
             1.0
         } else {
-            power(bs.pdf * frac_bsdf, light_pdf * frac_em)
+            mis::power(bs.pdf * frac_bsdf, light_pdf * frac_em)
         };
         result += bs.weight * le * (w / bsdf_samples as f32);
     }

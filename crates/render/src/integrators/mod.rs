@@ -1,8 +1,15 @@
-//! Integrators: estimate the radiance (or an AOV) arriving along a camera ray.
+//! Integrators: twelve ways of estimating the light that reaches the camera, each a thin
+//! policy over the transport layer (`transport/`: the walk, the shadow query, next-event
+//! estimation's parts, the emission rule, MIS and roulette) and driven by the loops of
+//! `crate::drive`.
 //!
-//! Closed-set dispatch: [`Integrator`] is an enum and `li` matches on it. Each integrator draws
-//! its random numbers from the sampler it is handed, so the estimate is a pure function of the
-//! sampler's stream.
+//! Every integrator implements [`IntegratorModel`]: its name, why a scene is beyond it, what
+//! it keeps besides the film, and its render in a colour mode `M` (RGB or spectral, chosen
+//! once, at the top: `render::render`). Those that estimate each camera sample on their own
+//! (the AOVs, `path`, `volpath`, `direct`) are also a [`crate::drive::Estimator`] and render
+//! through the tile loop; the light-path integrators (SPPM/PPM, the photon mapper, light
+//! tracing, BDPT, MLT) run their own passes, iterations or chains through the drive's loops.
+//! [`Integrator`] is the closed set the scene asks for, dispatched by one macro.
 
 mod aov;
 pub mod bdpt;
@@ -16,51 +23,63 @@ pub mod sppm;
 pub mod transport;
 pub mod volpath;
 
+pub use self::aov::Aov;
+pub use self::direct::DirectConfig;
+
 use self::path::PathConfig;
-
 use crate::camera::CameraRay;
+use crate::drive::{self, Estimator, adaptive};
 use crate::math::Vec3;
-use crate::spectral::lanes::{RgbMode, SpectralMode};
-use base::RenderMode;
-
-/// Spectral mode with the built-in sRGB upsampling table.
-type Spectral = SpectralMode<'static>;
 use crate::sampling::Sampler;
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
+
+/// What every integrator is.
+pub trait IntegratorModel: Sync {
+    /// The name the command line and messages use.
+    fn name(&self) -> &'static str;
+
+    /// Why `scene` cannot be rendered with this integrator (`None`: it can).
+    fn unsupported(&self, _scene: &Scene) -> Option<String> {
+        None
+    }
+
+    /// What the integrator keeps besides the film (photon maps, visible points, one image
+    /// per strategy), with what it is called, and its peak bytes.
+    fn memory(&self, _scene: &Scene) -> Option<(&'static str, u64)> {
+        None
+    }
+
+    /// Render `scene`, its paths in the colour mode `M`.
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome;
+}
 
 /// The integrators this build can run.
 #[derive(Clone, Debug)]
 pub enum Integrator {
-    /// Shading normal at the first hit (world space, components in [-1,1]); 0 on a miss.
-    Normals,
-    /// Reflectance colour at the first hit; 0 on a miss.
-    Albedo,
-    /// Distance along the camera ray to the first hit; 0 on a miss.
-    Depth,
-    /// Fraction of the cosine-weighted hemisphere that is unoccluded within `length`.
-    AmbientOcclusion { samples: u32, length: f32 },
-    /// Path tracing and its restrictions (Whitted, Nori's variants).
+    /// Arbitrary output variables: normals, albedo, depth, ambient occlusion.
+    Aov(Aov),
+    /// Path tracing and its restrictions (Whitted, Nori's and the courses' variants).
     Path(PathConfig),
     /// Mitsuba's `volpath`: path tracing through participating media.
     VolPath(volpath::VolPathConfig),
-    /// Mitsuba's `direct`: `emitter_samples` + `bsdf_samples` combined with MIS.
-    Direct {
-        emitter_samples: u32,
-        bsdf_samples: u32,
-    },
-    /// Stochastic progressive photon mapping: not an estimator per camera sample, so
-    /// the render driver (`render.rs`) runs it as a whole ([`sppm::render`]).
+    /// Mitsuba's `direct`: emitter and BSDF samples combined with MIS.
+    Direct(DirectConfig),
+    /// Stochastic progressive photon mapping (and PPM).
     Sppm(sppm::SppmConfig),
-    /// Photon mapping: its maps are traced when the render starts, so
-    /// the render driver (`render.rs`) runs it ([`photon::PhotonMapper`]).
+    /// Photon mapping.
     Photon(photon::PhotonConfig),
-    /// Light tracing (Mitsuba 3's particle tracer): light paths splatted into the film, run
-    /// as a whole by the render driver ([`ptracer::render`]).
+    /// Light tracing (Mitsuba 3's particle tracer).
     Ptracer(ptracer::PtracerConfig),
-    /// Bidirectional path tracing: light-tracing strategies splat into the film, so the
-    /// render driver runs it as a whole ([`bdpt::render`]).
+    /// Bidirectional path tracing.
     Bdpt(bdpt::BdptConfig),
-    /// Metropolis light transport over BDPT ([`mlt::render`]).
+    /// Metropolis light transport over BDPT.
     Mlt(mlt::MltConfig),
 }
 
@@ -69,149 +88,129 @@ pub enum Integrator {
 #[error("integrator '{0}' is not implemented yet")]
 pub struct UnsupportedIntegrator(pub String);
 
-impl Integrator {
-    pub fn name(&self) -> &'static str {
-        match self {
-            Integrator::Normals => "normals",
-            Integrator::Albedo => "albedo",
-            Integrator::Depth => "depth",
-            Integrator::AmbientOcclusion { .. } => "ao",
-            Integrator::Path(_) => "path",
-            Integrator::VolPath(_) => "volpath",
-            Integrator::Direct { .. } => "direct",
-            Integrator::Sppm(c) => match c.kind {
-                sppm::Progressive::Stochastic => "sppm",
-                sppm::Progressive::Fixed { .. } => "ppm",
-            },
-            Integrator::Photon(_) => "photon",
-            Integrator::Ptracer(_) => "ptracer",
-            Integrator::Bdpt(_) => "bdpt",
-            Integrator::Mlt(_) => "mlt",
+/// `$e` with `$i` bound to the integrator inside `$s`, whichever it is.
+macro_rules! dispatch {
+    ($s:expr, $i:ident => $e:expr) => {
+        match $s {
+            Integrator::Aov($i) => $e,
+            Integrator::Path($i) => $e,
+            Integrator::VolPath($i) => $e,
+            Integrator::Direct($i) => $e,
+            Integrator::Sppm($i) => $e,
+            Integrator::Photon($i) => $e,
+            Integrator::Ptracer($i) => $e,
+            Integrator::Bdpt($i) => $e,
+            Integrator::Mlt($i) => $e,
         }
-    }
+    };
+}
 
-    /// Whether [`Self::li`] estimates the radiance of one camera sample (every integrator
-    /// but the photon-mapping family and the light tracer, which the render driver,
-    /// `render.rs`, runs as a whole).
-    pub fn per_sample(&self) -> bool {
-        !matches!(
-            self,
-            Integrator::Sppm(_)
-                | Integrator::Photon(_)
-                | Integrator::Ptracer(_)
-                | Integrator::Bdpt(_)
-                | Integrator::Mlt(_)
-        )
-    }
-
-    /// Why `scene` cannot be rendered with this integrator: light paths start only in
-    /// emitting media that fill bounded shapes, and cannot reach an orthographic camera.
-    pub fn unsupported(&self, scene: &Scene) -> Option<String> {
-        if self.per_sample() {
-            return None;
-        }
-        if matches!(
-            self,
-            Integrator::Ptracer(_) | Integrator::Photon(_) | Integrator::Sppm(_)
-        ) && let Err(why) = photons::volume_emitters(scene)
-        {
-            return Some(format!("{}: {why}", self.name()));
-        }
-        if let Integrator::Bdpt(cfg) = self
-            && cfg.strategy_images.is_some()
-            && cfg.max_depth < 0
-        {
-            return Some(
-                "bdpt: per-strategy images need a finite max depth (e.g. --max-depth 6; \
-                 pbrt-v4's default maxdepth 5 is 6 edges)"
-                    .to_string(),
-            );
-        }
-        if matches!(
-            self,
-            Integrator::Ptracer(_) | Integrator::Bdpt(_) | Integrator::Mlt(_)
-        ) && !scene.camera.supports_importance()
-        {
-            return Some(format!(
-                "{}: light paths cannot be connected to an orthographic camera (use path)",
-                self.name()
-            ));
-        }
-        None
-    }
-
-    /// The estimate along one camera ray; 0 for an integrator that is not
-    /// [`Self::per_sample`] (callers check).
-    pub fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
-        match self {
-            Integrator::Normals => aov::normals(scene, cray),
-            Integrator::Albedo => aov::albedo(scene, cray),
-            Integrator::Depth => aov::depth(scene, cray),
-            Integrator::AmbientOcclusion { samples, length } => {
-                aov::ambient_occlusion(scene, cray, sampler, *samples, *length)
-            }
-            Integrator::Path(cfg) => match scene.mode {
-                RenderMode::Rgb => path::li(scene, cray, sampler, cfg),
-                RenderMode::Spectral => path::li_in::<Spectral>(scene, cray, sampler, cfg),
-            },
-            Integrator::VolPath(cfg) => match scene.mode {
-                RenderMode::Rgb => volpath::li(scene, cray, sampler, cfg),
-                RenderMode::Spectral => volpath::li_in::<Spectral>(scene, cray, sampler, cfg),
-            },
-            Integrator::Direct {
-                emitter_samples,
-                bsdf_samples,
-            } => {
-                let (e, b) = (*emitter_samples, *bsdf_samples);
-                match scene.mode {
-                    RenderMode::Rgb => direct::li(scene, cray, sampler, e, b),
-                    RenderMode::Spectral => direct::li_in::<Spectral>(scene, cray, sampler, e, b),
-                }
-            }
+/// `Some($e)` with `$i` bound to the per-sample estimator inside `$s`; `None` for the
+/// integrators that are not one.
+macro_rules! per_sample {
+    ($s:expr, $i:ident => $e:expr) => {
+        match $s {
+            Integrator::Aov($i) => Some($e),
+            Integrator::Path($i) => Some($e),
+            Integrator::VolPath($i) => Some($e),
+            Integrator::Direct($i) => Some($e),
             Integrator::Sppm(_)
             | Integrator::Photon(_)
             | Integrator::Ptracer(_)
             | Integrator::Bdpt(_)
-            | Integrator::Mlt(_) => Vec3::ZERO,
+            | Integrator::Mlt(_) => None,
         }
+    };
+}
+
+impl Integrator {
+    pub fn name(&self) -> &'static str {
+        dispatch!(self, i => i.name())
     }
 
-    /// Estimates for a stream of camera samples: `next` sets the sampler up for the next sample
-    /// and returns its tag and camera ray (`None`: no more); `done` receives each estimate with
-    /// its tag, not necessarily in order. The path tracer keeps several paths in flight
-    /// ([`path::li_batched`]); the others trace one sample at a time with [`Integrator::li`].
-    pub fn li_stream<T>(
+    /// See [`IntegratorModel::unsupported`].
+    pub fn unsupported(&self, scene: &Scene) -> Option<String> {
+        dispatch!(self, i => i.unsupported(scene))
+    }
+
+    /// See [`IntegratorModel::memory`].
+    pub fn memory(&self, scene: &Scene) -> Option<(&'static str, u64)> {
+        dispatch!(self, i => i.memory(scene))
+    }
+
+    /// Whether the integrator estimates each camera sample on its own (what adaptive
+    /// sampling and Nori's statistical tests need).
+    pub fn per_sample(&self) -> bool {
+        per_sample!(self, _i => ()).is_some()
+    }
+
+    /// Render in the colour mode `M` (see [`crate::render::render`], which picks it).
+    pub fn render_in<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        dispatch!(self, i => i.render::<M>(scene, opts, observer))
+    }
+
+    /// One camera sample's estimate in the colour mode `M` (`None`: not a per-sample
+    /// integrator).
+    pub fn li_in<M: PathMode>(
+        &self,
+        scene: &Scene,
+        cray: &CameraRay,
+        sampler: &mut Sampler,
+    ) -> Option<Vec3> {
+        per_sample!(self, i => Estimator::<M>::li(i, scene, cray, sampler))
+    }
+
+    /// A stream of camera samples' estimates in the colour mode `M` (see
+    /// [`Estimator::li_stream`]); `false` when the integrator is not a per-sample one.
+    pub fn li_stream_in<M: PathMode, T>(
         &self,
         scene: &Scene,
         template: &Sampler,
-        mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
-        mut done: impl FnMut(T, Vec3),
-    ) {
-        if let Integrator::Path(cfg) = self
-            && cfg.only_depth.is_none()
-        {
-            // A separate instantiation for clamping: the default loop is untouched.
-            if let Some(max) = cfg.clamp {
-                let clamped = |tag, l| done(tag, path::clamp_sample(l, max));
-                return match scene.mode {
-                    RenderMode::Rgb => {
-                        path::li_batched::<_, RgbMode>(scene, cfg, template, next, clamped)
-                    }
-                    RenderMode::Spectral => {
-                        path::li_batched::<_, Spectral>(scene, cfg, template, next, clamped)
-                    }
-                };
-            }
-            return match scene.mode {
-                RenderMode::Rgb => path::li_batched::<_, RgbMode>(scene, cfg, template, next, done),
-                RenderMode::Spectral => {
-                    path::li_batched::<_, Spectral>(scene, cfg, template, next, done)
-                }
-            };
-        }
-        let mut sampler = template.clone();
-        while let Some((tag, cray)) = next(&mut sampler) {
-            done(tag, self.li(scene, &cray, &mut sampler));
-        }
+        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        done: impl FnMut(T, Vec3),
+    ) -> bool {
+        per_sample!(self, i => Estimator::<M>::li_stream(i, scene, template, next, done)).is_some()
     }
+
+    /// Adaptive sampling in the colour mode `M` (`None`: not a per-sample integrator).
+    pub fn render_adaptive_in<M: PathMode>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        settings: &adaptive::AdaptiveSettings,
+        observer: &dyn RenderObserver,
+    ) -> Option<adaptive::AdaptiveOutcome> {
+        per_sample!(self, i => adaptive::render_adaptive::<M, _>(scene, i, opts, settings, observer))
+    }
+}
+
+/// The render of a per-sample estimator: the tile loop ([`drive::render_tiles`]).
+fn render_per_sample<M: PathMode, E: Estimator<M>>(
+    e: &E,
+    scene: &Scene,
+    opts: &RenderOptions,
+    observer: &dyn RenderObserver,
+) -> RenderOutcome {
+    drive::render_tiles::<M, E>(scene, e, opts, observer)
+}
+
+/// Why light paths cannot be connected to the camera (an orthographic one), for the
+/// integrators that connect them.
+fn camera_unsupported(name: &str, scene: &Scene) -> Option<String> {
+    (!scene.camera.supports_importance()).then(|| {
+        format!("{name}: light paths cannot be connected to an orthographic camera (use path)")
+    })
+}
+
+/// Why light paths cannot start in the scene's emitting media (see
+/// [`photons::volume_emitters`]), for the integrators that trace photons.
+fn volume_unsupported(name: &str, scene: &Scene) -> Option<String> {
+    photons::volume_emitters(scene)
+        .err()
+        .map(|why| format!("{name}: {why}"))
 }

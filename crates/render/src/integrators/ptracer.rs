@@ -29,19 +29,19 @@
 
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use super::photons::{self, CameraWalk, PhotonHit, PhotonJob, PhotonLights};
 use super::transport::{Connection, From, transmittance};
+use super::{IntegratorModel, camera_unsupported, volume_unsupported};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
+use crate::drive::{self, run_passes};
 use crate::lights::ShadowTarget;
 use crate::math::{UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
-use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
-use base::{RenderMode, TransmittanceEstimator};
+use base::TransmittanceEstimator;
 
 /// The parameters of the light tracer.
 #[derive(Clone, Debug, PartialEq)]
@@ -61,17 +61,23 @@ impl Default for PtracerConfig {
     }
 }
 
-/// Render `scene` by light tracing: `opts.spp` passes (a time budget or cancellation stops
-/// after a whole pass).
-pub fn render(
-    scene: &Scene,
-    cfg: &PtracerConfig,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
-    match scene.mode {
-        RenderMode::Rgb => render_in::<RgbMode>(scene, cfg, opts, observer),
-        RenderMode::Spectral => render_in::<SpectralMode<'static>>(scene, cfg, opts, observer),
+impl IntegratorModel for PtracerConfig {
+    fn name(&self) -> &'static str {
+        "ptracer"
+    }
+
+    fn unsupported(&self, scene: &Scene) -> Option<String> {
+        volume_unsupported(self.name(), scene).or_else(|| camera_unsupported(self.name(), scene))
+    }
+
+    /// `opts.spp` passes (a time budget or cancellation stops after a whole pass).
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        render_in::<M>(scene, self, opts, observer)
     }
 }
 
@@ -95,10 +101,9 @@ fn render_in<M: PathMode>(
     let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |pass| {
         // 1. Emitters seen directly: one camera ray per pixel, rows in parallel, merged in
         // row order.
-        let rows: Vec<_> = (pmin.y..pmax.y)
-            .into_par_iter()
-            .map(|y| {
-                let mut tile = film.tile(UVec2::new(pmin.x, y), UVec2::new(pmax.x, y + 1));
+        drive::rows(
+            &mut film,
+            |y, tile| {
                 let mut sampler = template.clone();
                 for x in pmin.x..pmax.x {
                     let (p_film, cray) = camera_sample(scene, &mut sampler, UVec2::new(x, y), pass);
@@ -110,12 +115,9 @@ fn render_in<M: PathMode>(
                     };
                     tile.add_sample(p_film, m.to_rgb(l));
                 }
-                tile
-            })
-            .collect();
-        for tile in &rows {
-            film.merge(tile);
-        }
+            },
+            |_, ()| {},
+        );
         // 2. Light paths, their splats added in chunk order.
         if lights.any() {
             let job = PhotonJob {
@@ -144,14 +146,7 @@ fn render_in<M: PathMode>(
         film.set_splat_scale(1.0 / (pass + 1) as f64);
         observer.pass_done(&film, pass + 1);
     });
-    RenderOutcome {
-        film,
-        spp: done,
-        passes: done,
-        elapsed: start.elapsed(),
-        cancelled,
-        extra: Vec::new(),
-    }
+    RenderOutcome::of_passes(film, done, start, cancelled)
 }
 
 /// The emission a camera ray meets without scattering: an emitter's surface or the

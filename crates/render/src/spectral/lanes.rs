@@ -367,6 +367,9 @@ impl ColorMode for SpectralMode<'_> {
 /// path's estimate into linear sRGB for the film. A clone is the same wavelengths with its
 /// own termination (BDPT's two subpaths each terminate their own).
 pub trait PathMode: ColorMode + Clone + Sized {
+    /// Whether paths carry sampled wavelengths (spectral mode) rather than RGB.
+    const SPECTRAL: bool;
+
     fn start(sampler: &mut impl Samples) -> Self;
     /// The mode `start` makes when the sampler's next number is `u` (the photon-mapping
     /// family shares one set of wavelengths across an iteration's paths).
@@ -391,6 +394,8 @@ pub trait PathMode: ColorMode + Clone + Sized {
 }
 
 impl PathMode for RgbMode {
+    const SPECTRAL: bool = false;
+
     #[inline(always)]
     fn start(_sampler: &mut impl Samples) -> Self {
         RgbMode
@@ -426,6 +431,8 @@ impl PathMode for RgbMode {
 }
 
 impl PathMode for SpectralMode<'static> {
+    const SPECTRAL: bool = true;
+
     #[inline]
     fn start(sampler: &mut impl Samples) -> Self {
         Self::from_u(sampler.next_1d())

@@ -82,15 +82,17 @@ mod walk;
 use std::marker::PhantomData;
 
 pub use self::record::{BdptConnection, BdptSample, BdptVertex, BdptVertexKind};
-pub use self::render::{memory_needed, render};
+pub use self::render::memory_needed;
 pub use self::vertex::Subpaths;
 
 use self::connect::Joins;
 use self::vertex::{Joint, Kind, Modes, Vertex};
+use super::{IntegratorModel, camera_unsupported};
 use crate::camera::CameraRay;
 use crate::math::{Vec2, Vec3};
 use crate::media::MediumKind;
 use crate::sampling::{Distribution1D, Samples};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
@@ -182,6 +184,38 @@ pub struct Bdpt<'a, M: PathMode = RgbMode> {
     /// strategy.
     flight_densities: bool,
     mode: PhantomData<fn() -> M>,
+}
+
+impl IntegratorModel for BdptConfig {
+    fn name(&self) -> &'static str {
+        "bdpt"
+    }
+
+    fn unsupported(&self, scene: &Scene) -> Option<String> {
+        if self.strategy_images.is_some() && self.max_depth < 0 {
+            return Some(
+                "bdpt: per-strategy images need a finite max depth (e.g. --max-depth 6; \
+                 pbrt-v4's default maxdepth 5 is 6 edges)"
+                    .to_string(),
+            );
+        }
+        camera_unsupported(self.name(), scene)
+    }
+
+    fn memory(&self, scene: &Scene) -> Option<(&'static str, u64)> {
+        self.strategy_images
+            .map(|_| ("keeping one image per strategy", memory_needed(scene, self)))
+    }
+
+    /// `opts.spp` passes of one sample per pixel (see `render.rs`).
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        render::render_in::<M>(scene, self, opts, observer)
+    }
 }
 
 impl<'a, M: PathMode> Bdpt<'a, M> {

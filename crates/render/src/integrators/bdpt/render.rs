@@ -4,17 +4,15 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use super::vertex::Subpaths;
 use super::{Bdpt, BdptConfig, StrategyImages, StrategySink};
-use crate::film::Film;
+use crate::drive::{self, run_passes};
+use crate::film::{Film, FilmTile};
 use crate::math::{UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample, run_passes};
-use crate::spectral::lanes::{Color, PathMode, RgbMode, SpectralMode};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
-use base::RenderMode;
 
 /// The per-strategy images' part of one camera sample: (s, t, film position, value).
 struct StrategyRecord<'a> {
@@ -43,25 +41,13 @@ pub fn memory_needed(scene: &Scene, cfg: &BdptConfig) -> u64 {
     }
 }
 
-/// Render `scene` with BDPT: `opts.spp` passes of one sample per pixel, rows in parallel,
+/// BDPT in the colour mode `M`: `opts.spp` passes of one sample per pixel, rows in parallel,
 /// each row's film tile and light-tracing splats merged in row order (the image does not
 /// depend on the thread count); a time budget or cancellation stops after a whole pass.
 /// With `cfg.strategy_images` the outcome also holds one image per strategy (s, t), named
 /// by [`StrategyImages::name`]: every contribution splatted at its film position, so that
 /// with the box filter the weighted images sum to the image up to rounding.
-pub fn render(
-    scene: &Scene,
-    cfg: &BdptConfig,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
-    match scene.mode {
-        RenderMode::Rgb => render_in::<RgbMode>(scene, cfg, opts, observer),
-        RenderMode::Spectral => render_in::<SpectralMode<'static>>(scene, cfg, opts, observer),
-    }
-}
-
-fn render_in<M: PathMode>(
+pub(super) fn render_in<M: PathMode>(
     scene: &Scene,
     cfg: &BdptConfig,
     opts: &RenderOptions,
@@ -85,44 +71,39 @@ fn render_in<M: PathMode>(
         None => BTreeMap::new(),
     };
     let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |pass| {
-        let rows: Vec<_> = (pmin.y..pmax.y)
-            .into_par_iter()
-            .map(|y| {
-                let mut tile = film.tile(UVec2::new(pmin.x, y), UVec2::new(pmax.x, y + 1));
-                let mut splats = Vec::new();
-                let mut records = Vec::new();
-                let mut paths = Subpaths::default();
-                let mut sampler = template.clone();
-                for x in pmin.x..pmax.x {
-                    let (p_film, cray) = camera_sample(scene, &mut sampler, UVec2::new(x, y), pass);
-                    let (s, p) = (&mut sampler, &mut paths);
-                    let l = match cfg.strategy_images {
-                        None => bdpt.li(scene, &cray, s, p, &mut splats, &mut ()),
-                        Some(kind) => {
-                            let mut record = StrategyRecord {
-                                p_film,
-                                weighted: kind == StrategyImages::Weighted,
-                                out: &mut records,
-                            };
-                            bdpt.li(scene, &cray, s, p, &mut splats, &mut record)
-                        }
-                    };
-                    tile.add_sample(p_film, l);
-                }
-                (tile, splats, records)
-            })
-            .collect();
-        for (tile, splats, records) in &rows {
-            film.merge(tile);
-            for &(p, c) in splats {
+        let row = |y: u32, tile: &mut FilmTile| {
+            let mut splats = Vec::new();
+            let mut records = Vec::new();
+            let mut paths = Subpaths::default();
+            let mut sampler = template.clone();
+            for x in pmin.x..pmax.x {
+                let (p_film, cray) = camera_sample(scene, &mut sampler, UVec2::new(x, y), pass);
+                let (s, p) = (&mut sampler, &mut paths);
+                let l = match cfg.strategy_images {
+                    None => bdpt.li(scene, &cray, s, p, &mut splats, &mut ()),
+                    Some(kind) => {
+                        let mut record = StrategyRecord {
+                            p_film,
+                            weighted: kind == StrategyImages::Weighted,
+                            out: &mut records,
+                        };
+                        bdpt.li(scene, &cray, s, p, &mut splats, &mut record)
+                    }
+                };
+                tile.add_sample(p_film, l);
+            }
+            (splats, records)
+        };
+        drive::rows(&mut film, row, |film, (splats, records)| {
+            for (p, c) in splats {
                 film.add_splat(p, c);
             }
-            for &(s, t, p, c) in records {
+            for (s, t, p, c) in records {
                 if let Some(img) = strategy_films.get_mut(&(s, t)) {
                     img.add_splat(p, c);
                 }
             }
-        }
+        });
         film.set_splat_scale(1.0 / (per_pass * (pass + 1) as f64));
         observer.pass_done(&film, pass + 1);
     });
@@ -137,11 +118,7 @@ fn render_in<M: PathMode>(
         })
         .collect();
     RenderOutcome {
-        film,
-        spp: done,
-        passes: done,
-        elapsed: start.elapsed(),
-        cancelled,
         extra,
+        ..RenderOutcome::of_passes(film, done, start, cancelled)
     }
 }

@@ -48,9 +48,12 @@ pub use self::record::{
 };
 use self::vertex::{PathState, Tracer};
 use super::transport::Heuristic;
+use super::{IntegratorModel, render_per_sample};
 use crate::camera::CameraRay;
+use crate::drive::Estimator;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
@@ -152,6 +155,53 @@ pub fn clamp_sample(l: Vec3, max: f32) -> Vec3 {
 
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &PathConfig) -> Vec3 {
     li_in::<RgbMode>(scene, cray, sampler, cfg)
+}
+
+impl<M: PathMode> Estimator<M> for PathConfig {
+    fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        let l = li_in::<M>(scene, cray, sampler, self);
+        self.clamp.map_or(l, |max| clamp_sample(l, max))
+    }
+
+    /// Several paths in flight per thread ([`li_batched`]), unless `only_depth` asks for a
+    /// recorder (one path at a time).
+    fn li_stream<T>(
+        &self,
+        scene: &Scene,
+        template: &Sampler,
+        mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        mut done: impl FnMut(T, Vec3),
+    ) {
+        if self.only_depth.is_some() {
+            let mut sampler = template.clone();
+            while let Some((tag, cray)) = next(&mut sampler) {
+                done(tag, Estimator::<M>::li(self, scene, &cray, &mut sampler));
+            }
+            return;
+        }
+        // A separate instantiation for clamping: the default loop is untouched.
+        match self.clamp {
+            Some(max) => li_batched::<_, M>(scene, self, template, next, |tag, l| {
+                done(tag, clamp_sample(l, max))
+            }),
+            None => li_batched::<_, M>(scene, self, template, next, done),
+        }
+    }
+}
+
+impl IntegratorModel for PathConfig {
+    fn name(&self) -> &'static str {
+        "path"
+    }
+
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        render_per_sample::<M, _>(self, scene, opts, observer)
+    }
 }
 
 /// [`li`] in the colour mode `M` (set up for this camera sample from `sampler`), as linear

@@ -44,9 +44,14 @@ pub use map::{PhotonMap, StoredPhoton};
 use self::gather::Gather;
 use self::map::MapData;
 use super::photons::{self, PhotonHit, PhotonJob, PhotonLights};
+use std::time::Instant;
+
+use super::{IntegratorModel, volume_unsupported};
 use crate::camera::CameraRay;
+use crate::drive::{self, Estimator};
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
@@ -238,9 +243,39 @@ pub struct PhotonMapper<'a, M: PathMode = RgbMode> {
     points: Vec<Vec3>,
 }
 
-impl<M: PathMode> PhotonMapper<'_, M> {
+impl IntegratorModel for PhotonConfig {
+    fn name(&self) -> &'static str {
+        "photon"
+    }
+
+    fn unsupported(&self, scene: &Scene) -> Option<String> {
+        volume_unsupported(self.name(), scene)
+    }
+
+    fn memory(&self, _scene: &Scene) -> Option<(&'static str, u64)> {
+        Some(("storing the photons", memory_needed(self)))
+    }
+
+    /// The maps first (in spectral mode one set per [`WAVELENGTH_SETS`]), then the camera
+    /// pass through the tile loop.
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        let start = Instant::now();
+        let sets = if M::SPECTRAL { WAVELENGTH_SETS } else { 1 };
+        let mapper = PhotonMapper::<M>::build(scene, self, scene.sampler.seed, sets);
+        let mut out = drive::render_tiles::<M, _>(scene, &mapper, opts, observer);
+        out.elapsed = start.elapsed();
+        out
+    }
+}
+
+impl<M: PathMode> Estimator<M> for PhotonMapper<'_, M> {
     /// The radiance along a camera ray (linear sRGB).
-    pub fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+    fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
         // One set (RGB) draws nothing, so RGB's sample streams do not depend on the mode.
         let n = self.sets.len();
         let (u, maps) = if n == 1 {

@@ -39,7 +39,7 @@
 //! Spectral mode: in SPPM all the paths of an iteration carry one set of wavelengths, which
 //! follows a rank-1 lattice over the iterations; PPM's visible points are traced once, so
 //! they are spread over [`super::photon::WAVELENGTH_SETS`] sets by slot and each pass
-//! traces a group of photons per set ([`render`]).
+//! traces a group of photons per set.
 
 mod grid;
 mod visible;
@@ -51,11 +51,13 @@ use rayon::prelude::*;
 use self::grid::Grid;
 use self::visible::{CameraPass, CameraSample, Gatherers, VisiblePoint};
 use super::photons::{self, PhotonHit, PhotonJob, PhotonLights};
+use super::{IntegratorModel, volume_unsupported};
+use crate::drive::run_passes;
 use crate::film::{Film, Filter};
 use crate::math::{PI, UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome, run_passes};
-use crate::spectral::lanes::{PathMode, RgbMode, SpectralMode};
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 use base::FilterDesc;
 
@@ -170,7 +172,7 @@ struct Slot {
 type CameraRow<C> = (Vec<Vec3>, Vec<VisiblePoint<C>>);
 
 /// Peak bytes of SPPM's state for `scene`: a slot per pixel (per eye sample in PPM), about one
-/// visible point per slot (at the spectral size when spectral), the grid's entries (up to 27
+/// visible point per slot, the grid's entries (up to 27
 /// cells a point) and an iteration's photon contributions (about two per photon).
 pub fn memory_needed(scene: &Scene, cfg: &SppmConfig) -> u64 {
     let f = &scene.film;
@@ -179,35 +181,47 @@ pub fn memory_needed(scene: &Scene, cfg: &SppmConfig) -> u64 {
         Progressive::Stochastic => 1,
         Progressive::Fixed { eye_samples } => eye_samples.max(1) as u64,
     };
-    let vp = match scene.mode {
-        base::RenderMode::Rgb => std::mem::size_of::<VisiblePoint<Vec3>>(),
-        base::RenderMode::Spectral => {
-            std::mem::size_of::<VisiblePoint<crate::spectral::SampledSpectrum>>()
-        }
-    } as u64;
+    // At the size of a spectral one, the larger.
+    let vp = std::mem::size_of::<VisiblePoint<Vec3>>().max(std::mem::size_of::<
+        VisiblePoint<crate::spectral::SampledSpectrum>,
+    >()) as u64;
     let slots = pixels * eye;
     let photons = cfg.photons.unwrap_or(pixels);
     slots * (std::mem::size_of::<Slot>() as u64 + vp + 27 * 4 + 8)
         + photons.saturating_mul(2 * std::mem::size_of::<(u32, Vec3)>() as u64)
 }
 
-/// Render `scene` with SPPM: `opts.spp` iterations (a time budget or cancellation stops
-/// after a whole iteration).
-pub fn render(
-    scene: &Scene,
-    cfg: &SppmConfig,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
-    match scene.mode {
-        base::RenderMode::Rgb => render_in::<RgbMode>(scene, cfg, opts, observer),
-        base::RenderMode::Spectral => {
-            render_in::<SpectralMode<'static>>(scene, cfg, opts, observer)
+impl IntegratorModel for SppmConfig {
+    fn name(&self) -> &'static str {
+        match self.kind {
+            Progressive::Stochastic => "sppm",
+            Progressive::Fixed { .. } => "ppm",
         }
+    }
+
+    fn unsupported(&self, scene: &Scene) -> Option<String> {
+        volume_unsupported(self.name(), scene)
+    }
+
+    fn memory(&self, scene: &Scene) -> Option<(&'static str, u64)> {
+        Some((
+            "keeping the visible points and photon contributions",
+            memory_needed(scene, self),
+        ))
+    }
+
+    /// `opts.spp` iterations (a time budget or cancellation stops after a whole iteration).
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        render_in::<M>(scene, self, opts, observer)
     }
 }
 
-/// [`render`] in the colour mode `M`: every path of an iteration (camera and photon) carries
+/// SPPM in the colour mode `M`: every path of an iteration (camera and photon) carries
 /// the same wavelengths, drawn per iteration from the seed (pbrt-v4 draws them per pixel
 /// and per photon; a shared set is what lets a photon's flux be weighed by a visible point's
 /// BSDF at the same wavelengths — the extended-Nori write-up's one map per wavelength set).
@@ -228,14 +242,7 @@ fn render_in<M: PathMode + Send>(
     });
     let film = sppm.develop(done);
     observer.pass_done(&film, done);
-    RenderOutcome {
-        film,
-        spp: done,
-        passes: done,
-        elapsed: start.elapsed(),
-        cancelled,
-        extra: Vec::new(),
-    }
+    RenderOutcome::of_passes(film, done, start, cancelled)
 }
 
 /// SPPM's state between iterations.
@@ -288,9 +295,10 @@ impl<'a, M: PathMode + Send> Sppm<'a, M> {
             Progressive::Stochastic => (1, true),
             Progressive::Fixed { eye_samples } => (eye_samples.max(1), false),
         };
-        let groups = match scene.mode {
-            base::RenderMode::Spectral if !nee => super::photon::WAVELENGTH_SETS,
-            _ => 1,
+        let groups = if M::SPECTRAL && !nee {
+            super::photon::WAVELENGTH_SETS
+        } else {
+            1
         };
         let kernel = Kernel {
             radius: radius0,

@@ -36,11 +36,14 @@ use super::path::{
 use super::transport::{
     self, Connection, Event, From, Heuristic, Previous, Scatterer, Walker, mis, roulette,
 };
+use super::{IntegratorModel, render_per_sample};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
+use crate::drive::Estimator;
 use crate::lights::Receiver;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
+use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
@@ -76,6 +79,27 @@ const PHASE: Scatter = Scatter {
 #[inline]
 pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathConfig) -> Vec3 {
     li_in::<RgbMode>(scene, cray, sampler, cfg)
+}
+
+impl<M: PathMode> Estimator<M> for VolPathConfig {
+    fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        li_in::<M>(scene, cray, sampler, self)
+    }
+}
+
+impl IntegratorModel for VolPathConfig {
+    fn name(&self) -> &'static str {
+        "volpath"
+    }
+
+    fn render<M: PathMode + Send>(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        observer: &dyn RenderObserver,
+    ) -> RenderOutcome {
+        render_per_sample::<M, _>(self, scene, opts, observer)
+    }
 }
 
 /// [`li`] in the colour mode `M` (set up for this camera sample from `sampler`), as linear

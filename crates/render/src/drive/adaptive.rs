@@ -17,12 +17,13 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
+use super::Estimator;
 use crate::film::image::Image;
 use crate::film::{Film, FilmTile};
-use crate::integrators::Integrator;
 use crate::math::{UVec2, Vec3};
 use crate::sampling::Sampler;
 use crate::session::{Progress, RenderObserver, RenderOptions, camera_sample};
+use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
 /// Confidence-interval factor: 95 % two-sided for a normal mean.
@@ -122,9 +123,9 @@ struct PixelState {
 /// bit-identical for any thread count. Rounds are short, so no worker idles long behind one
 /// slow tile at the end, and `opts.cancel` stops after the current round with every pixel the
 /// mean of the samples it has. `opts.time_budget` and `opts.pass_duration` are ignored.
-pub fn render_adaptive(
+pub fn render_adaptive<M: PathMode, E: Estimator<M>>(
     scene: &Scene,
-    integrator: &Integrator,
+    integrator: &E,
     opts: &RenderOptions,
     settings: &AdaptiveSettings,
     observer: &dyn RenderObserver,
