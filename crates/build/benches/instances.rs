@@ -133,7 +133,9 @@ fn main() {
     };
     let t_load = t0.elapsed();
     let t1 = Instant::now();
-    let build::Built { scene, integrator } = build(&desc, &BuildOptions::default()).expect("build");
+    let build::Built {
+        scene, integrator, ..
+    } = build(&desc, &BuildOptions::default()).expect("build");
     let t_build = t1.elapsed();
     let peak = peak_rss_kb();
     let total = t0.elapsed();

@@ -27,7 +27,7 @@ use render::math::Vec3;
 use render::render::{RenderOptions, RenderOutcome, Silent, render};
 use render::shapes::ShapeGeom;
 use render::textures::Textures;
-use render::world::Scene;
+use render::world::{SamplerSettings, Scene};
 use scene::{IntegratorDesc, LightSelection, Loc, Material, MaterialId, SceneDesc, SppmDesc};
 
 /// A problem found while building (unreadable texture, unsupported feature).
@@ -60,6 +60,10 @@ pub struct BuildOptions {
 pub struct Built {
     pub scene: Scene,
     pub integrator: Integrator,
+    /// Samples per pixel (iterations, passes or mutations per pixel for the integrators that
+    /// count them so): the scene's, or `BuildOptions::spp`, or Mitsuba 0.6's `maxPasses`.
+    /// The one value a render's `RenderOptions::spp` is made from.
+    pub spp: u32,
 }
 
 /// Turn a loaded scene into a renderable one.
@@ -167,13 +171,11 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         film.height = h;
         film.crop = None;
     }
-    let mut sampler = sensor.sampler.clone();
-    if let Some(spp) = opts.spp {
-        sampler.spp = spp;
-    }
-    if let Some(seed) = opts.seed {
-        sampler.seed = seed;
-    }
+    let mut spp = opts.spp.unwrap_or(sensor.sampler.spp);
+    let sampler = SamplerSettings {
+        kind: sensor.sampler.kind,
+        seed: opts.seed.unwrap_or(sensor.sampler.seed),
+    };
     let camera = camera::camera(&sensor.camera, film.width, film.height);
     let integrator_desc = opts
         .integrator
@@ -188,7 +190,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         }),
     ) = (opts.spp, &integrator_desc)
     {
-        sampler.spp = *n;
+        spp = *n;
     }
     let ambient: Vec3 = desc
         .emitters
@@ -262,18 +264,26 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
     };
     scene.light_sampler =
         LightSampler::new(selection, &scene.lights, &scene.infinite_lights, &scene);
-    Ok(Built { scene, integrator })
+    Ok(Built {
+        scene,
+        integrator,
+        spp,
+    })
 }
 
 /// Build `desc` with `opts` and render it to the end with no observer: the convenience of
-/// tests and tools that need one image (the spp is the scene's after `opts.spp`).
+/// tests and tools that need one image (at [`Built::spp`]).
 pub fn render_desc(desc: &SceneDesc, opts: &BuildOptions) -> Result<RenderOutcome, String> {
-    let Built { scene, integrator } = build(desc, opts).map_err(|e| e.to_string())?;
+    let Built {
+        scene,
+        integrator,
+        spp,
+    } = build(desc, opts).map_err(|e| e.to_string())?;
     Ok(render(
         &scene,
         &integrator,
         &RenderOptions {
-            spp: scene.sampler.spp,
+            spp,
             ..Default::default()
         },
         &Silent,

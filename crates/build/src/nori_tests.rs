@@ -81,7 +81,9 @@ fn bsdf_of(desc: &SceneDesc, id: MaterialId) -> Result<Bsdf, TestError> {
 
 /// Mean and variance of the luminance of `n` camera samples of `desc`.
 fn scene_estimate(desc: &SceneDesc, n: u64, seed: u64) -> Result<MeanVar, TestError> {
-    let Built { scene, integrator } = build(desc, &BuildOptions::default())?;
+    let Built {
+        scene, integrator, ..
+    } = build(desc, &BuildOptions::default())?;
     let (w, h) = (scene.film.width.max(1), scene.film.height.max(1));
     const CHUNK: u64 = 4096;
     let chunks: Vec<MeanVar> = (0..n.div_ceil(CHUNK))

@@ -112,7 +112,9 @@ fn one_absorbing_medium_per_absorbing_material() {
     extra.material = Some(two);
     desc.shapes.push(extra);
 
-    let Built { scene, integrator } = build(&desc, &BuildOptions::default()).unwrap();
+    let Built {
+        scene, integrator, ..
+    } = build(&desc, &BuildOptions::default()).unwrap();
     assert_eq!(scene.media.len(), 3, "Amber, Tea and Unused");
     let interior_of = |m: u32| -> Vec<Option<u32>> {
         desc.shapes
@@ -175,7 +177,9 @@ fn declared_media_keep_path_ignoring_media() {
         (IntegratorDesc::Path(PathDesc::default()), false),
         (IntegratorDesc::Whitted { max_depth: 5 }, false),
     ] {
-        let Built { scene, integrator } = build(
+        let Built {
+            scene, integrator, ..
+        } = build(
             &desc,
             &BuildOptions {
                 integrator: Some(integrator),

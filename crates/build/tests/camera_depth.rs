@@ -180,7 +180,9 @@ fn orthographic_depth_image_of_a_facing_plane_is_exact() {
     };
     let plane = shape(Shape::Rectangle, Mat4::from_scale(Vec3::splat(10.0)));
     let desc = scene_with(camera, vec![plane], 16, 12);
-    let build::Built { scene, integrator } = build(&desc, &BuildOptions::default()).unwrap();
+    let build::Built {
+        scene, integrator, ..
+    } = build(&desc, &BuildOptions::default()).unwrap();
     let out = render(
         &scene,
         &integrator,

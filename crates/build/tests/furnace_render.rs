@@ -90,7 +90,9 @@ fn furnace_in(material: Material, fov: f32, mode: scene::RenderMode, spp: u32) -
         mode,
         ..Default::default()
     };
-    let build::Built { scene, integrator } = build(&desc, &opts).unwrap();
+    let build::Built {
+        scene, integrator, ..
+    } = build(&desc, &opts).unwrap();
     let out = render(
         &scene,
         &integrator,

@@ -154,7 +154,9 @@ impl SqrtOrNeg for f32 {
 fn time_averaged_coverage_matches_the_analytic_fraction() {
     let (w, h, spp) = (32u32, 32u32, 2048u32);
     let desc = scene_desc(w, h, spp);
-    let build::Built { scene, integrator } = build(&desc, &BuildOptions::default()).unwrap();
+    let build::Built {
+        scene, integrator, ..
+    } = build(&desc, &BuildOptions::default()).unwrap();
     assert!(scene.has_motion);
     let img = render(
         &scene,

@@ -240,7 +240,9 @@ fn batched_paths_equal_one_at_a_time() {
         },
     ));
     for (name, path) in configs {
-        let build::Built { scene, integrator } = build(
+        let build::Built {
+            scene, integrator, ..
+        } = build(
             &desc,
             &BuildOptions {
                 spp: Some(SPP),

@@ -58,7 +58,9 @@ fn render_mode(
         mode,
         ..Default::default()
     };
-    let Built { scene, integrator } = build(desc, &opts).expect("scene builds");
+    let Built {
+        scene, integrator, ..
+    } = build(desc, &opts).expect("scene builds");
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -329,8 +331,12 @@ fn mitsuba_progressive_parameters() {
                 spp,
                 ..Default::default()
             };
-            let Built { scene, integrator } = build(&desc, &opts).expect("builds");
-            assert_eq!(scene.sampler.spp, want, "{ty}, --spp {spp:?}");
+            let Built {
+                integrator,
+                spp: got,
+                ..
+            } = build(&desc, &opts).expect("builds");
+            assert_eq!(got, want, "{ty}, --spp {spp:?}");
             let Integrator::Sppm(cfg) = integrator else {
                 panic!("{ty}: {integrator:?}")
             };

@@ -328,7 +328,11 @@ fn render_with_layers(
     dev: &(dyn Fn(&mut Image) + Sync),
 ) -> Result<(), Failure> {
     crate::check_outputs(&job.outputs)?;
-    let build::Built { scene, integrator } = build(desc, &job.build).map_err(Failure::input)?;
+    let build::Built {
+        scene,
+        integrator,
+        spp,
+    } = build(desc, &job.build).map_err(Failure::input)?;
     for w in &scene.warnings {
         eprintln!("{w}");
     }
@@ -340,11 +344,11 @@ fn render_with_layers(
         .build()
         .map_err(Failure::other)?;
     let start = std::time::Instant::now();
-    let films = pool.install(|| render_layers(&scene, &cfg, scene.sampler.spp, 16));
+    let films = pool.install(|| render_layers(&scene, &cfg, spp, 16));
     if !job.quiet {
         eprintln!(
             "rendered {} spp with layers in {:.2} s",
-            scene.sampler.spp,
+            spp,
             start.elapsed().as_secs_f64()
         );
     }

@@ -1012,7 +1012,11 @@ pub(crate) fn render_scene_with(
     }
 
     let start = std::time::Instant::now();
-    let build::Built { scene, integrator } = build(desc, &job.build).map_err(Failure::input)?;
+    let build::Built {
+        scene,
+        integrator,
+        spp,
+    } = build(desc, &job.build).map_err(Failure::input)?;
     if !job.quiet {
         eprintln!(
             "built the scene (BVH, lights) in {:.3} s",
@@ -1044,10 +1048,11 @@ pub(crate) fn render_scene_with(
         });
     }
     let ropts = RenderOptions {
+        // A time budget without --spp: as many passes as fit.
         spp: if job.time.is_some() && job.build.spp.is_none() {
             u32::MAX / 2
         } else {
-            scene.sampler.spp
+            spp
         },
         time_budget: job.time.map(Duration::from_secs_f64),
         cancel,

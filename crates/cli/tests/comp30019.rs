@@ -182,7 +182,9 @@ fn load(path: &Path) -> SceneDesc {
 #[test]
 fn layers_sum_to_beauty() {
     let desc = load(&ours("showcase.txt"));
-    let build::Built { scene, integrator } = build(
+    let build::Built {
+        scene, integrator, ..
+    } = build(
         &desc,
         &BuildOptions {
             spp: Some(4),

@@ -32,7 +32,9 @@ fn integrator(hemisphere: bool) -> IntegratorDesc {
 }
 
 fn render_one(desc: &SceneDesc, integ: &IntegratorDesc, spp: u32, seed: u64) -> Image {
-    let build::Built { scene, integrator } = build(
+    let build::Built {
+        scene, integrator, ..
+    } = build(
         desc,
         &BuildOptions {
             spp: Some(spp),
@@ -109,7 +111,9 @@ fn adaptive_sampling_reaches_the_same_mean() {
     let mut total = 0u64;
     let test: Vec<Image> = (0..16)
         .map(|s| {
-            let build::Built { scene, integrator } = build(
+            let build::Built {
+                scene, integrator, ..
+            } = build(
                 &dae,
                 &BuildOptions {
                     spp: Some(64),
@@ -148,6 +152,7 @@ fn adaptive_sampling_is_deterministic_across_thread_counts() {
     let build::Built {
         scene,
         integrator: integ,
+        ..
     } = build(
         &dae,
         &BuildOptions {

@@ -3,7 +3,7 @@
 //! hit, occlusion, parameters at a hit, light selection). Built by [`crate::build`]; the
 //! integrators, lights and materials read it and never the builder.
 
-use base::SamplerDesc;
+use base::SamplerKind;
 use base::spectrum::DeclaredSpectrum;
 
 use crate::accel::{Accel, Hit};
@@ -34,6 +34,13 @@ pub enum ShapeLights {
     },
 }
 
+/// The sampler a scene's pixel samples draw from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SamplerSettings {
+    pub kind: SamplerKind,
+    pub seed: u64,
+}
+
 pub struct Scene {
     /// The colour mode the scene was built for and its paths run in.
     pub mode: base::RenderMode,
@@ -45,7 +52,9 @@ pub struct Scene {
     pub textures: Textures,
     pub camera: Camera,
     pub film: FilmSettings,
-    pub sampler: SamplerDesc,
+    /// How pixel samples draw their numbers (the samples per pixel are the render's,
+    /// `RenderOptions::spp`).
+    pub sampler: SamplerSettings,
     pub background: Option<Vec3>,
     /// A texture over the image seen by escaping camera rays (CENG795 `replace_background`).
     pub background_texture: Option<u32>,
