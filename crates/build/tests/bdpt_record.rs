@@ -65,7 +65,14 @@ fn check_sample(
     let mut b = a.clone();
     let (_, cray) = camera_sample(scene, &mut a, pixel, index);
     let mut splats = Vec::new();
-    let l = bdpt.estimate(scene, &cray, &mut a, &mut Subpaths::default(), &mut splats);
+    let l = bdpt.li(
+        scene,
+        &cray,
+        &mut a,
+        &mut Subpaths::default(),
+        &mut splats,
+        &mut (),
+    );
     let (_, cray_b) = camera_sample(scene, &mut b, pixel, index);
     let rec = bdpt.record(scene, &cray_b, &mut b, &mut Subpaths::default());
     let at = format!("pixel {pixel} #{index}");

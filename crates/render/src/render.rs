@@ -13,7 +13,7 @@ use crate::world::Scene;
 use base::RenderMode;
 
 pub use crate::session::{
-    Progress, RenderObserver, RenderOptions, RenderOutcome, Silent, camera_sample,
+    Job, Progress, RenderObserver, RenderOptions, RenderOutcome, Silent, camera_sample,
 };
 
 /// Something run in a colour mode: RGB, or spectral with the built-in sRGB upsampling.
@@ -43,26 +43,19 @@ pub fn render(
     opts: &RenderOptions,
     observer: &dyn RenderObserver,
 ) -> RenderOutcome {
-    struct Task<'a> {
-        scene: &'a Scene,
-        integrator: &'a Integrator,
-        opts: &'a RenderOptions,
-        observer: &'a dyn RenderObserver,
-    }
+    struct Task<'a>(&'a Integrator, Job<'a>);
     impl InMode for Task<'_> {
         type Out = RenderOutcome;
         fn run<M: PathMode + Send>(self) -> RenderOutcome {
-            self.integrator
-                .render_in::<M>(self.scene, self.opts, self.observer)
+            self.0.render_in::<M>(&self.1)
         }
     }
-    let task = Task {
+    let job = Job {
         scene,
-        integrator,
         opts,
         observer,
     };
-    in_mode(scene.mode, task)
+    in_mode(scene.mode, Task(integrator, job))
 }
 
 /// CS184's adaptive sampling of `scene` with a per-sample `integrator` (`None` for the
@@ -74,29 +67,19 @@ pub fn render_adaptive(
     settings: &AdaptiveSettings,
     observer: &dyn RenderObserver,
 ) -> Option<AdaptiveOutcome> {
-    struct Task<'a> {
-        scene: &'a Scene,
-        integrator: &'a Integrator,
-        opts: &'a RenderOptions,
-        settings: &'a AdaptiveSettings,
-        observer: &'a dyn RenderObserver,
-    }
+    struct Task<'a>(&'a Integrator, Job<'a>, &'a AdaptiveSettings);
     impl InMode for Task<'_> {
         type Out = Option<AdaptiveOutcome>;
         fn run<M: PathMode + Send>(self) -> Option<AdaptiveOutcome> {
-            let t = self;
-            t.integrator
-                .render_adaptive_in::<M>(t.scene, t.opts, t.settings, t.observer)
+            self.0.render_adaptive_in::<M>(&self.1, self.2)
         }
     }
-    let task = Task {
+    let job = Job {
         scene,
-        integrator,
         opts,
-        settings,
         observer,
     };
-    in_mode(scene.mode, task)
+    in_mode(scene.mode, Task(integrator, job, settings))
 }
 
 /// One camera sample's estimate by a per-sample `integrator` (`None` for the others), in the

@@ -61,6 +61,25 @@ pub struct RenderOutcome {
     pub extra: Vec<(String, Film)>,
 }
 
+/// A render as the integrators and the loops receive it: the scene, what is asked, and who
+/// is told.
+#[derive(Clone, Copy)]
+pub struct Job<'a> {
+    pub scene: &'a Scene,
+    pub opts: &'a RenderOptions,
+    pub observer: &'a dyn RenderObserver,
+}
+
+impl Job<'_> {
+    /// A blank film of the scene's, and the sampler every pixel sample of the render starts
+    /// from (the scene's kind and seed, the render's samples per pixel).
+    pub fn film_and_sampler(&self) -> (Film, Sampler) {
+        let s = self.scene;
+        let template = Sampler::new(s.sampler.kind, self.opts.spp.max(1), s.sampler.seed);
+        (s.film.film(), template)
+    }
+}
+
 impl RenderOutcome {
     /// The outcome of `passes` whole passes (iterations) into `film`, begun at `start`.
     pub fn of_passes(film: Film, passes: u32, start: std::time::Instant, cancelled: bool) -> Self {

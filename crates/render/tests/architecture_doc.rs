@@ -4,7 +4,9 @@
 //!   fails the tests. Inside a folder (`bsdf/`, `lights/`, `sampling/`...) the folder's own
 //!   docs list its files.
 //! - The renderer does not depend on the scene model (only `penumbra-build` reads both).
-//! - The renderer's modules import each other without a circle.
+//! - The renderer's modules import each other without a circle, and so do the modules inside
+//!   each of its folders (a folder's `mod.rs` aside: it is the folder's face, which its
+//!   files may use).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -105,11 +107,9 @@ fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
     graph
 }
 
-#[test]
-fn renderer_modules_import_each_other_without_a_circle() {
-    let graph = module_graph();
-    assert!(graph.len() > 15, "only {} modules found", graph.len());
-    // Depth-first search; a grey node reached again closes a circle.
+/// A circle in `graph`, if there is one (depth-first search; a grey node reached again
+/// closes a circle).
+fn find_circle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
     fn visit(
         n: &str,
         graph: &BTreeMap<String, BTreeSet<String>>,
@@ -140,15 +140,87 @@ fn renderer_modules_import_each_other_without_a_circle() {
     let mut state = BTreeMap::new();
     for n in graph.keys() {
         let mut stack = Vec::new();
-        if let Some(circle) = visit(n, &graph, &mut state, &mut stack) {
-            panic!("import circle: {}", circle.join(" → "));
+        if let Some(circle) = visit(n, graph, &mut state, &mut stack) {
+            return Some(circle);
         }
     }
-    // The layering, printed for the record (`cargo test -- --nocapture`).
+    None
+}
+
+#[test]
+fn renderer_modules_import_each_other_without_a_circle() {
+    let graph = module_graph();
+    assert!(graph.len() > 15, "only {} modules found", graph.len());
+    if let Some(circle) = find_circle(&graph) {
+        panic!("import circle: {}", circle.join(" → "));
+    } // The layering, printed for the record (`cargo test -- --nocapture`).
     for (n, uses) in &graph {
         println!(
             "{n} → {}",
             uses.iter().cloned().collect::<Vec<_>>().join(", ")
         );
     }
+}
+
+/// The modules inside folder `dir` (its files but `mod.rs`, and its subfolders) → the
+/// siblings each names as `super::name` (or inside `super::{…}`).
+fn folder_graph(dir: &Path) -> BTreeMap<String, BTreeSet<String>> {
+    let mut modules = BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+        if p.is_dir() || (p.extension().is_some_and(|e| e == "rs") && name != "mod") {
+            modules.insert(name, p);
+        }
+    }
+    let mut graph = BTreeMap::new();
+    for (name, path) in &modules {
+        let mut text = String::new();
+        sources(path, &mut text);
+        let mut uses = BTreeSet::new();
+        for (i, _) in text.match_indices("super::") {
+            let rest = &text[i + "super::".len()..];
+            let names: Vec<&str> = match rest.strip_prefix('{') {
+                Some(list) => list[..list.find('}').unwrap_or(list.len())]
+                    .split(|c: char| !(c.is_alphanumeric() || c == '_'))
+                    .collect(),
+                None => vec![
+                    &rest[..rest
+                        .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+                        .unwrap_or(rest.len())],
+                ],
+            };
+            for target in names {
+                if target != name && modules.contains_key(target) {
+                    uses.insert(target.to_string());
+                }
+            }
+        }
+        graph.insert(name.clone(), uses);
+    }
+    graph
+}
+
+#[test]
+fn modules_inside_each_folder_import_each_other_without_a_circle() {
+    let mut dirs = vec![root().join("crates/render/src")];
+    let mut checked = 0;
+    while let Some(dir) = dirs.pop() {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                let graph = folder_graph(&p);
+                if let Some(circle) = find_circle(&graph) {
+                    panic!(
+                        "import circle in {}: {}",
+                        p.strip_prefix(root()).unwrap().display(),
+                        circle.join(" → ")
+                    );
+                }
+                checked += 1;
+                dirs.push(p);
+            }
+        }
+    }
+    assert!(checked > 10, "only {checked} folders checked");
 }

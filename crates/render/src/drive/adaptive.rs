@@ -21,10 +21,8 @@ use super::Estimator;
 use crate::film::image::Image;
 use crate::film::{Film, FilmTile};
 use crate::math::{UVec2, Vec3};
-use crate::sampling::Sampler;
-use crate::session::{Progress, RenderObserver, RenderOptions, camera_sample};
+use crate::session::{Job, Progress, camera_sample};
 use crate::spectral::lanes::PathMode;
-use crate::world::Scene;
 
 /// Confidence-interval factor: 95 % two-sided for a normal mean.
 pub const Z_95: f64 = 1.96;
@@ -124,18 +122,15 @@ struct PixelState {
 /// slow tile at the end, and `opts.cancel` stops after the current round with every pixel the
 /// mean of the samples it has. `opts.time_budget` and `opts.pass_duration` are ignored.
 pub fn render_adaptive<M: PathMode, E: Estimator<M>>(
-    scene: &Scene,
+    job: &Job,
     integrator: &E,
-    opts: &RenderOptions,
     settings: &AdaptiveSettings,
-    observer: &dyn RenderObserver,
 ) -> AdaptiveOutcome {
     let start = Instant::now();
-    let f = &scene.film;
-    let mut film = f.film();
+    let (scene, opts, observer) = (job.scene, job.opts, job.observer);
+    let (mut film, template) = job.film_and_sampler();
     let max_spp = opts.spp.max(1);
     let batch = settings.batch.max(1);
-    let template = Sampler::new(scene.sampler.kind, max_spp, scene.sampler.seed);
     let tile_list = film.tile_bounds(opts.tile_size.max(1));
     let (pmin, pmax) = film.pixel_bounds();
     let size = pmax - pmin;

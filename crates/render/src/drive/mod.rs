@@ -44,12 +44,23 @@ pub trait Estimator<M: PathMode>: Sync {
         &self,
         scene: &Scene,
         template: &Sampler,
-        mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
-        mut done: impl FnMut(T, Vec3),
+        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        done: impl FnMut(T, Vec3),
     ) {
-        let mut sampler = template.clone();
-        while let Some((tag, cray)) = next(&mut sampler) {
-            done(tag, self.li(scene, &cray, &mut sampler));
-        }
+        one_at_a_time::<M, Self, T>(self, scene, template, next, done)
+    }
+}
+
+/// [`Estimator::li_stream`] one sample at a time, by [`Estimator::li`].
+pub fn one_at_a_time<M: PathMode, E: Estimator<M> + ?Sized, T>(
+    e: &E,
+    scene: &Scene,
+    template: &Sampler,
+    mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+    mut done: impl FnMut(T, Vec3),
+) {
+    let mut sampler = template.clone();
+    while let Some((tag, cray)) = next(&mut sampler) {
+        done(tag, e.li(scene, &cray, &mut sampler));
     }
 }

@@ -8,19 +8,19 @@ use rayon::prelude::*;
 
 use crate::film::{Film, FilmTile};
 use crate::math::UVec2;
-use crate::session::{Progress, RenderObserver, RenderOptions};
+use crate::session::{Job, Progress};
 
 /// Runs `pass(k)` for k = 0, 1, … until `opts.spp` passes are done, the time budget is spent
 /// (after at least one pass) or the render is cancelled (between passes), reporting progress
 /// after each (`samples_per_pass` samples). Returns the passes done and whether it was
 /// cancelled.
 pub fn run_passes(
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
+    job: &Job,
     start: Instant,
     samples_per_pass: u64,
     mut pass: impl FnMut(u32),
 ) -> (u32, bool) {
+    let (opts, observer) = (job.opts, job.observer);
     let target = opts.spp.max(1);
     let mut done = 0u32;
     while done < target {

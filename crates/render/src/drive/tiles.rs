@@ -16,7 +16,7 @@ use super::Estimator;
 use crate::film::FilmTile;
 use crate::math::UVec2;
 use crate::sampling::Sampler;
-use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::session::{Job, Progress, RenderOutcome, camera_sample};
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
@@ -49,16 +49,10 @@ fn render_tile<M: PathMode, E: Estimator<M>>(
 /// Render `scene` with the per-sample estimator `integrator` in colour mode `M`: passes of
 /// whole samples per pixel, tiles in parallel (each tile's samples handed to the estimator as
 /// one stream of camera rays), film tiles allocated once and cleared each pass.
-pub fn render_tiles<M: PathMode, E: Estimator<M>>(
-    scene: &Scene,
-    integrator: &E,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
+pub fn render_tiles<M: PathMode, E: Estimator<M>>(job: &Job, integrator: &E) -> RenderOutcome {
     let start = Instant::now();
-    let f = &scene.film;
-    let mut film = f.film();
-    let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
+    let (scene, opts, observer) = (job.scene, job.opts, job.observer);
+    let (mut film, template) = job.film_and_sampler();
     let tile_list = film.tile_bounds(opts.tile_size.max(1));
     // One tile per region for the whole render, cleared before each pass.
     let mut tiles: Vec<FilmTile> = tile_list

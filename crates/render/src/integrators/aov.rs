@@ -1,13 +1,13 @@
 //! Arbitrary-output-variable integrators: normals, albedo, depth, ambient occlusion.
 //! They prove loaders, geometry, cameras and film right before any light transport exists.
 
-use super::{IntegratorModel, render_per_sample};
+use super::IntegratorModel;
 use crate::camera::CameraRay;
-use crate::drive::Estimator;
+use crate::drive::{self, Estimator};
 use crate::math::{Frame, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::warp::square_to_cosine_hemisphere;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::session::{Job, RenderOutcome};
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
@@ -48,13 +48,8 @@ impl IntegratorModel for Aov {
         }
     }
 
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        render_per_sample::<M, _>(self, scene, opts, observer)
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
+        drive::render_tiles::<M, Self>(job, self)
     }
 }
 

@@ -3,14 +3,12 @@
 //! on the sample-count-weighted densities.
 
 use super::transport::{self, mis};
-use super::{IntegratorModel, render_per_sample};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
 use crate::drive::Estimator;
 use crate::lights::Receiver;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 
@@ -26,21 +24,6 @@ impl<M: PathMode> Estimator<M> for DirectConfig {
         let m = M::start(sampler);
         let l = estimate(scene, cray, sampler, &m, self);
         m.to_rgb(l)
-    }
-}
-
-impl IntegratorModel for DirectConfig {
-    fn name(&self) -> &'static str {
-        "direct"
-    }
-
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        render_per_sample::<M, _>(self, scene, opts, observer)
     }
 }
 

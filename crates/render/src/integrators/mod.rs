@@ -31,7 +31,7 @@ use crate::camera::CameraRay;
 use crate::drive::{self, Estimator, adaptive};
 use crate::math::Vec3;
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::session::{Job, RenderOutcome};
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
@@ -52,12 +52,7 @@ pub trait IntegratorModel: Sync {
     }
 
     /// Render `scene`, its paths in the colour mode `M`.
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome;
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome;
 }
 
 /// The integrators this build can run.
@@ -91,16 +86,12 @@ pub struct UnsupportedIntegrator(pub String);
 /// `$e` with `$i` bound to the integrator inside `$s`, whichever it is.
 macro_rules! dispatch {
     ($s:expr, $i:ident => $e:expr) => {
+        dispatch!(@ $s, $i, $e; Aov Path VolPath Direct Sppm Photon Ptracer Bdpt Mlt; )
+    };
+    (@ $s:expr, $i:ident, $e:expr; $($v:ident)*; $($n:ident)*) => {
         match $s {
-            Integrator::Aov($i) => $e,
-            Integrator::Path($i) => $e,
-            Integrator::VolPath($i) => $e,
-            Integrator::Direct($i) => $e,
-            Integrator::Sppm($i) => $e,
-            Integrator::Photon($i) => $e,
-            Integrator::Ptracer($i) => $e,
-            Integrator::Bdpt($i) => $e,
-            Integrator::Mlt($i) => $e,
+            $(Integrator::$v($i) => $e,)*
+            $(Integrator::$n(_) => None,)*
         }
     };
 }
@@ -109,17 +100,7 @@ macro_rules! dispatch {
 /// integrators that are not one.
 macro_rules! per_sample {
     ($s:expr, $i:ident => $e:expr) => {
-        match $s {
-            Integrator::Aov($i) => Some($e),
-            Integrator::Path($i) => Some($e),
-            Integrator::VolPath($i) => Some($e),
-            Integrator::Direct($i) => Some($e),
-            Integrator::Sppm(_)
-            | Integrator::Photon(_)
-            | Integrator::Ptracer(_)
-            | Integrator::Bdpt(_)
-            | Integrator::Mlt(_) => None,
-        }
+        dispatch!(@ $s, $i, Some($e); Aov Path VolPath Direct; Sppm Photon Ptracer Bdpt Mlt)
     };
 }
 
@@ -144,14 +125,9 @@ impl Integrator {
         per_sample!(self, _i => ()).is_some()
     }
 
-    /// Render in the colour mode `M` (see [`crate::render::render`], which picks it).
-    pub fn render_in<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        dispatch!(self, i => i.render::<M>(scene, opts, observer))
+    /// Render in the colour mode `M` (`render::render` picks it, once).
+    pub fn render_in<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
+        dispatch!(self, i => i.render::<M>(job))
     }
 
     /// One camera sample's estimate in the colour mode `M` (`None`: not a per-sample
@@ -180,24 +156,32 @@ impl Integrator {
     /// Adaptive sampling in the colour mode `M` (`None`: not a per-sample integrator).
     pub fn render_adaptive_in<M: PathMode>(
         &self,
-        scene: &Scene,
-        opts: &RenderOptions,
+        job: &Job,
         settings: &adaptive::AdaptiveSettings,
-        observer: &dyn RenderObserver,
     ) -> Option<adaptive::AdaptiveOutcome> {
-        per_sample!(self, i => adaptive::render_adaptive::<M, _>(scene, i, opts, settings, observer))
+        per_sample!(self, i => adaptive::render_adaptive::<M, _>(job, i, settings))
     }
 }
 
-/// The render of a per-sample estimator: the tile loop ([`drive::render_tiles`]).
-fn render_per_sample<M: PathMode, E: Estimator<M>>(
-    e: &E,
-    scene: &Scene,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
-    drive::render_tiles::<M, E>(scene, e, opts, observer)
+/// A per-sample estimator `$t` named `$name` as an integrator: rendered by the tile loop
+/// ([`drive::render_tiles`]).
+macro_rules! per_sample_model {
+    ($t:ty, $name:expr) => {
+        impl IntegratorModel for $t {
+            fn name(&self) -> &'static str {
+                $name
+            }
+
+            fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
+                drive::render_tiles::<M, Self>(job, self)
+            }
+        }
+    };
 }
+
+per_sample_model!(PathConfig, "path");
+per_sample_model!(volpath::VolPathConfig, "volpath");
+per_sample_model!(DirectConfig, "direct");
 
 /// Why light paths cannot be connected to the camera (an orthographic one), for the
 /// integrators that connect them.

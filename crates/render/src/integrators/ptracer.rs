@@ -38,7 +38,7 @@ use crate::drive::{self, run_passes};
 use crate::lights::ShadowTarget;
 use crate::math::{UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::session::{Job, RenderOutcome, camera_sample};
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 use base::TransmittanceEstimator;
@@ -71,25 +71,15 @@ impl IntegratorModel for PtracerConfig {
     }
 
     /// `opts.spp` passes (a time budget or cancellation stops after a whole pass).
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        render_in::<M>(scene, self, opts, observer)
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
+        render_in::<M>(job, self)
     }
 }
 
-fn render_in<M: PathMode>(
-    scene: &Scene,
-    cfg: &PtracerConfig,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
+fn render_in<M: PathMode>(job: &Job, cfg: &PtracerConfig) -> RenderOutcome {
     let start = Instant::now();
-    let f = &scene.film;
-    let mut film = f.film();
+    let (scene, f) = (job.scene, &job.scene.film);
+    let (mut film, template) = job.film_and_sampler();
     let (pmin, pmax) = film.pixel_bounds();
     let pixel_count = film.pixel_count();
     // The camera's importance is normalised over the full image: one light path per pixel
@@ -97,8 +87,7 @@ fn render_in<M: PathMode>(
     let paths = f.width as u64 * f.height as u64;
     let lights = PhotonLights::new(scene);
     let seed = scene.sampler.seed;
-    let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), seed);
-    let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |pass| {
+    let (done, cancelled) = run_passes(job, start, pixel_count, |pass| {
         // 1. Emitters seen directly: one camera ray per pixel, rows in parallel, merged in
         // row order.
         drive::rows(
@@ -144,7 +133,7 @@ fn render_in<M: PathMode>(
             }
         }
         film.set_splat_scale(1.0 / (pass + 1) as f64);
-        observer.pass_done(&film, pass + 1);
+        job.observer.pass_done(&film, pass + 1);
     });
     RenderOutcome::of_passes(film, done, start, cancelled)
 }
@@ -182,38 +171,28 @@ fn connect<M: PathMode>(
     m: &M,
     sampler: &mut Sampler,
 ) -> Option<(Vec2, Vec3)> {
-    if cfg.max_depth >= 0 && hit.edges + 1 > cfg.max_depth as u32 {
+    let v = &hit.v;
+    if cfg.max_depth >= 0 && v.depth + 1 > cfg.max_depth as u32 {
         return None;
     }
-    let c = scene.camera.sample_wi(hit.p, sampler.next_2d())?;
-    let (f, from) = match hit.si {
-        Some(si) => {
-            let (bsdf, frame) = scene.bsdf_at_in(si, m)?;
-            let f = bsdf.eval(
-                frame.to_local(hit.wi),
-                frame.to_local(c.wi),
-                TransportMode::Importance,
-            );
-            (f, From::Surface(si))
-        }
-        None => {
-            let med = &scene.media[hit.medium? as usize];
-            let p = med.phase.eval(c.wi, hit.wi);
-            (M::C::splat(p), From::Medium(hit.p, 0.0))
-        }
-    };
+    let c = scene.camera.sample_wi(v.p, sampler.next_2d())?;
+    let f = v.at.eval(c.wi, TransportMode::Importance);
     if f.is_black() {
         return None;
     }
+    let from = match v.si {
+        Some(si) => From::Surface(si),
+        None => From::Medium(v.p, 0.0),
+    };
     let query = Connection {
         from,
         wi: c.wi,
         target: ShadowTarget::Point(c.p_lens),
-        medium: hit.medium,
+        medium: v.medium,
     };
     let tr = transmittance(scene, &query, TransmittanceEstimator::default(), sampler, m);
     if tr.is_black() {
         return None;
     }
-    Some((c.p_film, m.to_rgb(hit.beta * f * tr * c.weight)))
+    Some((c.p_film, m.to_rgb(v.beta * f * tr * c.weight)))
 }

@@ -21,7 +21,7 @@ pub(super) struct Joins<'a, M: PathMode> {
     pub(super) cam: &'a [Vertex<M::C>],
     pub(super) light: &'a [Vertex<M::C>],
     pub(super) hero: usize,
-    pub(super) modes: &'a Modes<M>,
+    pub(super) modes: Modes<M>,
 }
 
 impl<M: PathMode> Bdpt<'_, M> {
@@ -34,7 +34,7 @@ impl<M: PathMode> Bdpt<'_, M> {
         sampler: &mut impl Samples,
         sink: &mut impl StrategySink<M::C>,
     ) -> (Vec3, f32) {
-        let (scene, cam, light, hero, modes) = (j.scene, j.cam, j.light, j.hero, j.modes);
+        let (scene, cam, light, hero, modes) = (j.scene, j.cam, j.light, j.hero, &j.modes);
         let pt = &cam[t - 1];
         let m = modes.of(pt.terminated);
         if s == 0 {
@@ -161,7 +161,7 @@ impl<M: PathMode> Bdpt<'_, M> {
         sampler: &mut impl Samples,
         sink: &mut impl StrategySink<M::C>,
     ) -> Option<(Vec2, Vec3, f32)> {
-        let (scene, light, hero, modes) = (j.scene, j.light, j.hero, j.modes);
+        let (scene, light, hero, modes) = (j.scene, j.light, j.hero, &j.modes);
         let qs = &light[s - 1];
         if !matches!(qs.kind, Kind::Surface | Kind::Medium) || !qs.connectible() {
             return None;

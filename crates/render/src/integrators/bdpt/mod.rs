@@ -22,9 +22,8 @@
 //! emitter reached by a camera subpath use the same choice. A direction sampled from a
 //! delta lobe has density 1 in the discrete measure, both ways (Veach's thesis, ch. 10;
 //! Mitsuba 0.6), so the next vertex's area density keeps its cos/d² factor. pbrt stores 0 there and
-//! reads it as 1, dropping the factor: weights that depend on the scene's scale. On
-//! `cbox-specular` the discrete measure cut BDPT's relMSE at 64 spp 2.5×, on
-//! `media-homogeneous` (media in a glass cube) 1.5×, and took away a heavy tail there.
+//! reads it as 1, dropping the factor: weights that depend on the scene's scale (and noisier
+//! behind glass and mirrors; figures in `bench/README.md`).
 //!
 //! Participating media: free flights sampled along both subpaths (`Medium::sample_in`, with
 //! a hero channel drawn per camera sample and shared by both subpaths) make medium vertices,
@@ -38,8 +37,7 @@
 //! 0.6's BDPT does the same): a connection's segment gets the same factor from its exact
 //! transmittance. With grids, whose transmittance is only estimated, they are left out
 //! (pbrt-v3's choice). Either way the weights are one function of the path for every
-//! strategy, so they sum to one. (On `media-homogeneous` the densities lowered BDPT's
-//! relMSE at 64 spp by 3 %, on `media-fog` by 4.5 %.) An emitting medium's light is
+//! strategy, so they sum to one. An emitting medium's light is
 //! found by the camera subpath's collision estimator (`volpath`'s default), the one strategy
 //! that samples it: no light subpath starts in a volume, so its MIS weight is 1.
 //!
@@ -92,7 +90,7 @@ use crate::camera::CameraRay;
 use crate::math::{Vec2, Vec3};
 use crate::media::MediumKind;
 use crate::sampling::{Distribution1D, Samples};
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::session::{Job, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
@@ -151,7 +149,7 @@ impl StrategyImages {
 
 /// Told of the strategies [`Bdpt::li`] evaluates (the per-strategy images, `debug-paths`'
 /// record); `()` is told nothing, and its calls compile away.
-pub(crate) trait StrategySink<C: Color> {
+pub trait StrategySink<C: Color> {
     /// Strategy (s, t) is joined at `joint` (for s = 1 the light point and for t = 1 the
     /// lens point sampled) with MIS weight `w`; its value follows through `add` if nonzero.
     #[inline(always)]
@@ -208,13 +206,8 @@ impl IntegratorModel for BdptConfig {
     }
 
     /// `opts.spp` passes of one sample per pixel (see `render.rs`).
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        render::render_in::<M>(scene, self, opts, observer)
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
+        render::render_in::<M>(job, self)
     }
 }
 
@@ -278,17 +271,43 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
         )
     }
 
-    /// The radiance of one camera sample as a render adds it ([`Self::li`] telling no one),
-    /// in linear sRGB; light-tracing contributions go to `splats`.
-    pub fn estimate(
+    /// A camera sample's two subpaths, built in `paths`, with its colour modes and hero lane:
+    /// the camera's from `cray` (its numbers from the sampler's current stream), the light's
+    /// from stream 1 (not drawn at all for a limit of 0), at most `max` = (camera, light)
+    /// vertices each; stream 2 is started for the connections. With `exact`, `None` as soon
+    /// as a subpath comes out shorter than its limit (a strategy of MLT needs it whole).
+    fn subpaths<'p>(
         &self,
-        scene: &Scene,
+        scene: &'p Scene,
         cray: &CameraRay,
+        (max_cam, max_light): (usize, usize),
+        exact: bool,
         sampler: &mut impl Samples,
-        paths: &mut Subpaths<M::C>,
-        splats: &mut Vec<(Vec2, Vec3)>,
-    ) -> Vec3 {
-        self.li(scene, cray, sampler, paths, splats, &mut ())
+        paths: &'p mut Subpaths<M::C>,
+    ) -> Option<Joins<'p, M>> {
+        let (cam, light) = paths.cleared();
+        let (modes, hero) = Self::start(scene, sampler);
+        let m = modes.full.clone();
+        self.camera_subpath(scene, cray, (hero, max_cam), sampler, cam, &m);
+        if exact && cam.len() != max_cam {
+            return None;
+        }
+        sampler.start_stream(1);
+        if max_light > 0 {
+            let m = modes.full.clone();
+            self.light_subpath(scene, (hero, max_light), sampler, light, &m);
+            if exact && light.len() != max_light {
+                return None;
+            }
+        }
+        sampler.start_stream(2);
+        Some(Joins {
+            scene,
+            cam,
+            light,
+            hero,
+            modes,
+        })
     }
 
     /// The radiance of one camera sample in linear sRGB (its subpaths built in `paths`);
@@ -297,8 +316,8 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
     /// stream, the light subpath from stream 1, the connections from stream 2
     /// ([`Samples::start_stream`]). In spectral mode both subpaths share the wavelengths and
     /// each terminates its own secondaries; a strategy counts the hero only if a vertex it
-    /// uses was reached after a termination.
-    pub(crate) fn li(
+    /// uses was reached after a termination. A render tells `()`.
+    pub fn li(
         &self,
         scene: &Scene,
         cray: &CameraRay,
@@ -307,24 +326,12 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
         splats: &mut Vec<(Vec2, Vec3)>,
         sink: &mut impl StrategySink<M::C>,
     ) -> Vec3 {
-        let (cam, light) = paths.cleared();
-        let (max_cam, max_light) = match self.cfg.max_depth {
+        let max = match self.cfg.max_depth {
             d if d < 0 => (usize::MAX, usize::MAX),
             d => (d as usize + 1, d as usize),
         };
-        let (modes, hero) = Self::start(scene, sampler);
-        let m = modes.full.clone();
-        self.camera_subpath(scene, cray, (hero, max_cam), sampler, cam, &m);
-        sampler.start_stream(1);
-        let m = modes.full.clone();
-        self.light_subpath(scene, (hero, max_light), sampler, light, &m);
-        sampler.start_stream(2);
-        let j = Joins {
-            scene,
-            cam,
-            light,
-            hero,
-            modes: &modes,
+        let Some(j) = self.subpaths(scene, cray, max, false, sampler, paths) else {
+            return Vec3::ZERO;
         };
         let mut l = Vec3::ZERO;
         for t in 1..=j.cam.len() {
@@ -365,29 +372,7 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
         sampler: &mut impl Samples,
         paths: &mut Subpaths<M::C>,
     ) -> Option<(Vec2, Vec3)> {
-        let (cam, light) = paths.cleared();
-        let (modes, hero) = Self::start(scene, sampler);
-        let m = modes.full.clone();
-        self.camera_subpath(scene, cray, (hero, t), sampler, cam, &m);
-        if cam.len() != t {
-            return None;
-        }
-        sampler.start_stream(1);
-        if s > 0 {
-            let m = modes.full.clone();
-            self.light_subpath(scene, (hero, s), sampler, light, &m);
-            if light.len() != s {
-                return None;
-            }
-        }
-        sampler.start_stream(2);
-        let j = Joins {
-            scene,
-            cam,
-            light,
-            hero,
-            modes: &modes,
-        };
+        let j = self.subpaths(scene, cray, (t, s), true, sampler, paths)?;
         if t == 1 {
             return self
                 .connect_camera(&j, s, sampler, &mut ())

@@ -9,8 +9,7 @@ use super::{Bdpt, BdptConfig, StrategyImages, StrategySink};
 use crate::drive::{self, run_passes};
 use crate::film::{Film, FilmTile};
 use crate::math::{UVec2, Vec2, Vec3};
-use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome, camera_sample};
+use crate::session::{Job, RenderOutcome, camera_sample};
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 
@@ -47,19 +46,13 @@ pub fn memory_needed(scene: &Scene, cfg: &BdptConfig) -> u64 {
 /// With `cfg.strategy_images` the outcome also holds one image per strategy (s, t), named
 /// by [`StrategyImages::name`]: every contribution splatted at its film position, so that
 /// with the box filter the weighted images sum to the image up to rounding.
-pub(super) fn render_in<M: PathMode>(
-    scene: &Scene,
-    cfg: &BdptConfig,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
+pub(super) fn render_in<M: PathMode>(job: &Job, cfg: &BdptConfig) -> RenderOutcome {
     let start = Instant::now();
-    let f = &scene.film;
-    let mut film = f.film();
+    let (scene, f) = (job.scene, &job.scene.film);
+    let (mut film, template) = job.film_and_sampler();
     let (pmin, pmax) = film.pixel_bounds();
     let pixel_count = film.pixel_count();
     let bdpt = Bdpt::<M>::new(scene, cfg);
-    let template = Sampler::new(scene.sampler.kind, opts.spp.max(1), scene.sampler.seed);
     // The camera's importance is normalised over the full image: light paths per pixel of
     // it, per pass.
     let per_pass = pixel_count.max(1) as f64 / (f.width as f64 * f.height as f64);
@@ -70,7 +63,7 @@ pub(super) fn render_in<M: PathMode>(
             .collect(),
         None => BTreeMap::new(),
     };
-    let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |pass| {
+    let (done, cancelled) = run_passes(job, start, pixel_count, |pass| {
         let row = |y: u32, tile: &mut FilmTile| {
             let mut splats = Vec::new();
             let mut records = Vec::new();
@@ -105,7 +98,7 @@ pub(super) fn render_in<M: PathMode>(
             }
         });
         film.set_splat_scale(1.0 / (per_pass * (pass + 1) as f64));
-        observer.pass_done(&film, pass + 1);
+        job.observer.pass_done(&film, pass + 1);
     });
     // Light-tracing images (t = 1) are normalised as the film's splats; the others hold one
     // sample per pixel and pass.

@@ -124,7 +124,7 @@ impl<C: Color> Vertex<C> {
 /// point sampled) and the light subpath's (`qs`: none for s = 0; for s = 1 the light point
 /// sampled), with the unit direction from each end to the other in the end's BSDF frame
 /// (zero at an end without a BSDF), which f·|cos| and the MIS weight share.
-pub(crate) struct Joint<'a, C: Color = Vec3> {
+pub struct Joint<'a, C: Color = Vec3> {
     pub(super) pt: &'a Vertex<C>,
     pub(super) qs: Option<&'a Vertex<C>>,
     pub(super) pt_to_qs: Vec3,

@@ -13,11 +13,9 @@ use crate::sampling::Samples;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 
-/// Where a subpath's random walk starts: the walker leaving its first vertex, the throughput
-/// and solid-angle density of its ray, how it transports, and how many vertices the subpath
-/// may hold.
+/// How a subpath's random walk starts, besides its walker: the throughput and solid-angle
+/// density of its first ray, how it transports, and how many vertices the subpath may hold.
 pub(super) struct WalkStart<C> {
-    pub(super) walker: Walker,
     pub(super) beta: C,
     pub(super) pdf_dir: f32,
     pub(super) mode: TransportMode,
@@ -25,18 +23,17 @@ pub(super) struct WalkStart<C> {
 }
 
 impl<M: PathMode> Bdpt<'_, M> {
-    /// Extend `path` (its last vertex the start) by the walk `start`; free flights in media
-    /// sample the walker's hero lane of `m`, the subpath's colour mode.
+    /// Extend `path` (its last vertex the start) by the walk of walker `w` from `start`; free
+    /// flights in media sample the walker's hero lane of `m`, the subpath's colour mode.
     pub(super) fn random_walk(
         &self,
+        (mut w, start): (Walker, WalkStart<M::C>),
         scene: &Scene,
-        start: WalkStart<M::C>,
         sampler: &mut impl Samples,
         path: &mut Vec<Vertex<M::C>>,
         m: &M,
     ) {
         let WalkStart {
-            walker: mut w,
             mut beta,
             mut pdf_dir,
             mode,
@@ -282,13 +279,13 @@ impl<M: PathMode> Bdpt<'_, M> {
         path.push(v);
         let (_, pdf_dir) = scene.camera.pdf_we(cray.ray.d.normalize());
         let start = WalkStart {
-            walker: Walker::camera(scene, cray, hero),
             beta: M::C::ONE,
             pdf_dir,
             mode: TransportMode::Radiance,
             max_vertices,
         };
-        self.random_walk(scene, start, sampler, path, m);
+        let w = Walker::camera(scene, cray, hero);
+        self.random_walk((w, start), scene, sampler, path, m);
     }
 
     /// The light subpath of at most `max_vertices` vertices (the light's included), free
@@ -323,15 +320,15 @@ impl<M: PathMode> Bdpt<'_, M> {
         } else {
             pmf * e.pdf_pos
         };
+        let w = Walker::new(e.ray, f32::INFINITY, v.medium, hero);
         let start = WalkStart {
-            walker: Walker::new(e.ray, f32::INFINITY, v.medium, hero),
             beta: e.weight / pmf,
             pdf_dir: e.pdf_dir,
             mode: TransportMode::Importance,
             max_vertices,
         };
         path.push(v);
-        self.random_walk(scene, start, sampler, path, m);
+        self.random_walk((w, start), scene, sampler, path, m);
         if infinite {
             // pbrt: the first surface's density is the disk's, times its cosine; the
             // light vertex's that of the direction (every infinite light's).

@@ -16,8 +16,7 @@
 //! Normalisation: b, the image's mean luminance summed over the depths, is estimated per
 //! depth from independent states: the `bootstrap` ones, and every large step the chains of
 //! that depth propose (each an independent fresh state, accepted or not; with the
-//! bootstrap alone the mean of Mitsuba's Cornell box was 1 % high at every mutation count,
-//! the bootstrap's own error). The chains start from bootstrap states chosen in proportion
+//! bootstrap alone its own error would stay in the image at every mutation count). The chains start from bootstrap states chosen in proportion
 //! to their luminance, and the film's splats, L/y(L) each, are developed times b / mutations
 //! per pixel. `--spp` sets the mutations per pixel.
 //!
@@ -25,9 +24,8 @@
 //! and two edges (emitters seen directly, direct light) are rendered by BDPT limited to two
 //! edges at `direct_samples` per pixel, and the chains take the longer ones. Chains on a
 //! small bright emitter seen directly hardly ever leave it, and too few bootstrap states
-//! find it to start the right number of chains there: on `veach-plates` the smallest light
-//! came out 36 % dark with the chains doing every depth (the image mean −1.6 % at 1024
-//! mutations per pixel; −0.5 % with them apart).
+//! find it to start the right number of chains there (`veach-plates`' smallest light came
+//! out dark with the chains doing every depth; figures in `bench/README.md`).
 //!
 //! Kelemen (`MltConfig::multiplexed` false): a state is one whole BDPT sample, a film
 //! position and lens sample, then [`Bdpt::li`]'s camera subpath, light subpath and every
@@ -66,7 +64,7 @@ use crate::drive::run_chains;
 use crate::film::Film;
 use crate::math::{Vec2, Vec3};
 use crate::sampling::Distribution1D;
-use crate::session::{Progress, RenderObserver, RenderOptions, RenderOutcome, Silent};
+use crate::session::{Job, Progress, RenderObserver, RenderOptions, RenderOutcome, Silent};
 use crate::spectral::lanes::PathMode;
 use crate::stats::Pcg32;
 use crate::world::Scene;
@@ -118,13 +116,9 @@ impl IntegratorModel for MltConfig {
     }
 
     /// `opts.spp` mutations per pixel.
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
         let start = Instant::now();
+        let (scene, opts, observer) = (job.scene, job.opts, job.observer);
         let first = if self.direct_samples >= 0 { 2 } else { 0 };
         let mut film = direct_part::<M>(scene, self, opts);
         let kelemen = !self.multiplexed;
@@ -193,7 +187,12 @@ fn direct_part<M: PathMode + Send>(scene: &Scene, cfg: &MltConfig, opts: &Render
         time_budget: None,
         ..opts.clone()
     };
-    let mut film = direct.render::<M>(scene, &dopts, &Silent).film;
+    let job = Job {
+        scene,
+        opts: &dopts,
+        observer: &Silent,
+    };
+    let mut film = direct.render::<M>(&job).film;
     film.bake_splat_scale();
     film
 }
@@ -333,8 +332,8 @@ impl<'a, M: PathMode> Population<'a, M> {
         let starts = Distribution1D::new(&ks.iter().map(|&k| self.weights[k]).collect::<Vec<_>>());
         // Systematic resampling: chain c starts at quantile (c + offset) / chains of the
         // weights, so each bootstrap state gets its share of chains to within one (drawn
-        // independently, a light holding 5 % of 300 chains' weight got 15 ± 4 of them, and
-        // chains hardly leave a small bright emitter).
+        // independently, the count of chains on a small bright emitter would vary by its
+        // binomial spread, and chains hardly leave such an emitter).
         let offset = Pcg32::new(seed_of(seed, 0x5354_4152_5400 + d as u64), 7).next_f32() as f64;
         // Blocks of at most 64 chains, fewer if their splats would take more than about
         // 256 MiB, at least one per thread (the image does not depend on it).

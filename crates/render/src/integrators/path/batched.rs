@@ -10,9 +10,8 @@
 //! hits ([`Scene::hit`], the 20-byte accelerator hit only), shading ([`Scene::surface`]
 //! computes the interaction in place and lends it to [`Tracer::vertex`]), then the shadow
 //! rays of the whole batch — and the out-of-order core overlaps the memory waits of
-//! different paths. Finished paths are replaced by new camera samples in place. With not
-//! copying the interaction, this cut CPU time by 8–12 % on the Cornell boxes
-//! (`docs/architecture.md`).
+//! different paths. Finished paths are replaced by new camera samples in place (what it
+//! saves: `bench/README.md`, "Design measurements").
 //!
 //! # The invariant: the same estimate as the single-path loop, bit for bit
 //!
@@ -39,52 +38,14 @@
 //! (which needs one), use the single-path loop.
 
 use super::PathConfig;
-use super::record::{Contribution, NoRecorder, PathRecorder};
-use super::vertex::{PathState, Tracer};
+use super::record::NoRecorder;
+use super::state::{PathState, ShadowQuery, Shadows, Tracer};
 use crate::accel::Hit;
 use crate::camera::CameraRay;
-use crate::geometry::Ray;
 use crate::math::Vec3;
 use crate::sampling::Sampler;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
-
-/// A candidate contribution `l` of next-event estimation and its shadow segment.
-pub(super) struct ShadowQuery<C> {
-    pub(super) ray: Ray,
-    pub(super) t_max: f32,
-    pub(super) l: C,
-}
-
-/// Where next-event estimation's candidate contributions go: each counts only if its shadow
-/// segment is unblocked.
-pub(super) enum Shadows<'a, C> {
-    /// Test each shadow ray when it is made (the single-path loop).
-    Immediate,
-    /// Queue it with the slot of its path, to be tested with the rest of the batch after
-    /// every path of the batch has been shaded.
-    Deferred {
-        queue: &'a mut Vec<(ShadowQuery<C>, u32)>,
-        slot: u32,
-    },
-}
-
-impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
-    /// Add `q.l` to the estimate (and tell the recorder) unless `q.ray` is blocked within
-    /// `(0, q.t_max)`, or queue it for the batch to do so.
-    #[inline]
-    pub(super) fn shadow(&mut self, q: ShadowQuery<M::C>, c: Contribution) {
-        match &mut self.shadows {
-            // A zero value (an MIS weight of 0) is neither traced nor recorded.
-            Shadows::Immediate => {
-                if !q.l.is_black() && !self.scene.occluded(&q.ray, q.t_max) {
-                    self.add(q.l, c);
-                }
-            }
-            Shadows::Deferred { queue, slot } => queue.push((q, *slot)),
-        }
-    }
-}
 
 /// Paths in flight at once in [`li_batched`].
 const BATCH: usize = 32;

@@ -21,12 +21,14 @@
 //!   and [`li_batched`] (a stream of camera samples);
 //! - `course.rs`: the course configurations ([`PathConfig::whitted`], Nori's) and which
 //!   switches each course uses;
-//! - `vertex.rs`: the path state and the per-vertex step both loops share;
+//! - `state.rs`: the path state, what a step works with ([`Tracer`](state::Tracer)) and the
+//!   shadow sink;
+//! - `vertex.rs`: the per-vertex step both loops share;
 //! - `nee.rs`: next-event estimation (one emitter, several samples, or every emitter) and the
 //!   MIS weights;
 //! - `scatter.rs`: the next direction and Russian roulette;
-//! - `batched.rs`: the batched loop and its deferred shadow rays — why, and why its estimates
-//!   are the single-path loop's bit for bit;
+//! - `batched.rs`: the batched loop with its deferred shadow rays — why, and why its
+//!   estimates are the single-path loop's bit for bit;
 //! - `record.rs`: what a [`PathRecorder`] sees (render layers, the path visualiser);
 //!   [`NoRecorder`] compiles to nothing.
 
@@ -35,25 +37,23 @@ mod course;
 mod nee;
 mod record;
 mod scatter;
+mod state;
 mod vertex;
 
 use base::{DirectionSampling, RussianRoulette};
 
-use self::batched::Shadows;
 pub use self::batched::li_batched;
 
 pub use self::record::{
     Contribution, DepthFilter, NoRecorder, PathEnd, PathRecorder, RecordedScatter, RecordedVertex,
     Scatter, VertexKind, Via,
 };
-use self::vertex::{PathState, Tracer};
-use super::transport::Heuristic;
-use super::{IntegratorModel, render_per_sample};
+use self::state::{PathState, Shadows, Tracer};
+use super::transport::MisHeuristic;
 use crate::camera::CameraRay;
-use crate::drive::Estimator;
+use crate::drive::{self, Estimator};
 use crate::math::Vec3;
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
@@ -73,10 +73,10 @@ pub enum Combine {
 impl Combine {
     /// The heuristic of the two MIS combinations (`None` for the one-strategy ones).
     #[inline(always)]
-    pub fn heuristic(self) -> Option<Heuristic> {
+    pub fn heuristic(self) -> Option<MisHeuristic> {
         match self {
-            Combine::Power => Some(Heuristic::Power),
-            Combine::Balance => Some(Heuristic::Balance),
+            Combine::Power => Some(MisHeuristic::Power),
+            Combine::Balance => Some(MisHeuristic::Balance),
             Combine::EmitterOnly | Combine::BsdfOnly => None,
         }
     }
@@ -169,15 +169,11 @@ impl<M: PathMode> Estimator<M> for PathConfig {
         &self,
         scene: &Scene,
         template: &Sampler,
-        mut next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
         mut done: impl FnMut(T, Vec3),
     ) {
         if self.only_depth.is_some() {
-            let mut sampler = template.clone();
-            while let Some((tag, cray)) = next(&mut sampler) {
-                done(tag, Estimator::<M>::li(self, scene, &cray, &mut sampler));
-            }
-            return;
+            return drive::one_at_a_time::<M, Self, T>(self, scene, template, next, done);
         }
         // A separate instantiation for clamping: the default loop is untouched.
         match self.clamp {
@@ -186,21 +182,6 @@ impl<M: PathMode> Estimator<M> for PathConfig {
             }),
             None => li_batched::<_, M>(scene, self, template, next, done),
         }
-    }
-}
-
-impl IntegratorModel for PathConfig {
-    fn name(&self) -> &'static str {
-        "path"
-    }
-
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        render_per_sample::<M, _>(self, scene, opts, observer)
     }
 }
 

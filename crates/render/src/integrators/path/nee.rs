@@ -12,10 +12,9 @@
 
 use base::DirectionSampling;
 
-use super::batched::ShadowQuery;
 use super::record::{Contribution, PathRecorder};
 use super::scatter::direction_pdf;
-use super::vertex::{Shading, Tracer};
+use super::state::{Shading, ShadowQuery, Tracer};
 use super::{Combine, PathConfig};
 use crate::bsdf::TransportMode;
 use crate::integrators::transport::{self, EmitterSample, Previous, mis};

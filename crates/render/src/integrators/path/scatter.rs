@@ -6,7 +6,7 @@ use base::{DirectionSampling, RussianRoulette};
 
 use super::PathConfig;
 use super::record::{PathEnd, PathRecorder, RecordedScatter, Scatter};
-use super::vertex::{PathState, Shading, Tracer};
+use super::state::{PathState, Shading, Tracer};
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::integrators::transport::{Previous, roulette};
 use crate::lights::Receiver;

@@ -1,109 +1,19 @@
-//! The state of a path between two segments ([`PathState`]) and the step both loops take at
-//! each of its vertices ([`Tracer::vertex`]): emission found by the segment just traced,
-//! emitter sampling, splitting, the next direction.
-//!
-//! A [`Tracer`] is what the step works with besides the path's state: the scene and
-//! configuration, the path's sampler, recorder, running estimate and shadow sink. The
-//! single-path loop ([`Tracer::trace`]) and the batched one (`batched.rs`) build one per
-//! path and step it; the step's parts live by purpose — emission, the unlit and ambient
-//! terms and splitting here, next-event estimation in `nee.rs`, the next direction and
-//! Russian roulette in `scatter.rs`.
+//! The step both loops take at each vertex of a path ([`Tracer::vertex`]): emission found
+//! by the segment just traced, emitter sampling, splitting, the next direction. The
+//! single-path loop ([`Tracer::trace`]) and the batched one (`batched.rs`) build a
+//! [`Tracer`] (`state.rs`) per path and step it; the step's parts live by purpose —
+//! emission, the unlit and ambient terms and splitting here, next-event estimation in
+//! `nee.rs`, the next direction and Russian roulette in `scatter.rs`.
 
-use super::PathConfig;
-use super::batched::Shadows;
 use super::nee::{NeeContext, emission_weight, nee_pdf};
-use super::record::{
-    Contribution, PathEnd, PathRecorder, RecordedVertex, Scatter, VertexKind, Via,
-};
-use crate::bsdf::Bsdf;
-use crate::camera::CameraRay;
-use crate::geometry::Ray;
-use crate::integrators::transport::{self, Previous};
+use super::record::{PathEnd, PathRecorder, RecordedVertex, VertexKind, Via};
+use super::state::{PathState, Shading, Shadows, Tracer};
+use crate::integrators::transport;
 use crate::lights::Receiver;
-use crate::math::{Frame, Vec3};
-use crate::sampling::Sampler;
+use crate::math::Vec3;
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::textures::TexCoord;
-use crate::world::Scene;
-
-/// The state of a path between two segments (throughput in the colour type `C` of its mode).
-#[derive(Clone, Copy)]
-pub(super) struct PathState<C> {
-    pub(super) ray: Ray,
-    pub(super) t_max: f32,
-    pub(super) throughput: C,
-    pub(super) eta: f32,
-    /// Segments traced so far.
-    pub(super) depth: u32,
-    pub(super) prev: Option<Previous>,
-    pub(super) first: Option<Scatter>,
-    /// Splitting still to be done at the next vertex.
-    pub(super) split: bool,
-    /// The medium the path is in, when the configuration applies media
-    /// ([`PathConfig::media_absorption`]; otherwise always `None`).
-    pub(super) medium: Option<u32>,
-    /// A non-delta bounce happened: emission found after delta bounces from here is caustic.
-    pub(super) diffuse_seen: bool,
-}
-
-impl<C: Color> PathState<C> {
-    pub(super) fn start(scene: &Scene, cfg: &PathConfig, cray: &CameraRay) -> PathState<C> {
-        PathState {
-            ray: cray.ray,
-            t_max: cray.t_max,
-            throughput: C::ONE,
-            eta: 1.0,
-            depth: 0,
-            prev: None,
-            first: None,
-            split: cfg.splitting > 1,
-            medium: scene.camera_medium.filter(|_| cfg.media_absorption),
-            diffuse_seen: false,
-        }
-    }
-
-    /// The segment just traced follows a delta bounce that follows a non-delta one.
-    #[inline]
-    fn caustic(&self) -> bool {
-        self.diffuse_seen && self.prev.is_some_and(|p| p.delta)
-    }
-
-    /// A contribution of this path reaching the camera along `depth` segments.
-    #[inline]
-    fn contribution(&self, via: Via, depth: u32) -> Contribution {
-        Contribution {
-            depth,
-            first: self.first,
-            via,
-        }
-    }
-}
-
-/// A vertex that scatters: its interaction, its BSDF in its shading frame, and the direction
-/// back along the path in that frame.
-#[derive(Clone, Copy)]
-pub(super) struct Shading<'a, C: Color> {
-    pub(super) si: &'a SurfaceInteraction,
-    pub(super) bsdf: &'a Bsdf<C>,
-    pub(super) frame: &'a Frame,
-    pub(super) wo: Vec3,
-}
-
-/// What a path's vertex step works with besides the path's state: among others its colour
-/// mode `M` (RGB, or spectral with the path's wavelengths), which every colour the path
-/// meets goes through.
-pub(super) struct Tracer<'a, R, M: PathMode> {
-    pub(super) scene: &'a Scene,
-    pub(super) cfg: &'a PathConfig,
-    pub(super) sampler: &'a mut Sampler,
-    pub(super) rec: &'a mut R,
-    pub(super) mode: &'a M,
-    /// The path's estimate so far.
-    pub(super) result: &'a mut M::C,
-    /// Where next-event estimation's candidate contributions go.
-    pub(super) shadows: Shadows<'a, M::C>,
-}
 
 impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
     /// Trace the path `st` to its end, one segment at a time.
@@ -117,13 +27,6 @@ impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
                 return;
             }
         }
-    }
-
-    /// Add `l` to the estimate and tell the recorder where it came from.
-    #[inline]
-    pub(super) fn add(&mut self, l: M::C, c: Contribution) {
-        *self.result += l;
-        self.rec.contribution(l, c);
     }
 
     /// One segment of a path: the emission found by `st.ray` (whose closest hit is `si`),

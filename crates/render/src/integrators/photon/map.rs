@@ -271,11 +271,12 @@ impl<C> Default for MapData<C> {
 impl<C: Color> MapData<C> {
     /// Store `hit`, carried by a photon now in mode `m`.
     pub(super) fn push<M: PathMode<C = C>>(&mut self, hit: &PhotonHit<C>, m: &M) {
-        self.points.push([hit.p.x, hit.p.y, hit.p.z]);
+        let p = hit.v.p;
+        self.points.push([p.x, p.y, p.z]);
         self.photons.push(StoredPhoton {
             wi: hit.wi,
-            beta: hit.beta,
-            edges: hit.edges,
+            beta: hit.v.beta,
+            edges: hit.v.depth,
             terminated: m.terminated(),
         });
     }

@@ -51,7 +51,7 @@ use crate::camera::CameraRay;
 use crate::drive::{self, Estimator};
 use crate::math::Vec3;
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::session::{Job, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
@@ -65,7 +65,7 @@ pub enum Lookup {
     /// The `k` nearest within a cap chosen from the map when it is built: the lower
     /// quartile, over a sample of its photons, of the distance to their `k`-th nearest
     /// neighbour. The k nearest alone overestimate dark regions next to bright ones (there
-    /// the k-th photon is far, in the bright part: `media-fog` came out 1.4–3 % too bright);
+    /// the k-th photon is far, in the bright part);
     /// where fewer than k photons lie within the cap the estimate is a fixed-radius one, a
     /// plain convolution of the photons' density, which keeps the image's mean, and the cap
     /// shrinks as photons are added. The default for volume lookups.
@@ -126,9 +126,7 @@ pub const BYTES_PER_PHOTON: u64 = 64;
 
 /// Wavelength sets of the photon mapper (and of PPM's visible points) in spectral mode: each
 /// has its own maps, built from as many photons carrying its four wavelengths, and a camera
-/// sample picks one. Few sets tint the image: on Mitsuba's Cornell box (photon mapper, 10⁶
-/// photons, final gathering) the red channel's mean is 2.3 % low with 8 sets, within 1 %
-/// in every channel with 32.
+/// sample picks one. Few sets tint the image (how many are enough: `bench/README.md`).
 pub const WAVELENGTH_SETS: u32 = 32;
 
 /// The photon maps of a scene (of one wavelength set in spectral mode).
@@ -183,8 +181,8 @@ impl<C: Color + Send> PhotonMaps<C> {
                  m: &M,
                  _: &mut Sampler| {
                     // Direct light is next-event estimation's, except from emitting media.
-                    let indirect = hit.edges > 1 || hit.from_volume;
-                    if hit.si.is_none() {
+                    let indirect = hit.v.depth > 1 || hit.from_volume;
+                    if hit.v.si.is_none() {
                         if gather || indirect {
                             volume.push(hit, m);
                         }
@@ -258,16 +256,12 @@ impl IntegratorModel for PhotonConfig {
 
     /// The maps first (in spectral mode one set per [`WAVELENGTH_SETS`]), then the camera
     /// pass through the tile loop.
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
         let start = Instant::now();
         let sets = if M::SPECTRAL { WAVELENGTH_SETS } else { 1 };
+        let scene = job.scene;
         let mapper = PhotonMapper::<M>::build(scene, self, scene.sampler.seed, sets);
-        let mut out = drive::render_tiles::<M, _>(scene, &mapper, opts, observer);
+        let mut out = drive::render_tiles::<M, _>(job, &mapper);
         out.elapsed = start.elapsed();
         out
     }

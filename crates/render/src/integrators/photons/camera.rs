@@ -36,6 +36,43 @@ pub struct Vertex<'a, C: Color> {
     pub hero: usize,
 }
 
+impl<'a, C: Color> Vertex<'a, C> {
+    /// The vertex where walker `w` met the surface `si` that scatters by `at`, `depth` edges
+    /// from its start, with throughput `beta`.
+    pub fn surface(
+        at: Scatterer<'a, C>,
+        si: &'a SurfaceInteraction,
+        w: &Walker,
+        depth: u32,
+        beta: C,
+    ) -> Self {
+        Vertex {
+            at,
+            si: Some(si),
+            p: si.p,
+            medium: w.medium,
+            depth,
+            beta,
+            time: si.time,
+            hero: w.hero,
+        }
+    }
+
+    /// The vertex where walker `w` collided at `p` in its medium (scattering by `at`).
+    pub fn collision(at: Scatterer<'a, C>, p: Vec3, w: &Walker, depth: u32, beta: C) -> Self {
+        Vertex {
+            at,
+            si: None,
+            p,
+            medium: w.medium,
+            depth,
+            beta,
+            time: w.ray.time,
+            hero: w.hero,
+        }
+    }
+}
+
 /// A segment of a camera-side walk through a medium, before its free flight is sampled.
 pub struct Segment<'a, C> {
     pub walker: &'a Walker,
@@ -163,19 +200,11 @@ impl CameraWalk {
                         l += power(beta, ratio) * emit * e.radiance_in(p, m);
                     }
                     beta *= weight;
-                    let v = Vertex {
-                        at: Scatterer::Medium {
-                            phase: &med.phase,
-                            wo: -w.ray.d,
-                        },
-                        si: None,
-                        p,
-                        medium: w.medium,
-                        depth,
-                        beta: power(beta, ratio),
-                        time: w.ray.time,
-                        hero: w.hero,
+                    let at = Scatterer::Medium {
+                        phase: &med.phase,
+                        wo: -w.ray.d,
                     };
+                    let v = Vertex::collision(at, p, &w, depth, power(beta, ratio));
                     l += v.beta * visit.vertex(&v, sampler);
                     break;
                 }
@@ -218,20 +247,8 @@ impl CameraWalk {
             };
             let wo = frame.to_local(si.wo);
             if bsdf.has_smooth() {
-                let v = Vertex {
-                    at: Scatterer::Surface {
-                        bsdf: &bsdf,
-                        frame: &frame,
-                        wo,
-                    },
-                    si: Some(&si),
-                    p: si.p,
-                    medium: w.medium,
-                    depth,
-                    beta: power(beta, ratio),
-                    time: si.time,
-                    hero: w.hero,
-                };
+                let at = Scatterer::surface(&bsdf, &frame, wo);
+                let v = Vertex::surface(at, &si, &w, depth, power(beta, ratio));
                 l += v.beta * visit.vertex(&v, sampler);
             }
             if !self.allows(depth + 1) {

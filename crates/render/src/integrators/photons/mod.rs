@@ -21,12 +21,11 @@ pub use sources::{PathStart, PhotonLights, VolumeEmitter, volume_emitters};
 
 use rayon::prelude::*;
 
-use super::transport::{Event, Walker, roulette};
+use super::transport::{Event, Scatterer, Walker, roulette};
 use crate::bsdf::TransportMode;
 use crate::math::{UVec2, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::sampler::{hash2, u64_to_unit};
-use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
 
@@ -35,21 +34,15 @@ pub const CHUNK: u64 = 4096;
 
 /// A photon arriving at a surface with a non-delta lobe, or scattering in a medium, in the
 /// colour type `C` of its mode.
-pub struct PhotonHit<'a, C = Vec3> {
-    /// Where: the surface (`None` for a scattering event in a medium).
-    pub si: Option<&'a SurfaceInteraction>,
-    pub p: Vec3,
-    /// The medium of a scattering event; for a surface hit, the medium the photon arrived
+pub struct PhotonHit<'a, C: Color = Vec3> {
+    /// Where and what scatters it: its `depth` the edges from the light (1: direct light),
+    /// its `beta` its power, Φ of the emitted sample times the path's throughput (divide by
+    /// the number of photons emitted for the flux it stands for; in a medium after the
+    /// collision's σs/σt), its `medium` the one it scatters in or, at a surface, arrived
     /// through.
-    pub medium: Option<u32>,
-    /// Its power: Φ of the emitted sample times the path's throughput (divide by the number
-    /// of photons emitted for the flux it stands for). In a medium, the power after the
-    /// collision's σs/σt (the event is a scattering one).
-    pub beta: C,
+    pub v: Vertex<'a, C>,
     /// Unit direction towards where it came from (world space).
     pub wi: Vec3,
-    /// Edges from the light to this hit (1: direct light).
-    pub edges: u32,
     /// Every bounce before this hit was a delta one and there was at least one (a caustic
     /// photon: light, specular surfaces, here).
     pub caustic: bool,
@@ -105,13 +98,12 @@ pub fn trace<M: PathMode>(
                 beta *= weight;
                 ratio *= r;
                 let wo = -w.ray.d;
+                let phase = &w.medium(scene).expect("collisions happen in media").phase;
+                let at = Scatterer::Medium { phase, wo };
+                let v = Vertex::collision(at, p, &w, edges, power(beta, ratio));
                 let hit = PhotonHit {
-                    si: None,
-                    p,
-                    medium: w.medium,
-                    beta: power(beta, ratio),
+                    v,
                     wi: wo,
-                    edges,
                     caustic: false,
                     from_volume: start.in_volume,
                 };
@@ -120,7 +112,6 @@ pub fn trace<M: PathMode>(
                     break;
                 }
                 specular_only = false;
-                let phase = w.medium(scene).expect("collisions happen in media").phase;
                 let (wi, _) = phase.sample(wo, sampler.next_2d());
                 let after = m.live_max(power(beta, ratio));
                 if !roulette::by_power(&mut beta, before, after, sampler.next_1d()) {
@@ -145,14 +136,13 @@ pub fn trace<M: PathMode>(
         };
         let here = power(beta, ratio);
         let before = m.live_max(here);
+        let wo = frame.to_local(si.wo);
         if bsdf.has_smooth() {
+            let at = Scatterer::surface(&bsdf, &frame, wo);
+            let v = Vertex::surface(at, &si, &w, edges, here);
             let hit = PhotonHit {
-                si: Some(&si),
-                p: si.p,
-                medium: w.medium,
-                beta: here,
+                v,
                 wi: -w.ray.d,
-                edges,
                 caustic: specular_only && edges > 1,
                 from_volume: start.in_volume,
             };
@@ -161,7 +151,6 @@ pub fn trace<M: PathMode>(
         if !allows(edges + 2) {
             break;
         }
-        let wo = frame.to_local(si.wo);
         let u1 = sampler.next_1d();
         let Some(bs) = bsdf.sample(wo, u1, sampler.next_2d(), TransportMode::Importance) else {
             break;

@@ -1,12 +1,10 @@
-//! A counting-sorted hash grid over the visible points: cells as wide as the largest radius,
-//! each point listed in every cell its sphere touches, in visible point order (so the grid is
-//! the same whatever the thread count).
+//! A counting-sorted hash grid over spheres (the visible points and their radii): cells as
+//! wide as the largest radius, each sphere listed in every cell it touches, in sphere order
+//! (so the grid is the same whatever the thread count).
 
-use super::visible::VisiblePoint;
 use crate::math::Vec3;
-use crate::spectral::lanes::Color;
 
-/// Counting-sorted hash grid over the visible points.
+/// Counting-sorted hash grid over spheres.
 pub(super) struct Grid {
     lo: Vec3,
     inv_cell: f32,
@@ -24,36 +22,36 @@ fn hash_cell(c: [i64; 3], slots: usize) -> usize {
 }
 
 impl Grid {
-    pub(super) fn build<C: Color>(
-        vps: &[VisiblePoint<C>],
-        radius: impl Fn(&VisiblePoint<C>) -> f32,
-    ) -> Option<Grid> {
-        let max_r = vps.iter().map(&radius).fold(0.0f32, f32::max);
-        if vps.is_empty() || !(max_r > 0.0 && max_r.is_finite()) {
+    /// The grid over `n` spheres, sphere `i` at `sphere(i)` = (centre, radius).
+    pub(super) fn build(n: usize, sphere: impl Fn(usize) -> (Vec3, f32)) -> Option<Grid> {
+        let max_r = (0..n).map(|i| sphere(i).1).fold(0.0f32, f32::max);
+        if n == 0 || !(max_r > 0.0 && max_r.is_finite()) {
             return None;
         }
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for v in vps {
-            lo = lo.min(v.p);
-            hi = hi.max(v.p);
+        for i in 0..n {
+            let p = sphere(i).0;
+            lo = lo.min(p);
+            hi = hi.max(p);
         }
         lo -= Vec3::splat(max_r);
         hi += Vec3::splat(max_r);
         let inv_cell = 1.0 / max_r;
         let ext = (hi - lo) * inv_cell;
         let res = [ext.x, ext.y, ext.z].map(|e| (e.ceil() as i64).clamp(1, 1 << 20));
-        let slots = vps.len().next_power_of_two().max(1);
+        let slots = n.next_power_of_two().max(1);
         let cell = |p: Vec3, res: &[i64; 3]| -> [i64; 3] {
             let q = (p - lo) * inv_cell;
             let q = [q.x, q.y, q.z];
             std::array::from_fn(|k| (q[k].floor() as i64).clamp(0, res[k] - 1))
         };
-        // Count, then fill, in visible point order.
+        // Count, then fill, in sphere order.
         let mut counts = vec![0u32; slots + 1];
         let each = |f: &mut dyn FnMut(usize, u32)| {
-            for (i, v) in vps.iter().enumerate() {
-                let r = Vec3::splat(radius(v));
-                let (a, b) = (cell(v.p - r, &res), cell(v.p + r, &res));
+            for i in 0..n {
+                let (p, r) = sphere(i);
+                let r = Vec3::splat(r);
+                let (a, b) = (cell(p - r, &res), cell(p + r, &res));
                 for z in a[2]..=b[2] {
                     for y in a[1]..=b[1] {
                         for x in a[0]..=b[0] {
@@ -82,7 +80,7 @@ impl Grid {
         })
     }
 
-    /// The visible points whose cells may hold `p`.
+    /// The spheres whose cells may hold `p`.
     pub(super) fn near(&self, p: Vec3) -> &[u32] {
         let q = (p - self.lo) * self.inv_cell;
         let mut c = [0i64; 3];

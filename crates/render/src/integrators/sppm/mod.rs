@@ -56,7 +56,7 @@ use crate::drive::run_passes;
 use crate::film::{Film, Filter};
 use crate::math::{PI, UVec2, Vec2, Vec3};
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
+use crate::session::{Job, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 use base::FilterDesc;
@@ -211,13 +211,8 @@ impl IntegratorModel for SppmConfig {
     }
 
     /// `opts.spp` iterations (a time budget or cancellation stops after a whole iteration).
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        render_in::<M>(scene, self, opts, observer)
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
+        render_in::<M>(job, self)
     }
 }
 
@@ -225,23 +220,18 @@ impl IntegratorModel for SppmConfig {
 /// the same wavelengths, drawn per iteration from the seed (pbrt-v4 draws them per pixel
 /// and per photon; a shared set is what lets a photon's flux be weighed by a visible point's
 /// BSDF at the same wavelengths — the extended-Nori write-up's one map per wavelength set).
-fn render_in<M: PathMode + Send>(
-    scene: &Scene,
-    cfg: &SppmConfig,
-    opts: &RenderOptions,
-    observer: &dyn RenderObserver,
-) -> RenderOutcome {
+fn render_in<M: PathMode + Send>(job: &Job, cfg: &SppmConfig) -> RenderOutcome {
     let start = Instant::now();
-    let mut sppm = Sppm::<M>::new(scene, cfg, opts);
+    let mut sppm = Sppm::<M>::new(job.scene, cfg, job.opts);
     let pixel_count = sppm.pixel_count() as u64;
-    let (done, cancelled) = run_passes(opts, observer, start, pixel_count, |iteration| {
+    let (done, cancelled) = run_passes(job, start, pixel_count, |iteration| {
         if sppm.nee || iteration == 0 {
             sppm.camera_pass(iteration);
         }
         sppm.photon_pass(iteration);
     });
     let film = sppm.develop(done);
-    observer.pass_done(&film, done);
+    job.observer.pass_done(&film, done);
     RenderOutcome::of_passes(film, done, start, cancelled)
 }
 
@@ -401,8 +391,11 @@ impl<'a, M: PathMode + Send> Sppm<'a, M> {
         let mut phi = vec![[Vec3::ZERO; 2]; slot_count];
         let mut found = vec![[0u32; 2]; slot_count];
         for (g, vps) in self.vps.iter().enumerate() {
-            let radius = |v: &VisiblePoint<M::C>| radii[v.slot as usize][v.in_medium() as usize];
-            let Some(grid) = Grid::build(vps, radius) else {
+            let sphere = |i: usize| {
+                let v = &vps[i];
+                (v.p, radii[v.slot as usize][v.in_medium() as usize])
+            };
+            let Some(grid) = Grid::build(vps.len(), sphere) else {
                 continue;
             };
             if !self.lights.any() {

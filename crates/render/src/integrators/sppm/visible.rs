@@ -217,18 +217,18 @@ impl<C: Color> Gatherers<'_, C> {
         modes: &(M, M),
         out: &mut Vec<(u32, Vec3)>,
     ) {
-        if hit.edges < self.first && !hit.from_volume {
+        if hit.v.depth < self.first && !hit.from_volume {
             return;
         }
-        let p = hit.p;
+        let p = hit.v.p;
         for &v in self.grid.near(p) {
             let vp = &self.vps[v as usize];
             let kind = vp.in_medium() as usize;
             let r = self.radii[vp.slot as usize][kind];
-            if (vp.p - p).length_squared() > r * r || !self.cfg.allows(vp.depth + hit.edges) {
+            if (vp.p - p).length_squared() > r * r || !self.cfg.allows(vp.depth + hit.v.depth) {
                 continue;
             }
-            let f = match (&vp.at, hit.si) {
+            let f = match (&vp.at, hit.v.si) {
                 (Scattering::Surface { bsdf, frame, wo }, Some(_)) => {
                     let wl = frame.to_local(hit.wi);
                     if wl.z == 0.0 {
@@ -237,7 +237,9 @@ impl<C: Color> Gatherers<'_, C> {
                     // eval is f·|cos θi|; the photon's flux already holds the cosine.
                     bsdf.eval(*wo, wl, TransportMode::Radiance) / wl.z.abs()
                 }
-                (Scattering::Medium { phase, wo, medium }, None) if hit.medium == Some(*medium) => {
+                (Scattering::Medium { phase, wo, medium }, None)
+                    if hit.v.medium == Some(*medium) =>
+                {
                     C::splat(phase.eval(*wo, hit.wi))
                 }
                 _ => continue,
@@ -250,7 +252,7 @@ impl<C: Color> Gatherers<'_, C> {
             } else {
                 &modes.0
             };
-            out.push((v, mode.to_rgb(vp.beta * f * hit.beta)));
+            out.push((v, mode.to_rgb(vp.beta * f * hit.v.beta)));
         }
     }
 }

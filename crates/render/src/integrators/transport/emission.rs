@@ -4,7 +4,7 @@
 //! [`emitter_density`]). Every integrator that follows rays from the camera side reads
 //! emission through these.
 
-use super::mis::{self, Heuristic};
+use super::mis::{self, MisHeuristic};
 use crate::lights::{Light, Receiver};
 use crate::math::Vec3;
 use crate::shapes::SurfaceInteraction;
@@ -26,7 +26,7 @@ impl Previous {
     /// with which emitter sampling from the receiver produces the same direction (asked only
     /// when a weight is needed).
     #[inline(always)]
-    pub fn weight(&self, h: Heuristic, nee: impl FnOnce(&Receiver) -> f32) -> f32 {
+    pub fn weight(&self, h: MisHeuristic, nee: impl FnOnce(&Receiver) -> f32) -> f32 {
         if self.delta {
             1.0
         } else {

@@ -1,25 +1,20 @@
 //! Multiple importance sampling: the heuristics that weigh one strategy's sample against the
 //! others that could have made it (Veach 1997, ch. 9).
 
-/// How two strategies' densities are combined.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Heuristic {
-    /// The power heuristic with β = 2 (Mitsuba's and pbrt's choice).
-    Power,
-    /// The balance heuristic (Nori's `path_mis`, CENG795's `MIS_BALANCE`).
-    Balance,
-}
+pub use base::MisHeuristic;
 
-/// The weight of a sample drawn with density `a` when a strategy of density `b` could have
-/// drawn it too; 0 where the ratio is not finite (both densities 0, or infinite).
+/// The weight, by heuristic `h` (the power heuristic with β = 2, Mitsuba's and pbrt's
+/// choice, or the balance heuristic), of a sample drawn with density `a` when a strategy of
+/// density `b` could have drawn it too; 0 where the ratio is not finite (both densities 0,
+/// or infinite).
 #[inline(always)]
-pub fn weight(h: Heuristic, a: f32, b: f32) -> f32 {
+pub fn weight(h: MisHeuristic, a: f32, b: f32) -> f32 {
     let w = match h {
-        Heuristic::Power => {
+        MisHeuristic::Power => {
             let (a2, b2) = (a * a, b * b);
             a2 / (a2 + b2)
         }
-        Heuristic::Balance => a / (a + b),
+        MisHeuristic::Balance => a / (a + b),
     };
     if w.is_finite() { w } else { 0.0 }
 }
@@ -27,7 +22,7 @@ pub fn weight(h: Heuristic, a: f32, b: f32) -> f32 {
 /// [`weight`] with the power heuristic.
 #[inline(always)]
 pub fn power(a: f32, b: f32) -> f32 {
-    weight(Heuristic::Power, a, b)
+    weight(MisHeuristic::Power, a, b)
 }
 
 #[cfg(test)]
@@ -37,7 +32,7 @@ mod tests {
     #[test]
     fn weights_of_two_strategies_sum_to_one() {
         for (a, b) in [(0.3f32, 2.0f32), (5.0, 5.0), (1e-3, 7.0)] {
-            for h in [Heuristic::Power, Heuristic::Balance] {
+            for h in [MisHeuristic::Power, MisHeuristic::Balance] {
                 let s = weight(h, a, b) + weight(h, b, a);
                 assert!((s - 1.0).abs() < 1e-6, "{h:?} {a} {b}: {s}");
             }

@@ -23,7 +23,7 @@ pub mod shadow;
 pub mod walk;
 
 pub use emission::{Previous, emitter_density, emitter_hit, environment};
-pub use mis::Heuristic;
+pub use mis::MisHeuristic;
 pub use nee::{EmitterSample, Scatterer, sample_emitter, sample_towards};
 pub use shadow::{Connection, From, transmittance};
 pub use walk::{Ahead, Event, Pass, Walker};

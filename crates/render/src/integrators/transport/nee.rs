@@ -72,7 +72,13 @@ pub enum Scatterer<'a, C: Color> {
     },
 }
 
-impl<C: Color> Scatterer<'_, C> {
+impl<'a, C: Color> Scatterer<'a, C> {
+    /// A BSDF in its shading frame, seen from the local direction `wo`.
+    #[inline(always)]
+    pub fn surface(bsdf: &'a Bsdf<C>, frame: &'a Frame, wo: Vec3) -> Self {
+        Scatterer::Surface { bsdf, frame, wo }
+    }
+
     /// f·|cos θ| towards the world direction `wi` (the phase function in a medium) and the
     /// solid-angle density with which the vertex samples `wi`.
     #[inline(always)]

@@ -3,12 +3,12 @@
 //! equiangular strategy for point lights), emission sampling of grids, and the phase
 //! function's new direction.
 
-use super::equiangular::{Segment, sample_emission};
+use super::equiangular::Segment;
 use super::{PHASE, Step, VolPath};
 use crate::integrators::path::{
     PathEnd, PathRecorder, RecordedScatter, RecordedVertex, VertexKind, Via,
 };
-use crate::integrators::transport::{self, Connection, From, Previous, mis};
+use crate::integrators::transport::{self, From, Previous, mis};
 use crate::lights::Receiver;
 use crate::math::Vec3;
 use crate::media::Medium;
@@ -59,19 +59,8 @@ impl<M: PathMode, R: PathRecorder<M::C>> VolPath<'_, M, R> {
         let (here, first) = (self.depth + 1, self.first.or(Some(PHASE)));
         self.medium_next_event(m, p, d, wo, segment, (here, first));
         if cfg.sample_emission {
-            let from = From::Medium(p, time);
-            let e = sample_emission(
-                scene,
-                from,
-                self.walker.medium,
-                cfg,
-                self.sampler,
-                mode,
-                |wi| M::C::splat(m.phase.eval(wo, wi)),
-            );
-            let l = self.throughput * e * self.hero_weight();
-            self.add(l, Via::EmitterSample, here, first);
-            self.emission_sampled = true;
+            let f = |wi| M::C::splat(m.phase.eval(wo, wi));
+            self.emission_sample(From::Medium(p, time), f, (here, first));
         }
         let (wi, pdf) = m.phase.sample(wo, self.sampler.next_2d());
         self.rec.scatter(&RecordedScatter {
@@ -109,16 +98,9 @@ impl<M: PathMode, R: PathRecorder<M::C>> VolPath<'_, M, R> {
         };
         let (ls, pmf, i) = (&e.ls, e.pmf, e.light);
         let ph = m.phase.eval(wo, ls.wi);
-        let c = Connection {
-            from: From::Medium(p, self.walker.ray.time),
-            wi: ls.wi,
-            target: ls.target,
-            medium: self.walker.medium,
-        };
-        let tr = transport::transmittance(scene, &c, self.cfg.transmittance, self.sampler, mode);
-        if tr.is_black() {
+        let Some(tr) = self.shadow(From::Medium(p, self.walker.ray.time), ls) else {
             return;
-        }
+        };
         let w = match (segment, scene.lights[i as usize].position()) {
             // A point light also reachable by strategy B.
             (Some(seg), Some(q)) => {

@@ -34,16 +34,14 @@ use super::path::{
     VertexKind, Via,
 };
 use super::transport::{
-    self, Connection, Event, From, Heuristic, Previous, Scatterer, Walker, mis, roulette,
+    self, Connection, Event, From, MisHeuristic, Previous, Scatterer, Walker, mis, roulette,
 };
-use super::{IntegratorModel, render_per_sample};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
 use crate::drive::Estimator;
-use crate::lights::Receiver;
+use crate::lights::{LightSample, Receiver};
 use crate::math::Vec3;
 use crate::sampling::Sampler;
-use crate::session::{RenderObserver, RenderOptions, RenderOutcome};
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
@@ -84,21 +82,6 @@ pub fn li(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, cfg: &VolPathC
 impl<M: PathMode> Estimator<M> for VolPathConfig {
     fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
         li_in::<M>(scene, cray, sampler, self)
-    }
-}
-
-impl IntegratorModel for VolPathConfig {
-    fn name(&self) -> &'static str {
-        "volpath"
-    }
-
-    fn render<M: PathMode + Send>(
-        &self,
-        scene: &Scene,
-        opts: &RenderOptions,
-        observer: &dyn RenderObserver,
-    ) -> RenderOutcome {
-        render_per_sample::<M, _>(self, scene, opts, observer)
     }
 }
 
@@ -312,7 +295,7 @@ impl<M: PathMode, R: PathRecorder<M::C>> VolPath<'_, M, R> {
     fn emission_weight(&self, i: u32, si: Option<&SurfaceInteraction>) -> f32 {
         let (scene, d) = (self.scene, self.walker.ray.d);
         self.prev.as_ref().map_or(1.0, |p| {
-            p.weight(Heuristic::Power, |r| {
+            p.weight(MisHeuristic::Power, |r| {
                 transport::emitter_density(scene, r, i, d, si)
             })
         })
@@ -386,30 +369,15 @@ impl<M: PathMode, R: PathRecorder<M::C>> VolPath<'_, M, R> {
             return Step::End(PathEnd::Absorbed);
         };
         let wo = frame.to_local(si.wo);
-        let at = Scatterer::Surface {
-            bsdf: &bsdf,
-            frame: &frame,
-            wo,
-        };
+        let at = Scatterer::surface(&bsdf, &frame, wo);
         // Contributions from this vertex reach the emitter one segment past it; before the
         // path leaves its first vertex, `first` is still unknown, as in the path tracer.
         let (here, first) = (self.depth + 2, self.first);
         self.emission_sampled = false;
         let smooth = bsdf.has_smooth() && self.depth + 1 < cfg.max_depth;
         if smooth && cfg.sample_emission {
-            let from = From::Surface(si);
-            let e = sample_emission(
-                scene,
-                from,
-                self.walker.medium,
-                cfg,
-                self.sampler,
-                mode,
-                |wi| at.eval(wi, TransportMode::Radiance),
-            );
-            let l = self.throughput * e * self.hero_weight();
-            self.add(l, Via::EmitterSample, here, first);
-            self.emission_sampled = true;
+            let f = |wi| at.eval(wi, TransportMode::Radiance);
+            self.emission_sample(From::Surface(si), f, (here, first));
         }
         if smooth {
             self.next_event(si, &at, here);
@@ -447,6 +415,36 @@ impl<M: PathMode, R: PathRecorder<M::C>> VolPath<'_, M, R> {
         Step::Continue
     }
 
+    /// Next-event estimation of the emission grids from `from` (scattering by `f`), recorded
+    /// at depth `here` after `first`; the collisions of the next segment then leave the grids'
+    /// emission alone.
+    fn emission_sample(
+        &mut self,
+        from: From,
+        f: impl Fn(Vec3) -> M::C,
+        (here, first): (u32, Option<Scatter>),
+    ) {
+        let (scene, cfg, medium) = (self.scene, self.cfg, self.walker.medium);
+        let e = sample_emission(scene, from, medium, cfg, self.sampler, self.mode, f);
+        let l = self.throughput * e * self.hero_weight();
+        self.add(l, Via::EmitterSample, here, first);
+        self.emission_sampled = true;
+    }
+
+    /// The transmittance of the connection from `from` (where the path is) to the emitter
+    /// sample `ls`; `None` when blocked.
+    fn shadow(&mut self, from: From, ls: &LightSample<M::C>) -> Option<M::C> {
+        let c = Connection {
+            from,
+            wi: ls.wi,
+            target: ls.target,
+            medium: self.walker.medium,
+        };
+        let (scene, mode) = (self.scene, self.mode);
+        let tr = transport::transmittance(scene, &c, self.cfg.transmittance, self.sampler, mode);
+        (!tr.is_black()).then_some(tr)
+    }
+
     /// Next-event estimation from the surface at `si` (scattering by `at`), its
     /// contribution recorded at depth `here`.
     fn next_event(&mut self, si: &SurfaceInteraction, at: &Scatterer<M::C>, here: u32) {
@@ -460,16 +458,9 @@ impl<M: PathMode, R: PathRecorder<M::C>> VolPath<'_, M, R> {
         if f.is_black() {
             return;
         }
-        let c = Connection {
-            from: From::Surface(si),
-            wi: ls.wi,
-            target: ls.target,
-            medium: self.walker.medium,
-        };
-        let tr = transport::transmittance(scene, &c, self.cfg.transmittance, self.sampler, mode);
-        if tr.is_black() {
+        let Some(tr) = self.shadow(From::Surface(si), ls) else {
             return;
-        }
+        };
         let w = if ls.delta {
             1.0
         } else {
