@@ -99,22 +99,19 @@ impl<M: PathMode> Bdpt<'_, M> {
                     path.push(v);
                     continue;
                 }
-                Event::Null(si, pass) => {
-                    pass.apply(&mut beta, &mut ratio);
-                    if let Some(s) = sigma {
-                        seg *= (-s * pass.d).exp();
-                    }
-                    w.cross(scene, &si);
-                    continue;
-                }
+                Event::Null(si, pass) => (Some((si, true)), pass),
+                Event::Surface(si, pass) => (Some((si, false)), pass),
                 Event::Escape(pass) => (None, pass),
-                Event::Surface(si, pass) => (Some(si), pass),
             };
             pass.apply(&mut beta, &mut ratio);
             if let Some(s) = sigma {
                 seg *= (-s * pass.d).exp();
             }
-            let Some(si) = si else {
+            if let Some((si, true)) = &si {
+                w.cross(scene, si);
+                continue;
+            }
+            let Some((si, _)) = si else {
                 if mode == TransportMode::Radiance {
                     let prev = path.last().expect("a subpath has a start");
                     let mut v = Vertex::new(Kind::Infinite, prev.p + w.ray.d, beta);
