@@ -276,6 +276,7 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
     /// from stream 1 (not drawn at all for a limit of 0), at most `max` = (camera, light)
     /// vertices each; stream 2 is started for the connections. With `exact`, `None` as soon
     /// as a subpath comes out shorter than its limit (a strategy of MLT needs it whole).
+    #[inline(always)]
     fn subpaths<'p>(
         &self,
         scene: &'p Scene,

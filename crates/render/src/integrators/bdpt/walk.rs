@@ -7,8 +7,9 @@ use super::vertex::{Kind, Scattered, Vertex, convert_density, local_dir};
 use super::{Bdpt, RR_FROM};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
-use crate::integrators::transport::{Event, Walker, roulette};
+use crate::integrators::transport::{Walker, roulette};
 use crate::math::Vec3;
+use crate::media::Flight;
 use crate::sampling::Samples;
 use crate::spectral::lanes::{Color, PathMode};
 use crate::world::Scene;
@@ -49,15 +50,19 @@ impl<M: PathMode> Bdpt<'_, M> {
             if path.len() >= max_vertices {
                 return;
             }
-            let sigma = self.flight_sigma(scene, w.medium, w.hero, m);
-            let (si, pass) = match w.next(scene, sampler, m) {
-                Event::Collision {
-                    p,
+            let sigma = match w.medium {
+                Some(_) => self.flight_sigma(scene, w.medium, w.hero, m),
+                None => None,
+            };
+            let ahead = w.ahead(scene);
+            let (weight, r) = match w.fly(scene, &ahead, sampler, m) {
+                Flight::Scatter {
                     d,
                     weight,
                     ratio: r,
                     emit,
                 } => {
+                    let p = w.ray.at(d);
                     let med = w.medium(scene).expect("collisions happen in media");
                     // An emitting medium's light, by the collision estimator (as
                     // `volpath`'s), with the throughput before the collision.
@@ -99,19 +104,21 @@ impl<M: PathMode> Bdpt<'_, M> {
                     path.push(v);
                     continue;
                 }
-                Event::Null(si, pass) => (Some((si, true)), pass),
-                Event::Surface(si, pass) => (Some((si, false)), pass),
-                Event::Escape(pass) => (None, pass),
+                Flight::Pass { weight, ratio } => (weight, ratio),
             };
-            pass.apply(&mut beta, &mut ratio);
+            beta *= weight;
+            ratio *= r;
             if let Some(s) = sigma {
-                seg *= (-s * pass.d).exp();
+                seg *= (-s * ahead.end).exp();
             }
-            if let Some((si, true)) = &si {
+            let si = w.surface(scene, ahead);
+            if let Some(si) = &si
+                && scene.is_null(si)
+            {
                 w.cross(scene, si);
                 continue;
             }
-            let Some((si, _)) = si else {
+            let Some(si) = si else {
                 if mode == TransportMode::Radiance {
                     let prev = path.last().expect("a subpath has a start");
                     let mut v = Vertex::new(Kind::Infinite, prev.p + w.ray.d, beta);

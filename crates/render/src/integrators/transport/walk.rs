@@ -96,7 +96,7 @@ impl Walker {
     }
 
     /// The segment ahead: the closest surface, its interaction left for [`Walker::reach`].
-    #[inline]
+    #[inline(always)]
     pub fn ahead(&self, scene: &Scene) -> Ahead {
         let closest = scene.closest(&self.ray, self.t_max);
         let end = closest.t(&self.ray, self.t_max);
@@ -105,7 +105,7 @@ impl Walker {
 
     /// A free flight through the walker's medium over the segment ahead (no collision, weight
     /// 1, outside media).
-    #[inline]
+    #[inline(always)]
     pub fn fly<M: ColorMode>(
         &self,
         scene: &Scene,
@@ -119,9 +119,16 @@ impl Walker {
         }
     }
 
+    /// The surface at the end of the segment ahead (`None`: the ray leaves the scene), its
+    /// interaction computed where the caller keeps it.
+    #[inline(always)]
+    pub fn surface(&self, scene: &Scene, ahead: Ahead) -> Option<SurfaceInteraction> {
+        ahead.closest.surface(scene, &self.ray, self.t_max)
+    }
+
     /// The end of the segment ahead, reached with the free flight's `pass`: a surface, a
     /// `null` one, or nothing.
-    #[inline]
+    #[inline(always)]
     pub fn reach<C>(&self, scene: &Scene, ahead: Ahead, pass: Pass<C>) -> Event<C> {
         match ahead.closest.surface(scene, &self.ray, self.t_max) {
             None => Event::Escape(pass),
@@ -132,7 +139,7 @@ impl Walker {
 
     /// The event a free flight over the segment ahead makes: its collision, or the end of
     /// the segment reached with its pass weight.
-    #[inline]
+    #[inline(always)]
     pub fn event<C>(&self, scene: &Scene, ahead: Ahead, flight: Flight<C>) -> Event<C> {
         match flight {
             Flight::Scatter {
@@ -155,7 +162,7 @@ impl Walker {
     }
 
     /// The next event along the ray ([`Walker::ahead`], [`Walker::fly`], [`Walker::event`]).
-    #[inline]
+    #[inline(always)]
     pub fn next<M: ColorMode>(
         &self,
         scene: &Scene,
