@@ -7,7 +7,7 @@ use super::vertex::{Kind, Scattered, Vertex, convert_density, local_dir};
 use super::{Bdpt, RR_FROM};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
-use crate::integrators::transport::{Walker, roulette};
+use crate::integrators::transport::{self, Walker, roulette};
 use crate::math::Vec3;
 use crate::media::Flight;
 use crate::sampling::Samples;
@@ -50,10 +50,9 @@ impl<M: PathMode> Bdpt<'_, M> {
             if path.len() >= max_vertices {
                 return;
             }
-            let sigma = match w.medium {
-                Some(_) => self.flight_sigma(scene, w.medium, w.hero, m),
-                None => None,
-            };
+            let sigma = w
+                .medium
+                .and_then(|_| self.flight_sigma(scene, w.medium, w.hero, m));
             let ahead = w.ahead(scene);
             let (weight, r) = match w.fly(scene, &ahead, sampler, m) {
                 Flight::Scatter {
@@ -122,9 +121,7 @@ impl<M: PathMode> Bdpt<'_, M> {
                 if mode == TransportMode::Radiance {
                     let prev = path.last().expect("a subpath has a start");
                     let mut v = Vertex::new(Kind::Infinite, prev.p + w.ray.d, beta);
-                    for &i in &scene.infinite_lights {
-                        v.le += scene.lights[i as usize].environment(w.ray.d, m);
-                    }
+                    v.le = transport::environment(scene, w.ray.d, m, M::C::ONE, |_, _| 1.0);
                     v.ratio = ratio;
                     v.terminated = m.terminated();
                     v.seg = seg;
