@@ -181,6 +181,23 @@ fn glowing_sphere(integrator: &str) -> String {
     )
 }
 
+/// `count` renders of the glowing sphere with `integrator` at `spp`, seeds 100, 101, ….
+fn batches(integrator: &str, count: u64, spp: u32) -> Vec<render::film::Image> {
+    let desc = scene::load_xml_text("glow", &glowing_sphere(integrator)).unwrap();
+    (0..count)
+        .map(|seed| {
+            let opts = BuildOptions {
+                seed: Some(100 + seed),
+                spp: Some(spp),
+                ..Default::default()
+            };
+            let out = render_desc(&desc, &opts).unwrap();
+            assert_eq!(out.film.nonfinite_count(), 0, "{integrator}");
+            out.film.develop()
+        })
+        .collect()
+}
+
 /// BDPT and MLT find a medium's emission (by the camera subpath's collision estimator,
 /// the one strategy that samples it) and light scattered in it: BDPT against `volpath` by
 /// the block t-test (16 × 32 spp against 8 × 512 spp, α = 0.01 Šidák-corrected inside);
@@ -189,21 +206,6 @@ fn glowing_sphere(integrator: &str) -> String {
 #[test]
 fn bdpt_and_mlt_render_emitting_media_as_volpath_does() {
     use render::compare::{Reference, TestImages, compare};
-    let batches = |integrator: &str, count: u64, spp: u32| -> Vec<render::film::Image> {
-        let desc = scene::load_xml_text("glow", &glowing_sphere(integrator)).unwrap();
-        (0..count)
-            .map(|seed| {
-                let opts = BuildOptions {
-                    seed: Some(100 + seed),
-                    spp: Some(spp),
-                    ..Default::default()
-                };
-                let out = render_desc(&desc, &opts).unwrap();
-                assert_eq!(out.film.nonfinite_count(), 0, "{integrator}");
-                out.film.develop()
-            })
-            .collect()
-    };
     let volpath =
         r#"<integrator type="volpath"><integer name="max_depth" value="8"/></integrator>"#;
     let reference = Reference::from_batches(&batches(volpath, 8, 512)).unwrap();
@@ -243,21 +245,6 @@ fn bdpt_and_mlt_render_emitting_media_as_volpath_does() {
 #[test]
 fn light_paths_start_in_emitting_media() {
     use render::compare::{Reference, TestImages, compare};
-    let batches = |integrator: &str, count: u64, spp: u32| -> Vec<render::film::Image> {
-        let desc = scene::load_xml_text("glow", &glowing_sphere(integrator)).unwrap();
-        (0..count)
-            .map(|seed| {
-                let opts = BuildOptions {
-                    seed: Some(100 + seed),
-                    spp: Some(spp),
-                    ..Default::default()
-                };
-                let out = render_desc(&desc, &opts).unwrap();
-                assert_eq!(out.film.nonfinite_count(), 0, "{integrator}");
-                out.film.develop()
-            })
-            .collect()
-    };
     let volpath =
         r#"<integrator type="volpath"><integer name="max_depth" value="8"/></integrator>"#;
     let reference = Reference::from_batches(&batches(volpath, 8, 512)).unwrap();

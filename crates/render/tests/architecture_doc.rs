@@ -76,35 +76,46 @@ fn sources(path: &Path, out: &mut String) {
     }
 }
 
-/// The renderer's module graph: top-level module → modules it names as `crate::name`.
-fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
-    let src = root().join("crates/render/src");
+/// The modules of folder `dir` (its files but `face` — `lib` or `mod`, the folder's face —
+/// and its subfolders) → the siblings each names after `prefix`: `crate::name` at the top,
+/// `super::name` inside a folder (also inside `prefix{…}`).
+fn graph(dir: &Path, face: &str, prefix: &str) -> BTreeMap<String, BTreeSet<String>> {
     let mut modules = BTreeMap::new();
-    for e in std::fs::read_dir(&src).unwrap() {
+    for e in std::fs::read_dir(dir).unwrap() {
         let p = e.unwrap().path();
         let name = p.file_stem().unwrap().to_string_lossy().into_owned();
-        if name != "lib" {
+        if p.is_dir() || (p.extension().is_some_and(|e| e == "rs") && name != face) {
             modules.insert(name, p);
         }
     }
+    let ident = |c: char| c.is_alphanumeric() || c == '_';
     let mut graph = BTreeMap::new();
     for (name, path) in &modules {
         let mut text = String::new();
         sources(path, &mut text);
         let mut uses = BTreeSet::new();
-        for (i, _) in text.match_indices("crate::") {
-            let rest = &text[i + "crate::".len()..];
-            let end = rest
-                .find(|c: char| !(c.is_alphanumeric() || c == '_'))
-                .unwrap_or(rest.len());
-            let target = &rest[..end];
-            if target != name && modules.contains_key(target) {
-                uses.insert(target.to_string());
+        for (i, _) in text.match_indices(prefix) {
+            let rest = &text[i + prefix.len()..];
+            let names: Vec<&str> = match rest.strip_prefix('{') {
+                Some(list) => list[..list.find('}').unwrap_or(list.len())]
+                    .split(|c: char| !ident(c))
+                    .collect(),
+                None => vec![&rest[..rest.find(|c: char| !ident(c)).unwrap_or(rest.len())]],
+            };
+            for target in names {
+                if target != name && modules.contains_key(target) {
+                    uses.insert(target.to_string());
+                }
             }
         }
         graph.insert(name.clone(), uses);
     }
     graph
+}
+
+/// The renderer's module graph: top-level module → modules it names as `crate::name`.
+fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
+    graph(&root().join("crates/render/src"), "lib", "crate::")
 }
 
 /// A circle in `graph`, if there is one (depth-first search; a grey node reached again
@@ -162,45 +173,6 @@ fn renderer_modules_import_each_other_without_a_circle() {
     }
 }
 
-/// The modules inside folder `dir` (its files but `mod.rs`, and its subfolders) → the
-/// siblings each names as `super::name` (or inside `super::{…}`).
-fn folder_graph(dir: &Path) -> BTreeMap<String, BTreeSet<String>> {
-    let mut modules = BTreeMap::new();
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        let name = p.file_stem().unwrap().to_string_lossy().into_owned();
-        if p.is_dir() || (p.extension().is_some_and(|e| e == "rs") && name != "mod") {
-            modules.insert(name, p);
-        }
-    }
-    let mut graph = BTreeMap::new();
-    for (name, path) in &modules {
-        let mut text = String::new();
-        sources(path, &mut text);
-        let mut uses = BTreeSet::new();
-        for (i, _) in text.match_indices("super::") {
-            let rest = &text[i + "super::".len()..];
-            let names: Vec<&str> = match rest.strip_prefix('{') {
-                Some(list) => list[..list.find('}').unwrap_or(list.len())]
-                    .split(|c: char| !(c.is_alphanumeric() || c == '_'))
-                    .collect(),
-                None => vec![
-                    &rest[..rest
-                        .find(|c: char| !(c.is_alphanumeric() || c == '_'))
-                        .unwrap_or(rest.len())],
-                ],
-            };
-            for target in names {
-                if target != name && modules.contains_key(target) {
-                    uses.insert(target.to_string());
-                }
-            }
-        }
-        graph.insert(name.clone(), uses);
-    }
-    graph
-}
-
 #[test]
 fn modules_inside_each_folder_import_each_other_without_a_circle() {
     let mut dirs = vec![root().join("crates/render/src")];
@@ -209,7 +181,7 @@ fn modules_inside_each_folder_import_each_other_without_a_circle() {
         for e in std::fs::read_dir(&dir).unwrap() {
             let p = e.unwrap().path();
             if p.is_dir() {
-                let graph = folder_graph(&p);
+                let graph = graph(&p, "mod", "super::");
                 if let Some(circle) = find_circle(&graph) {
                     panic!(
                         "import circle in {}: {}",
