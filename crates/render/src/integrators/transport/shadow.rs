@@ -45,18 +45,6 @@ pub struct Connection<'a> {
     pub medium: Option<u32>,
 }
 
-impl<'a> Connection<'a> {
-    /// The connection from `from` towards the point `q`.
-    pub fn to_point(from: From<'a>, q: Vec3, medium: Option<u32>) -> Connection<'a> {
-        Connection {
-            from,
-            wi: (q - from.p()).normalize_or_zero(),
-            target: ShadowTarget::Point(q),
-            medium,
-        }
-    }
-}
-
 /// The ray from `from` towards `target` (direction `wi`) and its parameter range.
 #[inline]
 fn shadow_ray(from: &From<'_>, wi: Vec3, target: ShadowTarget) -> (Ray, f32) {
