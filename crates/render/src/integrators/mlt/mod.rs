@@ -197,7 +197,7 @@ fn direct_part<M: PathMode + Send>(scene: &Scene, cfg: &MltConfig, opts: &Render
     film
 }
 
-/// What a render's chains are measured against: the mutations to make, the pixels they
+/// What a render's chains work towards: the mutations to make, the pixels they
 /// spread over, and how progress and cancellation reach them.
 struct Run<'a> {
     pixels: u64,
