@@ -108,3 +108,37 @@ fn photon_irradiance_matches_the_point_light() {
         }
     }
 }
+
+/// The part of a ball that a point in a medium sees (`Enclosure`, which keeps volume
+/// estimates from darkening at a medium's boundary): over random turns of its cells each
+/// probe ray's direction is uniform on the sphere, so its share of the ball is an unbiased
+/// estimate of ∫ min(1, t(ω)/r)³ dω / 4π. Above a plane at height h < r that is
+/// 1 − (1 − h/r)²(2 + h/r)/4 (the ball less its cap below the plane). z-test of the mean over
+/// 4000 turns at each of 4 heights, α = 0.001 Šidák-corrected over the 4: |z| < 3.48.
+#[test]
+fn enclosure_share_of_a_ball_above_a_plane() {
+    use render::integrators::photon::Enclosure;
+    use render::sampling::Sampler;
+    use scene::SamplerKind;
+    let desc = scene::load_xml_text("photon-density", SCENE).expect("scene loads");
+    let scene = build(&desc, &BuildOptions::default())
+        .expect("scene builds")
+        .scene;
+    let mut rng = Sampler::new(SamplerKind::Independent, 1, 5);
+    let r = 1.0f32;
+    for h in [0.05f32, 0.3, 0.6, 0.9] {
+        let want = 1.0 - (1.0 - h as f64).powi(2) * (2.0 + h as f64) / 4.0;
+        let shares: Vec<f64> = (0..4000)
+            .map(|_| {
+                let u = [rng.next_1d(), rng.next_1d(), rng.next_1d()];
+                Enclosure::probe(&scene, Vec3::new(0.1, h, -0.2), r, u).fraction(r) as f64
+            })
+            .collect();
+        let n = shares.len() as f64;
+        let mean = shares.iter().sum::<f64>() / n;
+        let var = shares.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let z = (mean - want) / (var / n).sqrt().max(1e-9);
+        eprintln!("h = {h}: share {mean:.5} (expected {want:.5}), z = {z:.2}");
+        assert!(z.abs() < 3.48, "h = {h}: {mean} vs {want} (z = {z})");
+    }
+}

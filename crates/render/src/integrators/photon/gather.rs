@@ -17,7 +17,7 @@
 //! is estimated at one distance (`photons::segment_point`) instead of a free flight, as at a
 //! collision, and the walk crosses the segment with its exact transmittance.
 
-use super::map::PhotonMap;
+use super::map::{Enclosure, PhotonMap};
 use super::{Lookup, PhotonConfig, PhotonMaps};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
@@ -65,19 +65,28 @@ impl<'a, M: PathMode> Gather<'a, M> {
     }
 
     /// Add `map`'s estimate at `v` (read with `lookup`, the photons that fit after `depth`
-    /// edges) times `weight`.
+    /// edges) times `weight`; in a medium, in the part of the ball that `v` sees
+    /// ([`Enclosure`]).
     fn add(
         &mut self,
-        map: &Option<PhotonMap<M::C>>,
-        lookup: Lookup,
+        (map, lookup): (&Option<PhotonMap<M::C>>, Lookup),
         v: &Vertex<M::C>,
-        depth: u32,
         weight: M::C,
+        sampler: &mut Sampler,
     ) {
-        if let Some(map) = map {
-            let est = map.estimate(lookup, self.cfg.kernel, v.p, &v.at, self.budget(depth));
-            self.rgb += est.to_rgb(weight, self.m);
-        }
+        let Some(map) = map else { return };
+        let budget = self.budget(v.depth);
+        let est = match v.at {
+            Scatterer::Surface { bsdf, frame, wo } => {
+                map.surface_estimate(lookup, self.cfg.kernel, v.p, (bsdf, frame, wo), budget)
+            }
+            Scatterer::Medium { phase, wo } => {
+                let u = [sampler.next_1d(), sampler.next_1d(), sampler.next_1d()];
+                let around = Enclosure::probe(self.scene, v.p, lookup.reach(), u);
+                map.volume_estimate(lookup, &around, (phase, wo), budget)
+            }
+        };
+        self.rgb += est.to_rgb(weight, self.m);
     }
 
     /// The map of `v`'s kind and its lookup: the global map at a surface, the volume map in
@@ -126,9 +135,9 @@ impl<'a, M: PathMode> Gather<'a, M> {
                     * (1.0 / cfg.direct_samples as f32);
             }
         }
-        self.add(&maps.caustic, cfg.caustic, v, depth, weight);
+        self.add((&maps.caustic, cfg.caustic), v, weight, sampler);
         if cfg.final_gather == 0 {
-            self.add(&maps.global, cfg.global, v, depth, weight);
+            self.add((&maps.global, cfg.global), v, weight, sampler);
             return l;
         }
         if !cfg.allows(depth + 2) {
@@ -152,7 +161,7 @@ impl<'a, M: PathMode> Gather<'a, M> {
             return M::C::ZERO;
         }
         let weight = self.weight(v, v.beta);
-        self.add(&maps.volume, maps.volume_lookup, v, v.depth, weight);
+        self.add((&maps.volume, maps.volume_lookup), v, weight, sampler);
         if cfg.final_gather > 0 {
             return M::C::ZERO;
         }
@@ -196,10 +205,9 @@ impl<'a, M: PathMode> Gather<'a, M> {
             beta,
             m,
             sampler,
-            &mut |v: &Vertex<M::C>, _: &mut Sampler| {
+            &mut |v: &Vertex<M::C>, sampler: &mut Sampler| {
                 let weight = self.weight(v, outer * v.beta);
-                let (map, lookup) = self.map_at(v);
-                self.add(map, lookup, v, v.depth, weight);
+                self.add(self.map_at(v), v, weight, sampler);
                 M::C::ZERO
             },
         )

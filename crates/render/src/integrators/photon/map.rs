@@ -6,12 +6,14 @@ use std::num::NonZero;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use super::{Kernel, Lookup};
-use crate::bsdf::TransportMode;
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::geometry::Ray;
 use crate::integrators::photons::PhotonHit;
-use crate::integrators::transport::Scatterer;
-use crate::math::{PI, Vec3};
+use crate::math::{Frame, PI, Vec2, Vec3};
 use crate::media::Phase;
+use crate::sampling::warp::square_to_uniform_sphere;
 use crate::spectral::lanes::{Color, PathMode};
+use crate::world::Scene;
 
 /// K(d) for squared distance `d2` within radius² `r2`, normalised over the disk.
 fn kernel_weight(kernel: Kernel, d2: f32, r2: f32) -> f32 {
@@ -46,13 +48,20 @@ fn bytes_per_photon<C>() -> u64 {
 pub struct PhotonMap<C = Vec3> {
     tree: ImmutableKdTree<f32, 3>,
     photons: Vec<StoredPhoton<C>>,
+    /// The photons' positions, kept for a volume map alone ([`Enclosure`]; 12 bytes more per
+    /// photon in a medium, within [`super::memory_needed`]'s bound).
+    points: Vec<[f32; 3]>,
     /// Up to 1024 photon positions spread evenly over the emission order
     /// ([`PhotonMap::resolve`]).
     sample: Vec<[f32; 3]>,
 }
 
 impl<C: Color> PhotonMap<C> {
-    fn new(points: Vec<[f32; 3]>, photons: Vec<StoredPhoton<C>>) -> Option<PhotonMap<C>> {
+    fn new(
+        points: Vec<[f32; 3]>,
+        photons: Vec<StoredPhoton<C>>,
+        keep_points: bool,
+    ) -> Option<PhotonMap<C>> {
         if points.is_empty() {
             return None;
         }
@@ -63,6 +72,7 @@ impl<C: Color> PhotonMap<C> {
         Some(PhotonMap {
             tree,
             photons,
+            points: if keep_points { points } else { Vec::new() },
             sample,
         })
     }
@@ -109,17 +119,17 @@ impl<C: Color> PhotonMap<C> {
         }
     }
 
-    /// Σ `term`(photon, d², r²) over the photons `lookup` finds around `p` whose path fits
-    /// in `budget` edges, r the radius of the region searched: [photons whose wavelengths
-    /// are all live, photons that terminated their secondaries] (spectral mode; see
-    /// [`Estimate`]).
+    /// Σ `term`(photon, its index, d², r²) over the photons `lookup` finds around `p` whose
+    /// path fits in `budget` edges, r the radius of the region searched: [photons whose
+    /// wavelengths are all live, photons that terminated their secondaries] (spectral mode;
+    /// see [`Estimate`]).
     fn sum(
         &self,
         lookup: Lookup,
         p: Vec3,
         budget: Option<u32>,
-        term: impl Fn(&StoredPhoton<C>, f32, f32) -> C,
-    ) -> Estimate<C> {
+        term: impl Fn(&StoredPhoton<C>, usize, f32, f32) -> C,
+    ) -> (Estimate<C>, f32) {
         let q = [p.x, p.y, p.z];
         let (found, r2) = match lookup {
             Lookup::Radius(r) => {
@@ -162,16 +172,17 @@ impl<C: Color> PhotonMap<C> {
         };
         let mut sum = Estimate([C::ZERO; 2]);
         if r2.is_nan() || r2 <= 0.0 {
-            return sum;
+            return (sum, 0.0);
         }
         for n in &found {
-            let ph = &self.photons[n.item as usize];
+            let i = n.item as usize;
+            let ph = &self.photons[i];
             if budget.is_some_and(|b| ph.edges > b) {
                 continue;
             }
-            sum.0[ph.terminated as usize] += term(ph, n.distance, r2);
+            sum.0[ph.terminated as usize] += term(ph, i, n.distance, r2);
         }
-        sum
+        (sum, r2)
     }
 
     /// Σ K·β and Σ (K·β)² over the photons `lookup` finds around `p`: N times the
@@ -179,7 +190,7 @@ impl<C: Color> PhotonMap<C> {
     /// estimated from (tests of the density estimation).
     pub fn irradiance_sums(&self, lookup: Lookup, kernel: Kernel, p: Vec3) -> (C, C) {
         let sq = std::cell::Cell::new(C::ZERO);
-        let Estimate([live, terminated]) = self.sum(lookup, p, None, |ph, d2, r2| {
+        let (Estimate([live, terminated]), _) = self.sum(lookup, p, None, |ph, _, d2, r2| {
             let c = ph.beta * kernel_weight(kernel, d2, r2);
             sq.set(sq.get() + c * c);
             c
@@ -187,46 +198,132 @@ impl<C: Color> PhotonMap<C> {
         (live + terminated, sq.get())
     }
 
-    /// The estimate at a vertex scattering by `at`, not yet divided by the number of
-    /// photons emitted: at a surface Σ K·f·β over the photons around `p` (f without its
-    /// cosine: the photon's power holds it); in a medium Σ p(wo, wᵢ)·β / (4/3·π·r³) over the
-    /// photons scattered around `p`, σs times the in-scattered radiance (the kernel does not
-    /// apply there).
-    pub(super) fn estimate(
+    /// The estimate at a surface vertex scattering by `bsdf` in `frame` towards `wo`, not
+    /// yet divided by the number of photons emitted: Σ K·f·β over the photons around `p`
+    /// (f without its cosine: the photon's power holds it).
+    pub(super) fn surface_estimate(
         &self,
         lookup: Lookup,
         kernel: Kernel,
         p: Vec3,
-        at: &Scatterer<C>,
+        (bsdf, frame, wo): (&Bsdf<C>, &Frame, Vec3),
         budget: Option<u32>,
     ) -> Estimate<C> {
-        match *at {
-            Scatterer::Surface { bsdf, frame, wo } => self.sum(lookup, p, budget, |ph, d2, r2| {
-                let wl = frame.to_local(ph.wi);
-                if wl.z == 0.0 {
-                    return C::ZERO;
-                }
-                let f = bsdf.eval(wo, wl, TransportMode::Radiance) / wl.z.abs();
-                f * ph.beta * kernel_weight(kernel, d2, r2)
-            }),
-            Scatterer::Medium { phase, wo } => volume_sum(self, lookup, p, phase, wo, budget),
+        let (sum, _) = self.sum(lookup, p, budget, |ph, _, d2, r2| {
+            let wl = frame.to_local(ph.wi);
+            if wl.z == 0.0 {
+                return C::ZERO;
+            }
+            let f = bsdf.eval(wo, wl, TransportMode::Radiance) / wl.z.abs();
+            f * ph.beta * kernel_weight(kernel, d2, r2)
+        });
+        sum
+    }
+
+    /// The estimate at a collision in a medium at `around.p`, scattering by `phase` towards
+    /// `wo`, not yet divided by the number of photons emitted: σs times the in-scattered
+    /// radiance, Σ p(wo, wᵢ)·β / V over the photons found in the part of the ball searched
+    /// that the point sees (V its volume, [`Enclosure`]; the kernel does not apply there).
+    pub(super) fn volume_estimate(
+        &self,
+        lookup: Lookup,
+        around: &Enclosure,
+        (phase, wo): (&Phase, Vec3),
+        budget: Option<u32>,
+    ) -> Estimate<C> {
+        let (sum, r2) = self.sum(lookup, around.p, budget, |ph, i, d2, _| {
+            if around.hides(self.points[i], d2) {
+                return C::ZERO;
+            }
+            ph.beta * phase.eval(wo, ph.wi)
+        });
+        let v = 4.0 / 3.0 * PI * r2 * r2.sqrt() * around.fraction(r2.sqrt());
+        if v > 0.0 {
+            sum.scaled(1.0 / v)
+        } else {
+            Estimate([C::ZERO; 2])
         }
     }
 }
 
-/// [`PhotonMap::estimate`] in a medium.
-fn volume_sum<C: Color>(
-    map: &PhotonMap<C>,
-    lookup: Lookup,
+/// Bands of equal height in z, of [`Enclosure`], each cut into four quadrants in φ: 16 cells
+/// of equal solid angle (Archimedes).
+const BANDS: usize = 4;
+const CELLS: usize = BANDS * 4;
+
+/// The part of a ball around a point `p` in a medium that `p` sees, for volume estimates
+/// near the medium's boundary: photons deposit only where the medium is, so a ball reaching
+/// past a boundary (a null surface, an object inside the medium) holds fewer photons than
+/// its volume says, and the estimate darkens towards every edge of a medium. The sphere of
+/// directions, in a frame turned at random, is cut into 16 cells of equal solid angle, and
+/// one ray per cell (through its middle) finds the distance t to the first surface there.
+/// The estimate counts a photon only if it is nearer than its cell's t, and divides by the
+/// volume of the same star-shaped region, Σ (4π/16)·min(r, t)³/3: a consistent estimate of
+/// the density inside it, which tends to the medium's region around `p` as r shrinks.
+pub struct Enclosure {
     p: Vec3,
-    phase: &Phase,
-    wo: Vec3,
-    budget: Option<u32>,
-) -> Estimate<C> {
-    map.sum(lookup, p, budget, |ph, _, r2| {
-        let v = 4.0 / 3.0 * PI * r2 * r2.sqrt();
-        ph.beta * (phase.eval(wo, ph.wi) / v)
-    })
+    frame: Frame,
+    /// Per cell, the distance to the first surface, at most the reach probed.
+    t: [f32; CELLS],
+    /// The least of `t`: nothing nearer is hidden.
+    open: f32,
+}
+
+impl Enclosure {
+    /// Probe around `p` up to `reach` (the lookup's largest radius), the cells turned by the
+    /// uniform numbers `u`.
+    pub fn probe(scene: &Scene, p: Vec3, reach: f32, u: [f32; 3]) -> Enclosure {
+        let f = Frame::from_normal(square_to_uniform_sphere(Vec2::new(u[0], u[1])));
+        let (sin, cos) = (2.0 * PI * u[2]).sin_cos();
+        let frame = Frame {
+            s: f.s * cos + f.t * sin,
+            t: f.t * cos - f.s * sin,
+            n: f.n,
+        };
+        let mut t = [reach; CELLS];
+        for (cell, t) in t.iter_mut().enumerate() {
+            let z = -1.0 + ((cell / 4) as f32 + 0.5) * (2.0 / BANDS as f32);
+            let r = (1.0 - z * z).sqrt() * std::f32::consts::FRAC_1_SQRT_2;
+            let (x, y) = match cell % 4 {
+                0 => (r, r),
+                1 => (-r, r),
+                2 => (-r, -r),
+                _ => (r, -r),
+            };
+            let d = frame.to_world(Vec3::new(x, y, z));
+            if let Some(hit) = scene.accel.intersect(&Ray::new(p, d), reach) {
+                *t = hit.t;
+            }
+        }
+        let open = t.iter().copied().fold(reach, f32::min);
+        Enclosure { p, frame, t, open }
+    }
+
+    /// Whether a photon at `q`, `d2` squared away, lies past its cell's first surface.
+    fn hides(&self, q: [f32; 3], d2: f32) -> bool {
+        if d2 <= self.open * self.open {
+            return false;
+        }
+        let l = self.frame.to_local(Vec3::new(q[0], q[1], q[2]) - self.p);
+        let band = (((l.z * d2.sqrt().recip() + 1.0) * 0.5 * BANDS as f32) as usize).min(BANDS - 1);
+        let quadrant = match (l.x > 0.0, l.y > 0.0) {
+            (true, true) => 0,
+            (false, true) => 1,
+            (false, false) => 2,
+            (true, false) => 3,
+        };
+        let t = self.t[band * 4 + quadrant];
+        d2 > t * t
+    }
+
+    /// The region's share of the ball of radius `r`.
+    pub fn fraction(&self, r: f32) -> f32 {
+        if self.open >= r {
+            return 1.0;
+        }
+        let sum: f32 = self.t.iter().map(|&t| (t / r).min(1.0).powi(3)).sum();
+        sum / CELLS as f32
+    }
 }
 
 /// A radiance estimate from a map, not yet times the camera path's throughput: the sums
@@ -239,6 +336,10 @@ fn volume_sum<C: Color>(
 pub(super) struct Estimate<C>([C; 2]);
 
 impl<C: Color> Estimate<C> {
+    fn scaled(self, s: f32) -> Estimate<C> {
+        Estimate(self.0.map(|c| c * s))
+    }
+
     /// `beta` (the camera path's throughput) times the estimate, as linear sRGB for the
     /// camera path's mode `m`.
     pub(super) fn to_rgb<M: PathMode<C = C>>(self, beta: C, m: &M) -> Vec3 {
@@ -286,8 +387,9 @@ impl<C: Color> MapData<C> {
         self.photons.append(&mut other.photons);
     }
 
-    pub(super) fn build(self) -> Option<PhotonMap<C>> {
-        PhotonMap::new(self.points, self.photons)
+    /// The map; `volume`: a volume map, which keeps its photons' positions.
+    pub(super) fn build(self, volume: bool) -> Option<PhotonMap<C>> {
+        PhotonMap::new(self.points, self.photons, volume)
     }
 }
 
@@ -327,7 +429,7 @@ mod tests {
             };
             points.len()
         ];
-        let map = PhotonMap::new(points, photons).unwrap();
+        let map = PhotonMap::new(points, photons, false).unwrap();
         for (k, want) in [(6, 1.0f32), (7, 2.0f32.sqrt())] {
             match map.resolve(Lookup::Calibrated { k }) {
                 Lookup::Nearest {

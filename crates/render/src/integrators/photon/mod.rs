@@ -21,11 +21,14 @@
 //!
 //! Memory: a stored photon is its position in the tree (12 bytes plus the tree's index,
 //! 4 bytes) and [`StoredPhoton`] (48 bytes: two 16-byte aligned vectors, RGB or four
-//! spectral lanes, and the edge count and flag): 64 bytes, counted by [`memory_needed`].
+//! spectral lanes, and the edge count and flag): 64 bytes, counted by [`memory_needed`]; a
+//! volume map keeps its positions once more (12 bytes), within that bound.
 //!
 //! Media (the extended-Nori write-up's volumetric photon mapping): photons also deposit at
 //! scattering events in media, in a volume map read with the 4/3·π·r³ kernel where the
-//! camera path (or a gathering ray) collides ([`Lookup::Calibrated`] by default); a
+//! camera path (or a gathering ray) collides ([`Lookup::Calibrated`] by default), cut to the
+//! part of the ball that the collision sees (`map::Enclosure`: 16 rays, so that the
+//! estimate does not darken towards the medium's boundary); a
 //! collision is a vertex like a surface with a non-delta lobe (next-event estimation through
 //! media by the transport layer's shadow query, final gathering by phase sampling). Photons
 //! start in emitting media too, whose direct light only the maps carry (`gather.rs`).
@@ -39,7 +42,7 @@
 mod gather;
 mod map;
 
-pub use map::{PhotonMap, StoredPhoton};
+pub use map::{Enclosure, PhotonMap, StoredPhoton};
 
 use self::gather::Gather;
 use self::map::MapData;
@@ -70,6 +73,17 @@ pub enum Lookup {
     /// plain convolution of the photons' density, which keeps the image's mean, and the cap
     /// shrinks as photons are added. The default for volume lookups.
     Calibrated { k: u32 },
+}
+
+impl Lookup {
+    /// The largest radius it can search.
+    pub fn reach(self) -> f32 {
+        match self {
+            Lookup::Nearest { max_radius, .. } => max_radius,
+            Lookup::Radius(r) => r,
+            Lookup::Calibrated { .. } => f32::INFINITY,
+        }
+    }
 }
 
 pub use base::PhotonKernel as Kernel;
@@ -205,10 +219,10 @@ impl<C: Color + Send> PhotonMaps<C> {
             caustic.append(c);
             volume.append(v);
         }
-        let volume = volume.build();
+        let volume = volume.build(true);
         PhotonMaps {
-            global: global.build(),
-            caustic: caustic.build(),
+            global: global.build(false),
+            caustic: caustic.build(false),
             volume_lookup: volume
                 .as_ref()
                 .map_or(cfg.volume, |m| m.resolve(cfg.volume)),
