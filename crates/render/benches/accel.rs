@@ -394,6 +394,24 @@ fn measure<T: Tracer>(
             })
         };
         out.sets.push(timing);
+        #[cfg(feature = "stats")]
+        {
+            let c = render::accel::stats::take();
+            if c[3] + c[7] > 0 {
+                let (r, n, l) = if s.occlusion {
+                    (c[7], c[4], c[5])
+                } else {
+                    (c[3], c[0], c[1])
+                };
+                let r = r as f64;
+                println!(
+                    "  {name} {}: per ray {:.2} inner nodes, {:.2} leaves",
+                    label(s),
+                    n as f64 / r,
+                    l as f64 / r
+                );
+            }
+        }
         if s.occlusion {
             out.differ.push(None);
             ts.push(Vec::new());

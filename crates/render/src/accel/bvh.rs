@@ -1,7 +1,6 @@
 //! An 8-wide BVH with single-precision child boxes in SoA layout, traversed one ray at a time:
 //! the eight box tests are one 8-wide operation per slab plane (AVX, via `wide::f32x8`; two
-//! SSE halves on processors without AVX), the triangle tests 4-wide (SSE, via glam `Vec4`). A
-//! node is 256 bytes on 64-byte boundaries.
+//! SSE halves on processors without AVX). A node is 256 bytes on 64-byte boundaries.
 //!
 //! Why 8-wide even on a 4-wide ISA: incoherent rays on large meshes are bound by the latency
 //! of dependent node fetches; a wider node halves the depth, and its four cache lines load in
@@ -10,12 +9,18 @@
 //! Construction: obvhs builds a binary BVH (PLOC, Meister & Bittner 2018, followed by SAH
 //! reinsertion optimisation, Meister & Bittner 2017); we collapse it into the wide tree by
 //! repeatedly opening the largest-area child (as in Embree / Wald et al. 2008), and emit a leaf
-//! for any subtree with at most [`LEAF_MAX`] primitives ([`SMALL_LEAF_MAX`] in small scenes). Triangles of a leaf are packed four at a
-//! time into [`Tri4`]s; analytic shapes take one packet each.
+//! for any subtree with at most [`LEAF_MAX`] primitives ([`SMALL_LEAF_MAX`] in small scenes).
+//!
+//! Leaves: a leaf of triangles only is one packet, tested in one go: up to four triangles in a
+//! [`Tri4`] (SSE), five to eight in a [`Tri8`] (AVX), each kind in its own array, with the
+//! `(shape, prim)` ids of its lanes in a parallel array read only for the final hit. A leaf
+//! holding an analytic shape (sphere, disk, ellipsoid) is a list of [`Packet`]s: the shapes one
+//! at a time, its triangles four at a time.
 //!
 //! Traversal: closest-hit orders the hit children front to back by entry distance and culls
 //! popped entries that lie beyond the current hit; occlusion skips ordering and returns on the
-//! first hit. The box test is made conservative by scaling the exit distance by `1 + 2γ₃`
+//! first hit. Both prefetch every entered child (when the tree is larger than the caches).
+//! The box test is made conservative by scaling the exit distance by `1 + 2γ₃`
 //! (Ize 2013, "Robust BVH Ray Traversal"), so watertight triangles are never lost to box misses.
 //! The stack is a fixed-size array on the call stack (8 to 1024 entries, chosen at build
 //! from the exact worst case of the tree's shape), so queries never allocate.
@@ -27,30 +32,39 @@ use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 
 use super::prim::{
-    Tri4, WoopRay, WoopRay4, intersect_disk, intersect_ellipsoid, intersect_sphere, tri4_any,
-    tri4_closest,
+    Tri4, Tri8, WoopRay, WoopRay4, WoopRay8, intersect_disk, intersect_ellipsoid, intersect_sphere,
+    tri_any, tri_closest,
 };
+use super::stats;
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3, Vec4};
 use wide::f32x8;
 
-/// Subtrees with at most this many primitives become leaves (triangles packed by four into
-/// [`Tri4`]s). Measured on the 1M-triangle benchmark: 8 beats 2 and 4 (fewer dependent node
-/// fetches; the packets of a leaf load in parallel) and equals 12.
+/// Subtrees with at most this many primitives become leaves. Measured on the 1M-triangle
+/// benchmark: 8 beats 2 and 4 (fewer dependent node fetches) and equals 12.
 pub(crate) const LEAF_MAX: u32 = 8;
 
 /// Scenes with at most this many primitives use [`SMALL_LEAF_MAX`] instead: their tree fits
 /// in cache, so traversal is bound by arithmetic rather than by node fetches, and their
 /// primitives are typically large (walls, boxes, area lights) with boxes that overlap much of
-/// the scene: small leaves trade a few more node visits for far fewer packet tests.
+/// the scene: small leaves trade a few more node visits for far fewer triangle tests.
 const SMALL_SCENE: usize = 4096;
 const SMALL_LEAF_MAX: u32 = 2;
 
+/// Child references: an inner node's index, or [`LEAF_BIT`] with a leaf kind in the two bits
+/// above [`KIND_SHIFT`] and the index of its packet ([`TRI4`], [`TRI8`]) or of its first
+/// packet ([`MIXED`], with the packet count above [`COUNT_SHIFT`]).
 const LEAF_BIT: u32 = 1 << 31;
-const COUNT_SHIFT: u32 = 27;
+const KIND_SHIFT: u32 = 29;
+const KIND_MASK: u32 = 3 << KIND_SHIFT;
+const TRI4: u32 = LEAF_BIT;
+const TRI8: u32 = LEAF_BIT | (1 << KIND_SHIFT);
+const MIXED: u32 = LEAF_BIT | (2 << KIND_SHIFT);
+/// An empty child slot (its box is inverted, so it is never entered).
+const EMPTY: u32 = LEAF_BIT | KIND_MASK;
+const INDEX_MASK: u32 = (1 << KIND_SHIFT) - 1;
+const COUNT_SHIFT: u32 = 25;
 const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
-/// An empty child slot: a leaf with no packets (its box is inverted, so it is never entered).
-const EMPTY: u32 = LEAF_BIT;
 /// Largest traversal stack (entries); deeper trees are rebuilt balanced.
 const MAX_STACK: usize = 1024;
 
@@ -66,7 +80,8 @@ pub(crate) enum Prim {
     Ellipsoid { to_object: Mat4 },
 }
 
-/// What a leaf stores: triangles four at a time, analytic shapes one at a time.
+/// What a leaf holding an analytic shape stores: its triangles four at a time, the analytic
+/// shapes one at a time.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Packet {
     Tri4(Tri4),
@@ -75,7 +90,7 @@ pub(crate) enum Packet {
         radius: f32,
     },
     /// A disk or an ellipsoid: a unit shape seen through `to_object`. One variant for both
-    /// keeps the leaf loop's dispatch as small as it was with disks alone.
+    /// keeps the leaf loop's dispatch small.
     Transformed {
         to_object: Mat4,
         kind: Unit,
@@ -93,8 +108,7 @@ pub(crate) enum Unit {
 const WIDTH: usize = 8;
 
 /// Inner node: child boxes as `b[axis][0 = min, 1 = max]`, one child per lane (one AVX register
-/// per plane; two SSE registers without AVX). A child reference with [`LEAF_BIT`] set encodes
-/// `count` packets starting at `first`.
+/// per plane; two SSE registers without AVX), and the child references.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct Node {
@@ -113,11 +127,18 @@ enum StackClass {
     S1024,
 }
 
+/// `(shape, prim)` of a packet's lanes (`u32::MAX` in unused lanes).
+type Ids<const N: usize> = [[u32; 2]; N];
+
 pub(crate) struct WideBvh {
     nodes: Vec<Node>,
+    tri4: Vec<Tri4>,
+    ids4: Vec<Ids<4>>,
+    tri8: Vec<Tri8>,
+    ids8: Vec<Ids<8>>,
+    /// Packets of the leaves that hold analytic shapes, and their lanes' ids.
     packets: Vec<Packet>,
-    /// `(shape, prim)` per packet lane.
-    ids: Vec<[[u32; 2]; 4]>,
+    ids: Vec<Ids<4>>,
     root: u32,
     stack: StackClass,
     /// Traversal stack entries needed: the largest, over root-to-leaf paths, of the pushes a
@@ -125,13 +146,12 @@ pub(crate) struct WideBvh {
     stack_need: u32,
     /// Subtrees with at most this many primitives become leaves.
     leaf_max: u32,
-    /// Whether traversal touches the entered children ahead of time (see [`WideBvh::touch`]):
-    /// only worth its loads when the tree does not fit in cache.
+    /// Whether traversal prefetches the entered children: only worth its instructions when
+    /// the tree does not fit in cache.
     prefetch: bool,
 }
 
-/// Trees smaller than this (nodes and packets, bytes) are assumed cache resident: traversal
-/// skips the prefetching loads, which then only cost instructions.
+/// Trees smaller than this (bytes) are assumed cache resident: traversal skips prefetching.
 const PREFETCH_MIN_BYTES: usize = 256 * 1024;
 
 /// Per-ray traversal constants.
@@ -198,12 +218,36 @@ pub(crate) struct RawHit {
     pub v: f32,
 }
 
+/// Asks the processor to fetch the cache lines of `r` (a hint: it never faults and changes no
+/// result).
+#[inline(always)]
+fn prefetch<T>(r: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let p = (r as *const T).cast::<i8>();
+        let mut off = 0;
+        while off < size_of::<T>() {
+            // SAFETY: a prefetch reads nothing architecturally and cannot fault; the address
+            // lies inside `*r` anyway.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
+            off += 64;
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = r;
+}
+
 impl WideBvh {
     /// Builds over `prims`, whose ids are `ids[i] = (shape, prim)`.
     pub(crate) fn build(prims: &[Prim], ids: &[[u32; 2]], aabbs: &[Aabb]) -> WideBvh {
         let n = prims.len();
         let mut out = WideBvh {
             nodes: Vec::new(),
+            tri4: Vec::new(),
+            ids4: Vec::new(),
+            tri8: Vec::new(),
+            ids8: Vec::new(),
             packets: Vec::new(),
             ids: Vec::new(),
             root: EMPTY,
@@ -244,25 +288,31 @@ impl WideBvh {
             }
         };
         out.collapse(&tree, prims, ids);
-        out.prefetch = out.nodes.len() * size_of::<Node>()
-            + out.packets.len() * size_of::<Packet>()
-            + out.ids.len() * size_of::<[[u32; 2]; 4]>()
-            >= PREFETCH_MIN_BYTES;
+        out.prefetch = out.memory_bytes() >= PREFETCH_MIN_BYTES;
         if out.stack_need() > MAX_STACK {
             // A balanced tree has depth ≤ log2(n) + 1, far below the limit.
-            out.nodes.clear();
-            out.packets.clear();
-            out.ids.clear();
+            out.clear();
             out.collapse(&Tree2::median(aabbs), prims, ids);
         }
         out
     }
 
+    fn clear(&mut self) {
+        self.nodes.clear();
+        self.tri4.clear();
+        self.ids4.clear();
+        self.tri8.clear();
+        self.ids8.clear();
+        self.packets.clear();
+        self.ids.clear();
+    }
+
     /// Bytes of nodes, packets and ids.
     pub(crate) fn memory_bytes(&self) -> usize {
         self.nodes.len() * size_of::<Node>()
-            + self.packets.len() * size_of::<Packet>()
-            + self.ids.len() * size_of::<[[u32; 2]; 4]>()
+            + self.tri4.len() * size_of::<(Tri4, Ids<4>)>()
+            + self.tri8.len() * size_of::<(Tri8, Ids<8>)>()
+            + self.packets.len() * size_of::<(Packet, Ids<4>)>()
     }
 
     /// Traversal stack entries needed (see the `stack_need` field).
@@ -363,40 +413,57 @@ impl WideBvh {
         let mut items = [0u32; LEAF_MAX as usize];
         let mut n = 0;
         tree.gather(node, &mut items, &mut n);
-        let first = self.packets.len() as u32;
         let mut tris = [[Vec3::ZERO; 3]; LEAF_MAX as usize];
         let mut tri_ids = [[u32::MAX; 2]; LEAF_MAX as usize];
         let mut nt = 0;
         for &i in &items[..n] {
-            let i = i as usize;
-            match prims[i] {
-                Prim::Tri(p) => {
-                    tris[nt] = p;
-                    tri_ids[nt] = ids[i];
-                    nt += 1;
-                }
-                Prim::Sphere { center, radius } => {
-                    self.packets.push(Packet::Sphere { center, radius });
-                    self.ids
-                        .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
-                }
-                Prim::Disk { to_object } => {
-                    self.packets.push(Packet::Transformed {
-                        to_object,
-                        kind: Unit::Disk,
-                    });
-                    self.ids
-                        .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
-                }
-                Prim::Ellipsoid { to_object } => {
-                    self.packets.push(Packet::Transformed {
-                        to_object,
-                        kind: Unit::Sphere,
-                    });
-                    self.ids
-                        .push([ids[i], [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]]);
-                }
+            if let Prim::Tri(p) = prims[i as usize] {
+                tris[nt] = p;
+                tri_ids[nt] = ids[i as usize];
+                nt += 1;
             }
+        }
+        let index = |len: usize| {
+            assert!(
+                len as u32 <= INDEX_MASK,
+                "too many primitives for the BVH encoding"
+            );
+            len as u32
+        };
+        if nt == n && nt <= 4 {
+            let r = TRI4 | index(self.tri4.len());
+            self.tri4.push(Tri4::new(&tris[..nt]));
+            let mut idv = [[u32::MAX; 2]; 4];
+            idv[..nt].copy_from_slice(&tri_ids[..nt]);
+            self.ids4.push(idv);
+            return r;
+        }
+        if nt == n {
+            let r = TRI8 | index(self.tri8.len());
+            self.tri8.push(Tri8::new(&tris[..nt]));
+            let mut idv = [[u32::MAX; 2]; 8];
+            idv[..nt].copy_from_slice(&tri_ids[..nt]);
+            self.ids8.push(idv);
+            return r;
+        }
+        let first = self.packets.len() as u32;
+        let one = |id: [u32; 2]| [id, [u32::MAX; 2], [u32::MAX; 2], [u32::MAX; 2]];
+        for &i in &items[..n] {
+            let i = i as usize;
+            let packet = match prims[i] {
+                Prim::Tri(_) => continue,
+                Prim::Sphere { center, radius } => Packet::Sphere { center, radius },
+                Prim::Disk { to_object } => Packet::Transformed {
+                    to_object,
+                    kind: Unit::Disk,
+                },
+                Prim::Ellipsoid { to_object } => Packet::Transformed {
+                    to_object,
+                    kind: Unit::Sphere,
+                },
+            };
+            self.packets.push(packet);
+            self.ids.push(one(ids[i]));
         }
         for (c, ci) in tris[..nt].chunks(4).zip(tri_ids[..nt].chunks(4)) {
             self.packets.push(Packet::Tri4(Tri4::new(c)));
@@ -409,29 +476,18 @@ impl WideBvh {
             first <= FIRST_MASK,
             "too many primitives for the BVH encoding"
         );
-        LEAF_BIT | (count << COUNT_SHIFT) | first
+        MIXED | (count << COUNT_SHIFT) | first
     }
 
-    /// Loads a word from each cache line of the node or first packet `c` refers to. Used as a
-    /// prefetch (without `unsafe` intrinsics): the loads of all entered children are issued
-    /// together and overlap, instead of missing one after the other when they are popped.
+    /// Prefetches the node or leaf packet that child reference `c` names.
     #[inline(always)]
-    fn touch(&self, c: u32) -> u32 {
-        if c & LEAF_BIT == 0 {
-            let n = &self.nodes[c as usize];
-            n.b[0][0].to_array()[0].to_bits()
-                ^ n.b[1][0].to_array()[0].to_bits()
-                ^ n.b[2][0].to_array()[0].to_bits()
-                ^ n.child[0]
-        } else if c != EMPTY {
-            match &self.packets[(c & FIRST_MASK) as usize] {
-                Packet::Tri4(t) => {
-                    t.p[0][0].x.to_bits() ^ t.p[1][1].x.to_bits() ^ t.p[2][2].x.to_bits()
-                }
-                _ => 0,
-            }
-        } else {
-            0
+    fn prefetch_child(&self, c: u32) {
+        let i = (c & INDEX_MASK) as usize;
+        match c & (LEAF_BIT | KIND_MASK) {
+            0 => prefetch(&self.nodes[i]),
+            TRI4 => prefetch(&self.tri4[i]),
+            TRI8 => prefetch(&self.tri8[i]),
+            _ => {}
         }
     }
 
@@ -466,18 +522,19 @@ impl WideBvh {
         if self.root == EMPTY {
             return None;
         }
+        stats::bump(3);
         let tr = TravRay::new(ray);
-        let woop = WoopRay4::new(&WoopRay::new(ray));
+        let woop = WoopRay::new(ray);
+        let (w4, w8) = (WoopRay4::new(&woop), WoopRay8::new(&woop));
         let mut stack_node = [0u32; N];
         let mut stack_t = [0f32; N];
         let mut sp = 0usize;
         let mut cur = self.root;
-        // (packet, t, u, v) and the lane within the packet.
-        let mut best: Option<(u32, f32, f32, f32)> = None;
-        let mut best_lane = 0usize;
-        let mut sink = 0u32;
+        // The leaf reference holding the closest hit so far, its lane and (t, u, v).
+        let mut best: Option<(u32, usize, f32, f32, f32)> = None;
         'outer: loop {
             if cur & LEAF_BIT == 0 {
+                stats::bump(0);
                 let node = &self.nodes[cur as usize];
                 let (tn, mask) = tr.hit_node(node, t_max);
                 if mask != 0 {
@@ -488,7 +545,7 @@ impl WideBvh {
                     if self.prefetch {
                         let mut m = mask;
                         while m != 0 {
-                            sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
+                            self.prefetch_child(node.child[m.trailing_zeros() as usize]);
                             m &= m - 1;
                         }
                     }
@@ -534,34 +591,16 @@ impl WideBvh {
                     continue;
                 }
             } else {
-                let first = (cur & FIRST_MASK) as usize;
-                let count = ((cur & !LEAF_BIT) >> COUNT_SHIFT) as usize;
-                for (pi, p) in self.packets[first..first + count].iter().enumerate() {
-                    match p {
-                        Packet::Tri4(tri) => {
-                            if let Some((lane, t, u, v)) = tri4_closest(&woop, tri, t_max) {
-                                t_max = t;
-                                best = Some(((first + pi) as u32, t, u, v));
-                                best_lane = lane;
-                            }
-                        }
-                        Packet::Sphere { center, radius } => {
-                            if let Some(t) = sphere_packet(ray, *center, *radius, t_max) {
-                                t_max = t;
-                                best = Some(((first + pi) as u32, t, 0.0, 0.0));
-                                best_lane = 0;
-                            }
-                        }
-                        Packet::Transformed { to_object, kind } => {
-                            if let Some((t, x, y)) =
-                                transformed_packet(ray, to_object, *kind, t_max)
-                            {
-                                t_max = t;
-                                best = Some(((first + pi) as u32, t, x, y));
-                                best_lane = 0;
-                            }
-                        }
-                    }
+                stats::bump(1);
+                let i = (cur & INDEX_MASK) as usize;
+                let hit = match cur & KIND_MASK {
+                    0 => tri_closest(&w4, &self.tri4[i], t_max),
+                    k if k == TRI8 & KIND_MASK => tri_closest(&w8, &self.tri8[i], t_max),
+                    _ => self.mixed_closest(cur, ray, &w4, t_max),
+                };
+                if let Some((lane, t, u, v)) = hit {
+                    t_max = t;
+                    best = Some((cur, lane, t, u, v));
                 }
             }
             // Pop the next entry that may still hold a closer hit.
@@ -576,9 +615,14 @@ impl WideBvh {
                 }
             }
         }
-        std::hint::black_box(sink);
-        best.map(|(p, t, u, v)| {
-            let [shape, prim] = self.ids[p as usize][best_lane];
+        best.map(|(leaf, lane, t, u, v)| {
+            let i = (leaf & INDEX_MASK) as usize;
+            let [shape, prim] = match leaf & (LEAF_BIT | KIND_MASK) {
+                TRI4 => self.ids4[i][lane],
+                TRI8 => self.ids8[i][lane],
+                // The mixed leaf's closest packet and lane, see `mixed_closest`.
+                _ => self.ids[lane >> 2][lane & 3],
+            };
             RawHit {
                 t,
                 shape,
@@ -589,21 +633,56 @@ impl WideBvh {
         })
     }
 
+    /// The closest hit in a leaf holding analytic shapes: `(packet · 4 + lane, t, u, v)`.
+    #[inline(never)]
+    fn mixed_closest(
+        &self,
+        leaf: u32,
+        ray: &Ray,
+        w4: &WoopRay4,
+        mut t_max: f32,
+    ) -> Option<(usize, f32, f32, f32)> {
+        let first = (leaf & FIRST_MASK) as usize;
+        let count = ((leaf & !(LEAF_BIT | KIND_MASK)) >> COUNT_SHIFT) as usize;
+        let mut best = None;
+        for (pi, p) in self.packets[first..first + count].iter().enumerate() {
+            let slot = (first + pi) << 2;
+            let hit = match p {
+                Packet::Tri4(tri) => {
+                    tri_closest(w4, tri, t_max).map(|(l, t, u, v)| (slot | l, t, u, v))
+                }
+                Packet::Sphere { center, radius } => {
+                    intersect_sphere(ray, *center, *radius, t_max).map(|t| (slot, t, 0.0, 0.0))
+                }
+                Packet::Transformed { to_object, kind } => {
+                    transformed_packet(ray, to_object, *kind, t_max)
+                        .map(|(t, x, y)| (slot, t, x, y))
+                }
+            };
+            if let Some(h) = hit {
+                t_max = h.1;
+                best = Some(h);
+            }
+        }
+        best
+    }
+
     #[inline(never)]
     fn occluded_n<const N: usize>(&self, ray: &Ray, t_max: f32) -> bool {
         if self.root == EMPTY {
             return false;
         }
+        stats::bump(7);
         let tr = TravRay::new(ray);
         // The triangle test's constants, made when the first leaf is reached: most shadow
         // rays in small scenes reach none.
-        let mut woop: Option<WoopRay4> = None;
+        let mut woop: Option<WoopRay> = None;
         let mut stack = [0u32; N];
         let mut sp = 0usize;
         let mut cur = self.root;
-        let mut sink = 0u32;
         loop {
             if cur & LEAF_BIT == 0 {
+                stats::bump(4);
                 let node = &self.nodes[cur as usize];
                 let (_, mut mask) = tr.hit_node(node, t_max);
                 if mask != 0 {
@@ -612,7 +691,7 @@ impl WideBvh {
                     if self.prefetch {
                         let mut m = mask;
                         while m != 0 {
-                            sink ^= self.touch(node.child[m.trailing_zeros() as usize]);
+                            self.prefetch_child(node.child[m.trailing_zeros() as usize]);
                             m &= m - 1;
                         }
                     }
@@ -624,46 +703,46 @@ impl WideBvh {
                     continue;
                 }
             } else {
-                let first = (cur & FIRST_MASK) as usize;
-                let count = ((cur & !LEAF_BIT) >> COUNT_SHIFT) as usize;
-                for p in &self.packets[first..first + count] {
-                    let hit = match p {
-                        Packet::Tri4(tri) => {
-                            let w = woop.get_or_insert_with(|| WoopRay4::new(&WoopRay::new(ray)));
-                            tri4_any(w, tri, t_max)
-                        }
-                        Packet::Sphere { center, radius } => {
-                            sphere_packet(ray, *center, *radius, t_max).is_some()
-                        }
-                        Packet::Transformed { to_object, kind } => {
-                            transformed_packet(ray, to_object, *kind, t_max).is_some()
-                        }
-                    };
-                    if hit {
-                        return true;
-                    }
+                stats::bump(5);
+                let i = (cur & INDEX_MASK) as usize;
+                let w = woop.get_or_insert_with(|| WoopRay::new(ray));
+                let hit = match cur & KIND_MASK {
+                    0 => tri_any(&WoopRay4::new(w), &self.tri4[i], t_max),
+                    k if k == TRI8 & KIND_MASK => tri_any(&WoopRay8::new(w), &self.tri8[i], t_max),
+                    _ => self.mixed_any(cur, ray, w, t_max),
+                };
+                if hit {
+                    return true;
                 }
             }
             if sp == 0 {
-                std::hint::black_box(sink);
                 return false;
             }
             sp -= 1;
             cur = stack[sp];
         }
     }
+
+    /// Whether a leaf holding analytic shapes blocks the ray.
+    #[inline(never)]
+    fn mixed_any(&self, leaf: u32, ray: &Ray, woop: &WoopRay, t_max: f32) -> bool {
+        let first = (leaf & FIRST_MASK) as usize;
+        let count = ((leaf & !(LEAF_BIT | KIND_MASK)) >> COUNT_SHIFT) as usize;
+        self.packets[first..first + count].iter().any(|p| match p {
+            Packet::Tri4(tri) => tri_any(&WoopRay4::new(woop), tri, t_max),
+            Packet::Sphere { center, radius } => {
+                intersect_sphere(ray, *center, *radius, t_max).is_some()
+            }
+            Packet::Transformed { to_object, kind } => {
+                transformed_packet(ray, to_object, *kind, t_max).is_some()
+            }
+        })
+    }
 }
 
-/// The sphere test, kept out of line in the traversal loops: inlined, its per-ray constants
-/// are hoisted into the set-up of every ray, including the many that never reach a sphere.
-#[inline(never)]
-fn sphere_packet(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Option<f32> {
-    intersect_sphere(ray, center, radius, t_max)
-}
-
-/// The disk and ellipsoid tests, out of line for the same reason as [`sphere_packet`]:
-/// `(t, x, y)` with the disk's object-space hit `x, y` (0 for ellipsoids).
-#[inline(never)]
+/// The disk or ellipsoid test: `(t, x, y)` with the disk's object-space hit `x, y` (0 for
+/// ellipsoids).
+#[inline]
 fn transformed_packet(
     ray: &Ray,
     to_object: &Mat4,

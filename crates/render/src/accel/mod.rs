@@ -18,8 +18,8 @@
 //!
 //! # Algorithms
 //! - Triangles: watertight test of Woop, Benthin and Wald (2013, JCGT 2(1)), with the
-//!   double-precision fallback for zero edge functions, evaluated four triangles at a time
-//!   ([`prim::tri4_closest`]); no cracks along shared edges or at shared vertices.
+//!   double-precision fallback for zero edge functions, evaluated four or eight triangles at a time
+//!   ([`prim::tri_closest`]); no cracks along shared edges or at shared vertices.
 //! - Spheres: the discriminant from the centre-to-line distance (pbrt-v4 §6.8.1, Ray Tracing
 //!   Gems ch. 7) and the `q = -(b ± √Δ)/2` root pair, robust for distant and grazing rays.
 //! - Disks: the ray is mapped to object space by the inverse of `to_world` (any invertible
@@ -418,6 +418,29 @@ pub fn ellipsoid_bounds(to_world: &Mat4) -> (Vec3, Vec3) {
     let c = Vec3::from_vec4(to_world.w_axis);
     let pad = c.abs() * (2.0 * f32::EPSILON);
     (c - half - pad, c + half + pad)
+}
+
+/// Traversal counters for the accelerator benchmark (`--features stats`): rays, inner nodes
+/// visited, leaves visited, per query kind. Without the feature the counting compiles away.
+pub mod stats {
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// Closest hit: inner nodes, leaves, (unused), rays; occlusion: inner nodes, leaves,
+    /// (unused), rays.
+    static COUNTS: [AtomicU64; 8] = [const { AtomicU64::new(0) }; 8];
+
+    #[inline(always)]
+    pub(crate) fn bump(i: usize) {
+        if cfg!(feature = "stats") {
+            COUNTS[i].fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// The counters since the last call: `[closest nodes, leaves, _, rays, occlusion nodes,
+    /// leaves, _, rays]`.
+    pub fn take() -> [u64; 8] {
+        std::array::from_fn(|i| COUNTS[i].swap(0, Ordering::Relaxed))
+    }
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 
 use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3, Vec4};
+use wide::{f32x4, f32x8};
 
 /// Per-ray constants of the watertight ray–triangle test (Woop, Benthin, Wald 2013, "Watertight
 /// Ray/Triangle Intersection", JCGT 2(1)): the ray is permuted so that its dominant axis is `z`
@@ -186,74 +187,165 @@ fn finish_triangle(
     Some((t, v * rcp, w * rcp))
 }
 
-/// Four triangles in structure-of-arrays layout for the 4-wide watertight test.
-/// `p[vertex][axis]` holds that coordinate of the four triangles; lanes `>= count` are unused.
-#[derive(Clone, Copy, Debug)]
-pub struct Tri4 {
-    pub p: [[Vec4; 3]; 3],
-    pub count: u32,
+/// The lane operations of the N-wide triangle test, for `wide`'s `f32x4` (SSE) and `f32x8`
+/// (AVX). Every operation is the plain IEEE one per lane, so all widths give the scalar
+/// test's values bit for bit.
+pub trait Lanes:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::BitAnd<Output = Self>
+    + std::ops::BitOr<Output = Self>
+    + std::ops::BitXor<Output = Self>
+{
+    /// Lanes.
+    const N: usize;
+    type Array: AsRef<[f32]> + AsMut<[f32]>;
+    fn splat(x: f32) -> Self;
+    fn from_array(a: Self::Array) -> Self;
+    fn to_array(self) -> Self::Array;
+    fn abs(self) -> Self;
+    /// `maxps`: the second operand where either is NaN.
+    fn max(self, o: Self) -> Self;
+    fn lt(self, o: Self) -> Self;
+    fn gt(self, o: Self) -> Self;
+    fn eq(self, o: Self) -> Self;
+    fn ne(self, o: Self) -> Self;
+    /// Bit `i` set where lane `i` of a comparison result is true.
+    fn bits(self) -> u32;
 }
 
-impl Tri4 {
-    pub fn new(tris: &[[Vec3; 3]]) -> Tri4 {
-        assert!(!tris.is_empty() && tris.len() <= 4);
-        let mut p = [[[0.0f32; 4]; 3]; 3];
-        for lane in 0..4 {
-            // Unused lanes repeat the first triangle; they are masked out by `count`.
+macro_rules! lanes {
+    ($t:ty, $n:literal) => {
+        impl Lanes for $t {
+            const N: usize = $n;
+            type Array = [f32; $n];
+            #[inline(always)]
+            fn splat(x: f32) -> Self {
+                <$t>::splat(x)
+            }
+            #[inline(always)]
+            fn from_array(a: [f32; $n]) -> Self {
+                <$t>::new(a)
+            }
+            #[inline(always)]
+            fn to_array(self) -> [f32; $n] {
+                <$t>::to_array(self)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                <$t>::fast_max(self, o)
+            }
+            #[inline(always)]
+            fn lt(self, o: Self) -> Self {
+                <$t>::simd_lt(self, o)
+            }
+            #[inline(always)]
+            fn gt(self, o: Self) -> Self {
+                <$t>::simd_gt(self, o)
+            }
+            #[inline(always)]
+            fn eq(self, o: Self) -> Self {
+                <$t>::simd_eq(self, o)
+            }
+            #[inline(always)]
+            fn ne(self, o: Self) -> Self {
+                <$t>::simd_ne(self, o)
+            }
+            #[inline(always)]
+            fn bits(self) -> u32 {
+                <$t>::to_bitmask(self)
+            }
+        }
+    };
+}
+lanes!(f32x4, 4);
+lanes!(f32x8, 8);
+
+/// `N` triangles in structure-of-arrays layout for the N-wide watertight test:
+/// `p[vertex][axis]` holds that coordinate of every lane's triangle. Packets with fewer
+/// triangles repeat their first triangle in the unused lanes: a repeated lane finds exactly
+/// the first lane's hit, which it never displaces (ties keep the lowest lane).
+#[derive(Clone, Copy, Debug)]
+pub struct TriPacket<L> {
+    pub p: [[L; 3]; 3],
+}
+
+/// Four triangles (SSE).
+pub type Tri4 = TriPacket<f32x4>;
+/// Eight triangles (AVX; two SSE halves without it).
+pub type Tri8 = TriPacket<f32x8>;
+
+impl<L: Lanes> TriPacket<L> {
+    /// A packet of 1 to `L::N` triangles.
+    pub fn new(tris: &[[Vec3; 3]]) -> TriPacket<L> {
+        assert!(!tris.is_empty() && tris.len() <= L::N);
+        let mut p: [[L::Array; 3]; 3] =
+            std::array::from_fn(|_| std::array::from_fn(|_| L::splat(0.0).to_array()));
+        for lane in 0..L::N {
             let tri = tris.get(lane).unwrap_or(&tris[0]);
             for (vtx, pv) in p.iter_mut().enumerate() {
                 for axis in 0..3 {
-                    pv[axis][lane] = tri[vtx][axis];
+                    pv[axis].as_mut()[lane] = tri[vtx][axis];
                 }
             }
         }
-        Tri4 {
-            p: p.map(|v| v.map(Vec4::from_array)),
-            count: tris.len() as u32,
+        TriPacket {
+            p: p.map(|v| v.map(L::from_array)),
         }
     }
 }
 
-/// Per-ray constants of the 4-wide test (splatted [`WoopRay`]).
+/// Per-ray constants of the N-wide test (splatted [`WoopRay`]).
 #[derive(Clone, Copy, Debug)]
-pub struct WoopRay4 {
+pub struct WoopRayN<L> {
     pub k: [usize; 3],
-    pub sx: Vec4,
-    pub sy: Vec4,
-    pub sz: Vec4,
-    pub ox: Vec4,
-    pub oy: Vec4,
-    pub oz: Vec4,
+    pub sx: L,
+    pub sy: L,
+    pub sz: L,
+    pub ox: L,
+    pub oy: L,
+    pub oz: L,
 }
 
-impl WoopRay4 {
-    #[inline]
-    pub fn new(w: &WoopRay) -> WoopRay4 {
-        WoopRay4 {
+pub type WoopRay4 = WoopRayN<f32x4>;
+pub type WoopRay8 = WoopRayN<f32x8>;
+
+impl<L: Lanes> WoopRayN<L> {
+    #[inline(always)]
+    pub fn new(w: &WoopRay) -> WoopRayN<L> {
+        WoopRayN {
             k: w.k,
-            sx: Vec4::splat(w.s.x),
-            sy: Vec4::splat(w.s.y),
-            sz: Vec4::splat(w.s.z),
-            ox: Vec4::splat(w.o.x),
-            oy: Vec4::splat(w.o.y),
-            oz: Vec4::splat(w.o.z),
+            sx: L::splat(w.s.x),
+            sy: L::splat(w.s.y),
+            sz: L::splat(w.s.z),
+            ox: L::splat(w.o.x),
+            oy: L::splat(w.o.y),
+            oz: L::splat(w.o.z),
         }
     }
 }
 
-/// Result of the 4-wide test before normalisation: a lane mask of hits and per-lane values.
-struct Tri4Eval {
+/// Result of the N-wide test before normalisation: a lane mask of hits and per-lane values.
+struct TriEval<L> {
     mask: u32,
-    v: Vec4,
-    w: Vec4,
-    t_scaled: Vec4,
-    det: Vec4,
+    v: L,
+    w: L,
+    t_scaled: L,
+    det: L,
 }
 
 #[inline(always)]
-fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
+fn tri_eval<L: Lanes>(w: &WoopRayN<L>, tri: &TriPacket<L>, t_max: f32) -> TriEval<L> {
     let [kx, ky, kz] = w.k;
     let [p0, p1, p2] = &tri.p;
+    let zero = L::splat(0.0);
     let az = p0[kz] - w.oz;
     let bz = p1[kz] - w.oz;
     let cz = p2[kz] - w.oz;
@@ -266,57 +358,37 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
     let mut u = cx * by - cy * bx;
     let mut v = ax * cy - ay * cx;
     let mut wg = bx * ay - by * ax;
-    let lanes = (1u32 << tri.count) - 1;
-    let zero = (u.cmpeq(Vec4::ZERO) | v.cmpeq(Vec4::ZERO) | wg.cmpeq(Vec4::ZERO)).bitmask() & lanes;
-    if zero != 0 {
+    let zeros = (u.eq(zero) | v.eq(zero) | wg.eq(zero)).bits();
+    if zeros != 0 {
         // Rare: the ray passes exactly through an edge or vertex in the sheared frame.
-        let (axa, aya, bxa, bya, cxa, cya) = (
-            ax.to_array(),
-            ay.to_array(),
-            bx.to_array(),
-            by.to_array(),
-            cx.to_array(),
-            cy.to_array(),
-        );
-        let (mut ua, mut va, mut wa) = (u.to_array(), v.to_array(), wg.to_array());
-        let mut bits = zero;
-        while bits != 0 {
-            let i = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            (ua[i], va[i], wa[i]) =
-                edge_functions_f64([axa[i], aya[i], bxa[i], bya[i], cxa[i], cya[i]]);
-        }
-        (u, v, wg) = (
-            Vec4::from_array(ua),
-            Vec4::from_array(va),
-            Vec4::from_array(wa),
-        );
+        (u, v, wg) = edge_lanes_f64(zeros, [ax, ay, bx, by, cx, cy], [u, v, wg]);
     }
-    let neg = u.cmplt(Vec4::ZERO) | v.cmplt(Vec4::ZERO) | wg.cmplt(Vec4::ZERO);
-    let pos = u.cmpgt(Vec4::ZERO) | v.cmpgt(Vec4::ZERO) | wg.cmpgt(Vec4::ZERO);
-    let inside = !(neg & pos).bitmask() & lanes;
+    let neg = u.lt(zero) | v.lt(zero) | wg.lt(zero);
+    let pos = u.gt(zero) | v.gt(zero) | wg.gt(zero);
+    let inside = !(neg & pos).bits() & ((1u32 << L::N) - 1);
     let det = u + v + wg;
     if inside == 0 {
         // Most packets miss on the edge test: skip the depth test and its error bound.
-        return Tri4Eval {
+        return TriEval {
             mask: 0,
             v,
             w: wg,
-            t_scaled: Vec4::ZERO,
+            t_scaled: zero,
             det,
         };
     }
-    let t_scaled = u * (w.sz * az) + v * (w.sz * bz) + wg * (w.sz * cz);
-    // Multiplying by ±1 is exact: this is |det| and t_scaled·sign(det).
-    let sign = Vec4::select(det.cmplt(Vec4::ZERO), Vec4::NEG_ONE, Vec4::ONE);
-    let ts = t_scaled * sign;
-    let adet = det * sign;
-    let in_range = ts.cmpgt(Vec4::ZERO) & ts.cmplt(Vec4::splat(t_max) * adet);
-    if in_range.bitmask() & inside == 0 {
+    let (sza, szb, szc) = (w.sz * az, w.sz * bz, w.sz * cz);
+    let t_scaled = u * sza + v * szb + wg * szc;
+    // |det| and t_scaled·sign(det): flipping the sign bit is the exact product by ±1.
+    let sign = det & L::splat(-0.0);
+    let ts = t_scaled ^ sign;
+    let adet = det ^ sign;
+    let in_range = ts.gt(zero) & ts.lt(L::splat(t_max) * adet);
+    if in_range.bits() & inside == 0 {
         // Inside the edges but behind the origin or beyond t_max (typically a shadow ray
         // passing through the emitter it ends at): the error floor below is positive, so it
         // cannot accept these lanes; skip computing it.
-        return Tri4Eval {
+        return TriEval {
             mask: 0,
             v,
             w: wg,
@@ -324,20 +396,20 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
             det,
         };
     }
-    let (szs_a, szs_b, szs_c) = ((w.sz * az).abs(), (w.sz * bz).abs(), (w.sz * cz).abs());
-    let max_z = szs_a.max(szs_b).max(szs_c);
+    let max_z = sza.abs().max(szb.abs()).max(szc.abs());
     let max_x = ax.abs().max(bx.abs()).max(cx.abs());
     let max_y = ay.abs().max(by.abs()).max(cy.abs());
     let max_e = u.abs().max(v.abs()).max(wg.abs());
-    let delta_z = gamma(3) * max_z;
-    let delta_x = gamma(5) * (max_x + max_z);
-    let delta_y = gamma(5) * (max_y + max_z);
-    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let floor = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e);
-    let ok = ts.cmpgt(floor) & in_range & det.cmpne(Vec4::ZERO);
-    let mask = ok.bitmask() & inside;
-    Tri4Eval {
-        mask,
+    let delta_z = L::splat(gamma(3)) * max_z;
+    let delta_x = L::splat(gamma(5)) * (max_x + max_z);
+    let delta_y = L::splat(gamma(5)) * (max_y + max_z);
+    let delta_e =
+        L::splat(2.0) * (L::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let floor =
+        L::splat(3.0) * (L::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e);
+    let ok = ts.gt(floor) & in_range & det.ne(zero);
+    TriEval {
+        mask: ok.bits() & inside,
         v,
         w: wg,
         t_scaled,
@@ -345,37 +417,63 @@ fn tri4_eval(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Tri4Eval {
     }
 }
 
-/// Closest hit among the four triangles: `(lane, t, u, v)`.
+/// The edge functions of the lanes in `lanes` recomputed in double precision (see
+/// [`edge_functions_f64`]).
+#[inline(never)]
+#[cold]
+fn edge_lanes_f64<L: Lanes>(lanes: u32, e: [L; 6], uvw: [L; 3]) -> (L, L, L) {
+    let e = e.map(L::to_array);
+    let [mut u, mut v, mut w] = uvw.map(L::to_array);
+    let mut bits = lanes;
+    while bits != 0 {
+        let i = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        let c = |k: usize| e[k].as_ref()[i];
+        (u.as_mut()[i], v.as_mut()[i], w.as_mut()[i]) =
+            edge_functions_f64([c(0), c(1), c(2), c(3), c(4), c(5)]);
+    }
+    (L::from_array(u), L::from_array(v), L::from_array(w))
+}
+
+/// Closest hit among the packet's triangles: `(lane, t, u, v)`.
 #[inline(always)]
-pub fn tri4_closest(w: &WoopRay4, tri: &Tri4, t_max: f32) -> Option<(usize, f32, f32, f32)> {
-    let e = tri4_eval(w, tri, t_max);
+pub fn tri_closest<L: Lanes>(
+    w: &WoopRayN<L>,
+    tri: &TriPacket<L>,
+    t_max: f32,
+) -> Option<(usize, f32, f32, f32)> {
+    let e = tri_eval(w, tri, t_max);
     if e.mask == 0 {
         return None;
     }
-    let t = e.t_scaled / e.det;
-    let ta = t.to_array();
+    let t = (e.t_scaled / e.det).to_array();
     let mut best: Option<usize> = None;
     let mut best_t = t_max;
     let mut bits = e.mask;
     while bits != 0 {
         let i = bits.trailing_zeros() as usize;
         bits &= bits - 1;
-        let ti = ta[i];
+        let ti = t.as_ref()[i];
         if ti > 0.0 && ti < best_t && ti.is_finite() {
             best_t = ti;
             best = Some(i);
         }
     }
     let i = best?;
-    let det = e.det.to_array()[i];
+    let det = e.det.to_array().as_ref()[i];
     let rcp = 1.0 / det;
-    Some((i, best_t, e.v.to_array()[i] * rcp, e.w.to_array()[i] * rcp))
+    Some((
+        i,
+        best_t,
+        e.v.to_array().as_ref()[i] * rcp,
+        e.w.to_array().as_ref()[i] * rcp,
+    ))
 }
 
-/// Whether any of the four triangles is hit.
+/// Whether any of the packet's triangles is hit.
 #[inline(always)]
-pub fn tri4_any(w: &WoopRay4, tri: &Tri4, t_max: f32) -> bool {
-    let e = tri4_eval(w, tri, t_max);
+pub fn tri_any<L: Lanes>(w: &WoopRayN<L>, tri: &TriPacket<L>, t_max: f32) -> bool {
+    let e = tri_eval(w, tri, t_max);
     if e.mask == 0 {
         return false;
     }
@@ -386,7 +484,7 @@ pub fn tri4_any(w: &WoopRay4, tri: &Tri4, t_max: f32) -> bool {
     while bits != 0 {
         let i = bits.trailing_zeros() as usize;
         bits &= bits - 1;
-        if t[i] > 0.0 && t[i] < t_max {
+        if t.as_ref()[i] > 0.0 && t.as_ref()[i] < t_max {
             return true;
         }
     }
@@ -484,7 +582,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tri4_matches_scalar() {
+    fn packets_match_scalar() {
         let mut s = 12345u32;
         let mut rnd = || {
             s ^= s << 13;
@@ -509,6 +607,8 @@ mod tests {
             let w = WoopRay::new(&ray);
             let w4 = WoopRay4::new(&w);
             let t4 = Tri4::new(&tris);
+            let w8 = WoopRay8::new(&w);
+            let t8 = Tri8::new(&tris);
             let mut best: Option<(usize, f32, f32, f32)> = None;
             for (i, t) in tris.iter().enumerate() {
                 if let Some((th, u, v)) = triangle_woop(&w, t[0], t[1], t[2], 10.0)
@@ -517,7 +617,11 @@ mod tests {
                     best = Some((i, th, u, v));
                 }
             }
-            let simd = tri4_closest(&w4, &t4, 10.0);
+            let simd = tri_closest(&w4, &t4, 10.0);
+            assert_eq!(
+                format!("{simd:?}"),
+                format!("{:?}", tri_closest(&w8, &t8, 10.0))
+            );
             match (best, simd) {
                 (None, None) => {}
                 (Some(a), Some(b)) => {
@@ -527,7 +631,8 @@ mod tests {
                 }
                 _ => panic!("scalar {best:?} vs simd {simd:?}"),
             }
-            assert_eq!(tri4_any(&w4, &t4, 10.0), best.is_some());
+            assert_eq!(tri_any(&w4, &t4, 10.0), best.is_some());
+            assert_eq!(tri_any(&w8, &t8, 10.0), best.is_some());
         }
     }
 }
