@@ -23,7 +23,8 @@
 //!
 //! Run: `cargo bench -p penumbra-render --bench accel [--features embree] [-- SCENE…]` where
 //! SCENE is `sphere` or `classroom` (default both). Set `ACCEL_PEERS` to a comma-separated
-//! subset of `penumbra,obvhs,embree` to measure fewer structures.
+//! subset of `penumbra,obvhs,embree` to measure fewer structures, and `ACCEL_RAYS_MAX` to trace
+//! at most that many rays of each set.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -206,12 +207,17 @@ fn sphere_scene(pool: &rayon::ThreadPool) -> BenchScene {
 
 /// The recorded classroom (see the module documentation), or `None` with a notice.
 fn classroom_scene() -> Option<BenchScene> {
+    // The target directory this benchmark runs from (`target/release/deps/accel-…`), else
+    // the workspace's.
     let exe = std::env::current_exe().ok()?;
-    let path: PathBuf = exe
-        .parent()?
-        .parent()?
-        .parent()?
-        .join("rays/classroom.rays");
+    let path: PathBuf = [
+        exe.parent()?.parent()?.parent()?.to_path_buf(),
+        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../target")),
+    ]
+    .iter()
+    .map(|t| t.join("rays/classroom.rays"))
+    .find(|p| p.exists())
+    .unwrap_or_else(|| PathBuf::from("target/rays/classroom.rays"));
     let Ok(bytes) = std::fs::read(&path) else {
         println!(
             "notice: classroom skipped: no {} (record it with `cargo bench -p penumbra-build \
@@ -466,6 +472,15 @@ fn main() {
     }
     if want("classroom") {
         scenes.extend(classroom_scene());
+    }
+    // A quick look (or a run under valgrind): at most this many rays per set.
+    if let Some(max) = std::env::var("ACCEL_RAYS_MAX")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        for s in scenes.iter_mut().flat_map(|s| s.sets.iter_mut()) {
+            s.rays.truncate(max);
+        }
     }
     for sc in &scenes {
         run(&pool, sc, &peer);

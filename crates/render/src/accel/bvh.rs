@@ -7,9 +7,11 @@
 //! parallel (figures in `bench/README.md`, "Accelerator").
 //!
 //! Construction: obvhs builds a binary BVH (PLOC, Meister & Bittner 2018, followed by SAH
-//! reinsertion optimisation, Meister & Bittner 2017); we collapse it into the wide tree by
-//! repeatedly opening the largest-area child (as in Embree / Wald et al. 2008), and emit a leaf
-//! for any subtree with at most [`LEAF_MAX`] primitives ([`SMALL_LEAF_MAX`] in small scenes).
+//! reinsertion optimisation, Meister & Bittner 2017); we collapse it into the wide tree by the
+//! SAH-optimal dynamic programme of Ylitie et al. 2017 ([`Plan`]), which decides for every
+//! binary node whether it becomes a wide node, a leaf (at most [`LEAF_MAX`] primitives,
+//! [`SMALL_LEAF_MAX`] in small scenes) or is opened into its parent's slots. A node's children
+//! are stored largest first.
 //!
 //! Leaves: a leaf of triangles only is one packet, tested in one go: up to four triangles in a
 //! [`Tri4`] (SSE), five to eight in a [`Tri8`] (AVX), each kind in its own array, with the
@@ -18,12 +20,14 @@
 //! at a time, its triangles four at a time.
 //!
 //! Traversal: closest-hit orders the hit children front to back by entry distance and culls
-//! popped entries that lie beyond the current hit; occlusion skips ordering and returns on the
-//! first hit. Both prefetch every entered child (when the tree is larger than the caches).
+//! popped entries that lie beyond the current hit; occlusion visits them in slot order
+//! (largest first: the likeliest to hold an occluder) and returns on the first hit. Both prefetch every entered child (when the tree is larger than the caches).
 //! The box test is made conservative by scaling the exit distance by `1 + 2γ₃`
 //! (Ize 2013, "Robust BVH Ray Traversal"), so watertight triangles are never lost to box misses.
 //! The stack is a fixed-size array on the call stack (8 to 1024 entries, chosen at build
 //! from the exact worst case of the tree's shape), so queries never allocate.
+
+use std::mem::MaybeUninit;
 
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
@@ -40,8 +44,9 @@ use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3, Vec4};
 use wide::f32x8;
 
-/// Subtrees with at most this many primitives become leaves. Measured on the 1M-triangle
-/// benchmark: 8 beats 2 and 4 (fewer dependent node fetches) and equals 12.
+/// Most primitives in a leaf (the collapse chooses leaf sizes up to this by SAH). Measured on
+/// the 1M-triangle benchmark before leaves were sized by SAH: 8 beat 2 and 4 (fewer dependent
+/// node fetches) and equalled 12.
 pub(crate) const LEAF_MAX: u32 = 8;
 
 /// Scenes with at most this many primitives use [`SMALL_LEAF_MAX`] instead: their tree fits
@@ -144,7 +149,7 @@ pub(crate) struct WideBvh {
     /// Traversal stack entries needed: the largest, over root-to-leaf paths, of the pushes a
     /// traversal may leave on the stack along the path (`children - 1` per inner node).
     stack_need: u32,
-    /// Subtrees with at most this many primitives become leaves.
+    /// Most primitives in a leaf.
     leaf_max: u32,
     /// Whether traversal prefetches the entered children: only worth its instructions when
     /// the tree does not fit in cache.
@@ -205,6 +210,40 @@ impl TravRay {
         let tf =
             (tfx.fast_min(tfy).fast_min(tfz) * f32x8::splat(ROBUST)).fast_min(f32x8::splat(t_max));
         (tn, tn.simd_le(tf).to_bitmask())
+    }
+}
+
+/// A traversal stack of at most `N` entries, left uninitialised: clearing the 8 KiB of the
+/// deepest trees' stacks cost more than a small tree's whole query.
+struct Stack<T: Copy, const N: usize> {
+    items: [MaybeUninit<T>; N],
+    len: usize,
+}
+
+impl<T: Copy, const N: usize> Stack<T, N> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack {
+            items: [MaybeUninit::uninit(); N],
+            len: 0,
+        }
+    }
+
+    /// Panics beyond `N` entries (the build sizes `N` for the tree's deepest path).
+    #[inline(always)]
+    fn push(&mut self, x: T) {
+        self.items[self.len] = MaybeUninit::new(x);
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<T> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: every entry below `len` was written by `push`.
+        Some(unsafe { self.items[self.len].assume_init() })
     }
 }
 
@@ -321,9 +360,9 @@ impl WideBvh {
     }
 
     fn collapse(&mut self, tree: &Tree2, prims: &[Prim], ids: &[[u32; 2]]) {
-        let counts = tree.subtree_counts();
+        let plan = Plan::new(tree, self.leaf_max);
         let mut need = 0;
-        self.root = self.emit(tree, &counts, prims, ids, 0, 0, &mut need);
+        self.root = self.emit(tree, &plan, prims, ids, 0, 0, &mut need);
         self.stack_need = need;
         let need = self.stack_need();
         self.stack = if need <= 8 {
@@ -343,44 +382,33 @@ impl WideBvh {
         };
     }
 
+    /// Emits binary node `node` as one child of a wide node: a leaf or a wide node, as `plan`
+    /// decided; returns its child reference.
     #[allow(clippy::too_many_arguments)]
     fn emit(
         &mut self,
         tree: &Tree2,
-        counts: &[u32],
+        plan: &Plan,
         prims: &[Prim],
         ids: &[[u32; 2]],
         node: usize,
         pushed: u32,
         need: &mut u32,
     ) -> u32 {
-        if counts[node] <= self.leaf_max {
+        if plan.leaf[node] {
             return self.emit_leaf(tree, node, prims, ids);
         }
-        let first = tree.nodes[node].first_index as usize;
         let mut kids = [0usize; WIDTH];
-        kids[0] = first;
-        kids[1] = first + 1;
-        let mut k = 2;
-        while k < WIDTH {
-            // Open the inner child with the largest surface area.
-            let mut best = None;
-            let mut best_area = -1.0;
-            for (j, &c) in kids[..k].iter().enumerate() {
-                if counts[c] > self.leaf_max {
-                    let a = tree.nodes[c].aabb().half_area();
-                    if a > best_area {
-                        best_area = a;
-                        best = Some(j);
-                    }
-                }
-            }
-            let Some(j) = best else { break };
-            let c = tree.nodes[kids[j]].first_index as usize;
-            kids[j] = c;
-            kids[k] = c + 1;
-            k += 1;
-        }
+        let mut k = 0;
+        plan.open(tree, node, WIDTH, &mut kids, &mut k);
+        // Largest first: occlusion queries visit the children in slot order, and a large
+        // child is the likeliest to hold an occluder.
+        kids[..k].sort_by(|&a, &b| {
+            tree.nodes[b]
+                .aabb()
+                .half_area()
+                .total_cmp(&tree.nodes[a].aabb().half_area())
+        });
         // Visiting this node leaves at most `k - 1` of its children on the stack while the
         // traversal descends into one of them.
         let pushed = pushed + k as u32 - 1;
@@ -399,7 +427,7 @@ impl WideBvh {
                 lo[axis][slot] = bb.min[axis];
                 hi[axis][slot] = bb.max[axis];
             }
-            child[slot] = self.emit(tree, counts, prims, ids, c, pushed, need);
+            child[slot] = self.emit(tree, plan, prims, ids, c, pushed, need);
         }
         let node = &mut self.nodes[index];
         for (b, (lo, hi)) in node.b.iter_mut().zip(lo.iter().zip(&hi)) {
@@ -526,9 +554,8 @@ impl WideBvh {
         let tr = TravRay::new(ray);
         let woop = WoopRay::new(ray);
         let (w4, w8) = (WoopRay4::new(&woop), WoopRay8::new(&woop));
-        let mut stack_node = [0u32; N];
-        let mut stack_t = [0f32; N];
-        let mut sp = 0usize;
+        // Entries: a child reference and its entry distance.
+        let mut stack = Stack::<(u32, f32), N>::new();
         let mut cur = self.root;
         // The leaf reference holding the closest hit so far, its lane and (t, u, v).
         let mut best: Option<(u32, usize, f32, f32, f32)> = None;
@@ -556,9 +583,7 @@ impl WideBvh {
                         // Two children (the common case): push the farther, enter the nearer.
                         let s1 = rest.trailing_zeros() as usize;
                         let (near, far) = if tb[s1] < tb[s0] { (s1, s0) } else { (s0, s1) };
-                        stack_node[sp] = node.child[far];
-                        stack_t[sp] = tb[far];
-                        sp += 1;
+                        stack.push((node.child[far], tb[far]));
                         cur = node.child[near];
                         continue;
                     }
@@ -583,9 +608,7 @@ impl WideBvh {
                     // Push all but the nearest (far ones first), continue with the nearest.
                     for &key in &keys[..k - 1] {
                         let s = (key & 7) as usize;
-                        stack_node[sp] = node.child[s];
-                        stack_t[sp] = tb[s];
-                        sp += 1;
+                        stack.push((node.child[s], tb[s]));
                     }
                     cur = node.child[(keys[k - 1] & 7) as usize];
                     continue;
@@ -605,12 +628,11 @@ impl WideBvh {
             }
             // Pop the next entry that may still hold a closer hit.
             loop {
-                if sp == 0 {
+                let Some((c, t)) = stack.pop() else {
                     break 'outer;
-                }
-                sp -= 1;
-                if stack_t[sp] <= t_max {
-                    cur = stack_node[sp];
+                };
+                if t <= t_max {
+                    cur = c;
                     break;
                 }
             }
@@ -677,8 +699,7 @@ impl WideBvh {
         // The triangle test's constants, made when the first leaf is reached: most shadow
         // rays in small scenes reach none.
         let mut woop: Option<WoopRay> = None;
-        let mut stack = [0u32; N];
-        let mut sp = 0usize;
+        let mut stack = Stack::<u32, N>::new();
         let mut cur = self.root;
         loop {
             if cur & LEAF_BIT == 0 {
@@ -695,10 +716,11 @@ impl WideBvh {
                             m &= m - 1;
                         }
                     }
+                    // Pushed last slot first, so that they are popped in slot order.
                     while mask != 0 {
-                        stack[sp] = node.child[mask.trailing_zeros() as usize];
-                        sp += 1;
-                        mask &= mask - 1;
+                        let s = 31 - mask.leading_zeros();
+                        stack.push(node.child[s as usize]);
+                        mask &= !(1 << s);
                     }
                     continue;
                 }
@@ -715,11 +737,10 @@ impl WideBvh {
                     return true;
                 }
             }
-            if sp == 0 {
+            let Some(c) = stack.pop() else {
                 return false;
-            }
-            sp -= 1;
-            cur = stack[sp];
+            };
+            cur = c;
         }
     }
 
@@ -752,6 +773,119 @@ fn transformed_packet(
     match kind {
         Unit::Disk => intersect_disk(ray, to_object, t_max),
         Unit::Sphere => intersect_ellipsoid(ray, to_object, t_max).map(|t| (t, 0.0, 0.0)),
+    }
+}
+
+/// SAH cost of testing a wide node, relative to which the leaf costs below are given.
+const COST_NODE: f32 = 1.0;
+/// SAH cost of testing a leaf of up to four triangles (one 4-wide test).
+const COST_LEAF4: f32 = 1.2;
+/// SAH cost of testing a leaf of five to eight triangles (one 8-wide test).
+const COST_LEAF8: f32 = 1.5;
+
+/// How the binary tree collapses into the wide one: the SAH-optimal choice of which binary
+/// nodes become wide nodes, which leaves, and which are opened into their parent's slots
+/// (the dynamic programme of Ylitie, Karras & Laine 2017, "Efficient Incoherent Ray
+/// Traversal on GPUs Through Compressed Wide BVHs", §3.1).
+struct Plan {
+    /// Whether a binary node, given one slot of a wide node, becomes a leaf (else a wide node).
+    leaf: Vec<bool>,
+    /// `cost[n][i - 1]`: the least SAH cost of representing subtree `n` in at most `i` slots.
+    cost: Vec<[f32; WIDTH]>,
+}
+
+impl Plan {
+    fn new(tree: &Tree2, leaf_max: u32) -> Plan {
+        let n = tree.nodes.len();
+        let mut plan = Plan {
+            leaf: vec![false; n],
+            cost: vec![[0.0; WIDTH]; n],
+        };
+        let mut count = vec![0u32; n];
+        for &(i, _) in tree.preorder().iter().rev() {
+            let i = i as usize;
+            let nd = &tree.nodes[i];
+            let area = nd.aabb().half_area();
+            let leaf_cost = |c: u32| area * if c <= 4 { COST_LEAF4 } else { COST_LEAF8 };
+            if nd.is_leaf() {
+                count[i] = nd.prim_count;
+                assert!(nd.prim_count <= leaf_max, "binary leaf larger than a leaf");
+                plan.leaf[i] = true;
+                plan.cost[i] = [leaf_cost(nd.prim_count); WIDTH];
+                continue;
+            }
+            let (l, r) = (nd.first_index as usize, nd.first_index as usize + 1);
+            count[i] = count[l] + count[r];
+            // The least cost of spreading the subtree over its two children with `s` slots
+            // between them.
+            let (cl, cr) = (plan.cost[l], plan.cost[r]);
+            let split = |s: usize| {
+                (1..s)
+                    .map(|j| cl[j - 1] + cr[s - j - 1])
+                    .fold(f32::INFINITY, f32::min)
+            };
+            let inner = area * COST_NODE + split(WIDTH);
+            let as_leaf = if count[i] <= leaf_max {
+                leaf_cost(count[i])
+            } else {
+                f32::INFINITY
+            };
+            // (Compared only when a leaf may hold the subtree: infinite areas make both costs
+            // infinite.)
+            plan.leaf[i] = count[i] <= leaf_max && as_leaf <= inner;
+            let one = as_leaf.min(inner);
+            let mut c = [one; WIDTH];
+            for s in 2..=WIDTH {
+                c[s - 1] = one.min(split(s)).min(c[s - 2]);
+            }
+            plan.cost[i] = c;
+        }
+        plan
+    }
+
+    /// Appends to `out` the binary nodes that fill at most `slots` slots for the inner node
+    /// `node`, opened as the plan decided.
+    fn open(
+        &self,
+        tree: &Tree2,
+        node: usize,
+        slots: usize,
+        out: &mut [usize; WIDTH],
+        k: &mut usize,
+    ) {
+        let first = tree.nodes[node].first_index as usize;
+        let (l, r) = (first, first + 1);
+        let (cl, cr) = (self.cost[l], self.cost[r]);
+        let j = (1..slots)
+            .min_by(|&a, &b| {
+                (cl[a - 1] + cr[slots - a - 1]).total_cmp(&(cl[b - 1] + cr[slots - b - 1]))
+            })
+            .expect("at least two slots");
+        self.fill(tree, l, j, out, k);
+        self.fill(tree, r, slots - j, out, k);
+    }
+
+    /// Appends the binary nodes that represent subtree `node` in at most `slots` slots: the
+    /// node itself when that is cheapest, else its opened children.
+    fn fill(
+        &self,
+        tree: &Tree2,
+        node: usize,
+        slots: usize,
+        out: &mut [usize; WIDTH],
+        k: &mut usize,
+    ) {
+        let c = &self.cost[node];
+        if slots == 1 || tree.nodes[node].is_leaf() || c[0] <= c[slots - 1] {
+            out[*k] = node;
+            *k += 1;
+            return;
+        }
+        // The fewest slots that reach the least cost of `slots` slots.
+        let s = (2..=slots)
+            .find(|&s| c[s - 1] <= c[slots - 1])
+            .unwrap_or(slots);
+        self.open(tree, node, s, out, k);
     }
 }
 
@@ -839,19 +973,6 @@ impl Tree2 {
 
     pub(crate) fn depth(&self) -> u32 {
         self.preorder().iter().map(|&(_, d)| d).max().unwrap_or(0)
-    }
-
-    fn subtree_counts(&self) -> Vec<u32> {
-        let mut counts = vec![0u32; self.nodes.len()];
-        for &(i, _) in self.preorder().iter().rev() {
-            let n = &self.nodes[i as usize];
-            counts[i as usize] = if n.is_leaf() {
-                n.prim_count
-            } else {
-                counts[n.first_index as usize] + counts[n.first_index as usize + 1]
-            };
-        }
-        counts
     }
 
     /// Collects the primitive indices below `node` (at most `LEAF_MAX` of them).
