@@ -22,8 +22,9 @@
 //! Traversal: closest-hit orders the hit children front to back by entry distance and culls
 //! popped entries that lie beyond the current hit; occlusion visits them in slot order
 //! (largest first: the likeliest to hold an occluder) and returns on the first hit. Both prefetch every entered child (when the tree is larger than the caches).
-//! The box test is made conservative by scaling the exit distance by `1 + 2γ₃`
-//! (Ize 2013, "Robust BVH Ray Traversal"), so watertight triangles are never lost to box misses.
+//! The box test is made conservative by scaling the exit distances (Ize 2013, "Robust BVH Ray
+//! Traversal"; here through the reciprocal direction, see [`ROBUST_FAR`]), so watertight
+//! triangles are never lost to box misses.
 //! The stack is a fixed-size array on the call stack (8 to 1024 entries, chosen at build
 //! from the exact worst case of the tree's shape), so queries never allocate.
 
@@ -73,8 +74,11 @@ const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
 /// Largest traversal stack (entries); deeper trees are rebuilt balanced.
 const MAX_STACK: usize = 1024;
 
-/// `1 + 2γ₃` with `γₙ = nε/(1-nε)`, ε = 2⁻²⁴ (pbrt-v4's robust slab test).
-const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+/// `1 + 2γ₄` with `γₙ = nε/(1-nε)`, ε = 2⁻²⁴: the factor on the reciprocal direction that
+/// makes far-plane distances conservative. pbrt-v4's robust slab test scales the computed exit
+/// distance by `1 + 2γ₃` (three roundings: the reciprocal, the difference, the product); here
+/// the factor is applied to the reciprocal once per ray, which adds a fourth rounding.
+const ROBUST_FAR: f32 = 1.0 + 2.0 * (4.0 * f32::EPSILON * 0.5) / (1.0 - 4.0 * f32::EPSILON * 0.5);
 
 /// A bounded primitive handed to the builder.
 #[derive(Clone, Copy, Debug)]
@@ -162,7 +166,10 @@ const PREFETCH_MIN_BYTES: usize = 256 * 1024;
 /// Per-ray traversal constants.
 struct TravRay {
     o: [f32x8; 3],
+    /// Reciprocal direction, for the near planes.
     inv: [f32x8; 3],
+    /// Reciprocal direction scaled by [`ROBUST_FAR`], for the far planes.
+    inv_far: [f32x8; 3],
     /// 1 where the direction component is negative (then the near plane is the max plane).
     neg: [usize; 3],
 }
@@ -172,12 +179,15 @@ impl TravRay {
     fn new(ray: &Ray) -> TravRay {
         // Reciprocal direction in one vector division; an infinite component (zero direction
         // component) becomes ±MAX with its sign, so slabs never produce 0 · ∞ = NaN.
-        let r = Vec4::ONE / Vec4::new(ray.d.x, ray.d.y, ray.d.z, 1.0);
-        let i = Vec4::select(
-            r.abs().cmplt(Vec4::INFINITY),
-            r,
-            Vec4::splat(f32::MAX).copysign(r),
-        );
+        let finite = |r: Vec4| {
+            Vec4::select(
+                r.abs().cmplt(Vec4::INFINITY),
+                r,
+                Vec4::splat(f32::MAX).copysign(r),
+            )
+        };
+        let i = finite(Vec4::ONE / Vec4::new(ray.d.x, ray.d.y, ray.d.z, 1.0));
+        let f = finite(i * ROBUST_FAR);
         let neg = i.is_negative_bitmask();
         TravRay {
             o: [
@@ -186,6 +196,7 @@ impl TravRay {
                 f32x8::splat(ray.o.z),
             ],
             inv: [f32x8::splat(i.x), f32x8::splat(i.y), f32x8::splat(i.z)],
+            inv_far: [f32x8::splat(f.x), f32x8::splat(f.y), f32x8::splat(f.z)],
             neg: [
                 (neg & 1) as usize,
                 ((neg >> 1) & 1) as usize,
@@ -195,6 +206,7 @@ impl TravRay {
     }
 
     /// Entry distances of the children and the mask of those entered within `(0, t_max)`.
+    /// The reductions are balanced trees: the next node's address waits on this test.
     #[inline(always)]
     fn hit_node(&self, n: &Node, t_max: f32) -> (f32x8, u32) {
         let [nx, ny, nz] = self.neg;
@@ -202,13 +214,14 @@ impl TravRay {
         let tnx = (b[0][nx & 1] - self.o[0]) * self.inv[0];
         let tny = (b[1][ny & 1] - self.o[1]) * self.inv[1];
         let tnz = (b[2][nz & 1] - self.o[2]) * self.inv[2];
-        let tfx = (b[0][(nx ^ 1) & 1] - self.o[0]) * self.inv[0];
-        let tfy = (b[1][(ny ^ 1) & 1] - self.o[1]) * self.inv[1];
-        let tfz = (b[2][(nz ^ 1) & 1] - self.o[2]) * self.inv[2];
+        let tfx = (b[0][(nx ^ 1) & 1] - self.o[0]) * self.inv_far[0];
+        let tfy = (b[1][(ny ^ 1) & 1] - self.o[1]) * self.inv_far[1];
+        let tfz = (b[2][(nz ^ 1) & 1] - self.o[2]) * self.inv_far[2];
         // `fast_max`/`fast_min` are the plain max/min instructions (no NaN can arise here).
-        let tn = tnx.fast_max(tny).fast_max(tnz).fast_max(f32x8::ZERO);
-        let tf =
-            (tfx.fast_min(tfy).fast_min(tfz) * f32x8::splat(ROBUST)).fast_min(f32x8::splat(t_max));
+        let tn = tnx.fast_max(tny).fast_max(tnz.fast_max(f32x8::ZERO));
+        let tf = tfx
+            .fast_min(tfy)
+            .fast_min(tfz.fast_min(f32x8::splat(t_max)));
         (tn, tn.simd_le(tf).to_bitmask())
     }
 }

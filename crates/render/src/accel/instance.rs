@@ -24,7 +24,7 @@ use crate::geometry::Ray;
 use crate::math::{Vec3, Vec3A};
 use glam::Affine3A;
 
-/// `1 + 2γ₃` (see `bvh::ROBUST`): the slab test's exit distances are scaled by it.
+/// `1 + 2γ₃` (pbrt-v4's robust slab test): the exit distances are scaled by it.
 const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 /// Deepest top-level tree traversed with the fixed stack; deeper PLOC trees are rebuilt
 /// balanced (depth ≤ log₂ n + 1).
