@@ -346,6 +346,7 @@ impl WideBvh {
             out.clear();
             out.collapse(&Tree2::median(aabbs), prims, ids);
         }
+        out.validate();
         out
     }
 
@@ -520,14 +521,63 @@ impl WideBvh {
         MIXED | (count << COUNT_SHIFT) | first
     }
 
+    /// Checks that the root and every child reference of every node name an existing node,
+    /// packet or packet range: traversal follows them without bounds checks.
+    fn validate(&self) {
+        let ok = |c: u32| {
+            let i = (c & INDEX_MASK) as usize;
+            match c & (LEAF_BIT | KIND_MASK) {
+                0 => i < self.nodes.len(),
+                TRI4 => i < self.tri4.len() && i < self.ids4.len(),
+                TRI8 => i < self.tri8.len() && i < self.ids8.len(),
+                MIXED => {
+                    let first = (c & FIRST_MASK) as usize;
+                    let count = ((c & !(LEAF_BIT | KIND_MASK)) >> COUNT_SHIFT) as usize;
+                    first + count <= self.packets.len() && first + count <= self.ids.len()
+                }
+                _ => c == EMPTY,
+            }
+        };
+        assert!(ok(self.root), "BVH root out of range");
+        for n in &self.nodes {
+            assert!(n.child.iter().all(|&c| ok(c)), "BVH child out of range");
+        }
+    }
+
+    /// The inner node `c` names (a reference met in traversal, see [`WideBvh::validate`]).
+    #[inline(always)]
+    fn node(&self, c: u32) -> &Node {
+        debug_assert!((c as usize) < self.nodes.len());
+        // SAFETY: `c` comes from the root or a node's child array, all of whose inner-node
+        // references `validate` checked to be below `nodes.len()` at the end of the build;
+        // the arrays are never modified afterwards.
+        unsafe { self.nodes.get_unchecked(c as usize) }
+    }
+
+    /// The 4-wide leaf packet at index `i` of a leaf reference (see [`WideBvh::node`]).
+    #[inline(always)]
+    fn tri4(&self, i: usize) -> &Tri4 {
+        debug_assert!(i < self.tri4.len());
+        // SAFETY: as in `node`, for the `TRI4` references.
+        unsafe { self.tri4.get_unchecked(i) }
+    }
+
+    /// The 8-wide leaf packet at index `i` of a leaf reference (see [`WideBvh::node`]).
+    #[inline(always)]
+    fn tri8(&self, i: usize) -> &Tri8 {
+        debug_assert!(i < self.tri8.len());
+        // SAFETY: as in `node`, for the `TRI8` references.
+        unsafe { self.tri8.get_unchecked(i) }
+    }
+
     /// Prefetches the node or leaf packet that child reference `c` names.
     #[inline(always)]
     fn prefetch_child(&self, c: u32) {
         let i = (c & INDEX_MASK) as usize;
         match c & (LEAF_BIT | KIND_MASK) {
-            0 => prefetch(&self.nodes[i]),
-            TRI4 => prefetch(&self.tri4[i]),
-            TRI8 => prefetch(&self.tri8[i]),
+            0 => prefetch(self.node(c)),
+            TRI4 => prefetch(self.tri4(i)),
+            TRI8 => prefetch(self.tri8(i)),
             _ => {}
         }
     }
@@ -575,7 +625,7 @@ impl WideBvh {
         'outer: loop {
             if cur & LEAF_BIT == 0 {
                 stats::bump(0);
-                let node = &self.nodes[cur as usize];
+                let node = self.node(cur);
                 let (tn, mask) = tr.hit_node(node, t_max);
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
@@ -630,8 +680,8 @@ impl WideBvh {
                 stats::bump(1);
                 let i = (cur & INDEX_MASK) as usize;
                 let hit = match cur & KIND_MASK {
-                    0 => tri_closest(&w4, &self.tri4[i], t_max),
-                    k if k == TRI8 & KIND_MASK => tri_closest(&w8, &self.tri8[i], t_max),
+                    0 => tri_closest(&w4, self.tri4(i), t_max),
+                    k if k == TRI8 & KIND_MASK => tri_closest(&w8, self.tri8(i), t_max),
                     _ => self.mixed_closest(cur, ray, &w4, t_max),
                 };
                 if let Some((lane, t, u, v)) = hit {
@@ -717,7 +767,7 @@ impl WideBvh {
         loop {
             if cur & LEAF_BIT == 0 {
                 stats::bump(4);
-                let node = &self.nodes[cur as usize];
+                let node = self.node(cur);
                 let (_, mut mask) = tr.hit_node(node, t_max);
                 if mask != 0 {
                     cur = node.child[mask.trailing_zeros() as usize];
@@ -742,8 +792,8 @@ impl WideBvh {
                 let i = (cur & INDEX_MASK) as usize;
                 let w = woop.get_or_insert_with(|| WoopRay::new(ray));
                 let hit = match cur & KIND_MASK {
-                    0 => tri_any(&WoopRay4::new(w), &self.tri4[i], t_max),
-                    k if k == TRI8 & KIND_MASK => tri_any(&WoopRay8::new(w), &self.tri8[i], t_max),
+                    0 => tri_any(&WoopRay4::new(w), self.tri4(i), t_max),
+                    k if k == TRI8 & KIND_MASK => tri_any(&WoopRay8::new(w), self.tri8(i), t_max),
                     _ => self.mixed_any(cur, ray, w, t_max),
                 };
                 if hit {
