@@ -57,6 +57,10 @@ pub(crate) const LEAF_MAX: u32 = 8;
 const SMALL_SCENE: usize = 4096;
 const SMALL_LEAF_MAX: u32 = 2;
 
+/// Scenes with at least this many primitives get the longer reinsertion optimisation (see
+/// [`WideBvh::build`]).
+const REINSERT_LARGE: usize = 500_000;
+
 /// Child references: an inner node's index, or [`LEAF_BIT`] with a leaf kind in the two bits
 /// above [`KIND_SHIFT`] and the index of its packet ([`TRI4`], [`TRI8`]) or of its first
 /// packet ([`MIXED`], with the packet count above [`COUNT_SHIFT`]).
@@ -326,9 +330,12 @@ impl WideBvh {
                 SortPrecision::U64,
                 3,
             );
-            // Batch ratio 0.4 rather than obvhs' "medium" 0.05: a slower build for faster
-            // traversal, the right trade for an offline renderer.
-            ReinsertionOptimizer::default().run(&mut bvh2, 0.4, None);
+            // Batch ratio 0.4 (obvhs' "medium" is 0.05) in large scenes: a slower build for
+            // faster traversal, the right trade for an offline renderer. Below
+            // `REINSERT_LARGE` primitives 0.1: there the traversal gain of more was within
+            // the noise, and reinsertion was most of the build.
+            let ratio = if n >= REINSERT_LARGE { 0.4 } else { 0.1 };
+            ReinsertionOptimizer::default().run(&mut bvh2, ratio, None);
             let t = Tree2::from_bvh2(bvh2);
             // PLOC trees are shallow in practice; a degenerate input (e.g. thousands of
             // coincident primitives) could make one deep. Bound the recursion here and the
