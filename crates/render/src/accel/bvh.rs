@@ -590,40 +590,65 @@ impl WideBvh {
     }
 
     pub(crate) fn intersect(&self, ray: &Ray, t_max: f32) -> Option<RawHit> {
+        if self.tri8.is_empty() {
+            self.intersect_w::<false>(ray, t_max)
+        } else {
+            self.intersect_w::<true>(ray, t_max)
+        }
+    }
+
+    /// [`WideBvh::intersect`] for trees with (`WIDE`) or without 8-wide leaves.
+    #[inline(always)]
+    fn intersect_w<const WIDE: bool>(&self, ray: &Ray, t_max: f32) -> Option<RawHit> {
         match self.stack {
-            StackClass::S8 => self.intersect_n::<8>(ray, t_max),
-            StackClass::S16 => self.intersect_n::<16>(ray, t_max),
-            StackClass::S32 => self.intersect_n::<32>(ray, t_max),
-            StackClass::S64 => self.intersect_n::<64>(ray, t_max),
-            StackClass::S128 => self.intersect_n::<128>(ray, t_max),
-            StackClass::S256 => self.intersect_n::<256>(ray, t_max),
-            StackClass::S1024 => self.intersect_n::<1024>(ray, t_max),
+            StackClass::S8 => self.intersect_n::<8, WIDE>(ray, t_max),
+            StackClass::S16 => self.intersect_n::<16, WIDE>(ray, t_max),
+            StackClass::S32 => self.intersect_n::<32, WIDE>(ray, t_max),
+            StackClass::S64 => self.intersect_n::<64, WIDE>(ray, t_max),
+            StackClass::S128 => self.intersect_n::<128, WIDE>(ray, t_max),
+            StackClass::S256 => self.intersect_n::<256, WIDE>(ray, t_max),
+            StackClass::S1024 => self.intersect_n::<1024, WIDE>(ray, t_max),
         }
     }
 
     pub(crate) fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.tri8.is_empty() {
+            self.occluded_w::<false>(ray, t_max)
+        } else {
+            self.occluded_w::<true>(ray, t_max)
+        }
+    }
+
+    /// [`WideBvh::occluded`] for trees with (`WIDE`) or without 8-wide leaves.
+    #[inline(always)]
+    fn occluded_w<const WIDE: bool>(&self, ray: &Ray, t_max: f32) -> bool {
         match self.stack {
-            StackClass::S8 => self.occluded_n::<8>(ray, t_max),
-            StackClass::S16 => self.occluded_n::<16>(ray, t_max),
-            StackClass::S32 => self.occluded_n::<32>(ray, t_max),
-            StackClass::S64 => self.occluded_n::<64>(ray, t_max),
-            StackClass::S128 => self.occluded_n::<128>(ray, t_max),
-            StackClass::S256 => self.occluded_n::<256>(ray, t_max),
-            StackClass::S1024 => self.occluded_n::<1024>(ray, t_max),
+            StackClass::S8 => self.occluded_n::<8, WIDE>(ray, t_max),
+            StackClass::S16 => self.occluded_n::<16, WIDE>(ray, t_max),
+            StackClass::S32 => self.occluded_n::<32, WIDE>(ray, t_max),
+            StackClass::S64 => self.occluded_n::<64, WIDE>(ray, t_max),
+            StackClass::S128 => self.occluded_n::<128, WIDE>(ray, t_max),
+            StackClass::S256 => self.occluded_n::<256, WIDE>(ray, t_max),
+            StackClass::S1024 => self.occluded_n::<1024, WIDE>(ray, t_max),
         }
     }
 
     // Not inlined into the dispatch above: each stack size gets its own frame, so small trees
-    // do not pay for the stack probes of the 1024-entry variant.
+    // do not pay for the stack probes of the 1024-entry variant. Trees without 8-wide leaves
+    // (small scenes) get a loop without their test: a smaller loop ran bench-cbox faster.
     #[inline(never)]
-    fn intersect_n<const N: usize>(&self, ray: &Ray, mut t_max: f32) -> Option<RawHit> {
+    fn intersect_n<const N: usize, const WIDE: bool>(
+        &self,
+        ray: &Ray,
+        mut t_max: f32,
+    ) -> Option<RawHit> {
         if self.root == EMPTY {
             return None;
         }
         stats::bump(3);
         let tr = TravRay::new(ray);
+        // The triangle test's constants, splatted 4- or 8-wide at each leaf as it needs.
         let woop = WoopRay::new(ray);
-        let (w4, w8) = (WoopRay4::new(&woop), WoopRay8::new(&woop));
         // Entries: a child reference and its entry distance.
         let mut stack = Stack::<(u32, f32), N>::new();
         let mut cur = self.root;
@@ -687,9 +712,12 @@ impl WideBvh {
                 stats::bump(1);
                 let i = (cur & INDEX_MASK) as usize;
                 let hit = match cur & KIND_MASK {
-                    0 => tri_closest(&w4, self.tri4(i), t_max),
-                    k if k == TRI8 & KIND_MASK => tri_closest(&w8, self.tri8(i), t_max),
-                    _ => self.mixed_closest(cur, ray, &w4, t_max),
+                    0 => tri_closest(&WoopRay4::new(&woop), self.tri4(i), t_max),
+                    k if k == TRI8 & KIND_MASK => {
+                        assert!(WIDE, "an 8-wide leaf in a tree without them");
+                        tri_closest(&WoopRay8::new(&woop), self.tri8(i), t_max)
+                    }
+                    _ => self.mixed_closest(cur, ray, &WoopRay4::new(&woop), t_max),
                 };
                 if let Some((lane, t, u, v)) = hit {
                     t_max = t;
@@ -760,7 +788,7 @@ impl WideBvh {
     }
 
     #[inline(never)]
-    fn occluded_n<const N: usize>(&self, ray: &Ray, t_max: f32) -> bool {
+    fn occluded_n<const N: usize, const WIDE: bool>(&self, ray: &Ray, t_max: f32) -> bool {
         if self.root == EMPTY {
             return false;
         }
@@ -769,6 +797,7 @@ impl WideBvh {
         // The triangle test's constants, made when the first leaf is reached: most shadow
         // rays in small scenes reach none.
         let mut woop: Option<WoopRay> = None;
+        let mut w4: Option<WoopRay4> = None;
         let mut stack = Stack::<u32, N>::new();
         let mut cur = self.root;
         loop {
@@ -799,8 +828,14 @@ impl WideBvh {
                 let i = (cur & INDEX_MASK) as usize;
                 let w = woop.get_or_insert_with(|| WoopRay::new(ray));
                 let hit = match cur & KIND_MASK {
-                    0 => tri_any(&WoopRay4::new(w), self.tri4(i), t_max),
-                    k if k == TRI8 & KIND_MASK => tri_any(&WoopRay8::new(w), self.tri8(i), t_max),
+                    0 => {
+                        let w4 = w4.get_or_insert_with(|| WoopRay4::new(w));
+                        tri_any(w4, self.tri4(i), t_max)
+                    }
+                    k if k == TRI8 & KIND_MASK => {
+                        assert!(WIDE, "an 8-wide leaf in a tree without them");
+                        tri_any(&WoopRay8::new(w), self.tri8(i), t_max)
+                    }
                     _ => self.mixed_any(cur, ray, w, t_max),
                 };
                 if hit {
@@ -901,9 +936,11 @@ impl Plan {
                 f32::INFINITY
             };
             // (Compared only when a leaf may hold the subtree: infinite areas make both costs
-            // infinite.)
-            plan.leaf[i] = count[i] <= leaf_max && as_leaf <= inner;
-            let one = as_leaf.min(inner);
+            // infinite.) Small scenes make a leaf of every subtree that fits, as before the
+            // plan: their rays mostly start inside the scene's box, which the SAH does not
+            // model, and bench-cbox ran 1 % faster so.
+            plan.leaf[i] = count[i] <= leaf_max && (leaf_max <= SMALL_LEAF_MAX || as_leaf <= inner);
+            let one = if plan.leaf[i] { as_leaf } else { inner };
             let mut c = [one; WIDTH];
             for s in 2..=WIDTH {
                 c[s - 1] = one.min(split(s)).min(c[s - 2]);

@@ -454,7 +454,8 @@ pub fn tri_closest<L: Lanes>(
         let i = bits.trailing_zeros() as usize;
         bits &= bits - 1;
         let ti = t.as_ref()[i];
-        if ti > 0.0 && ti < best_t && ti.is_finite() {
+        // (Excludes NaN and infinities too: `best_t` is at most `t_max`.)
+        if ti > 0.0 && ti < best_t {
             best_t = ti;
             best = Some(i);
         }
