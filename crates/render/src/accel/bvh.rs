@@ -57,8 +57,8 @@ pub(crate) const LEAF_MAX: u32 = 8;
 const SMALL_SCENE: usize = 4096;
 const SMALL_LEAF_MAX: u32 = 2;
 
-/// Scenes with at least this many primitives get the longer reinsertion optimisation (see
-/// [`WideBvh::build`]).
+/// Scenes with at least this many primitives (or at most [`SMALL_SCENE`]) get the longer
+/// reinsertion optimisation (see [`WideBvh::build`]).
 const REINSERT_LARGE: usize = 500_000;
 
 /// Child references: an inner node's index, or [`LEAF_BIT`] with a leaf kind in the two bits
@@ -331,10 +331,16 @@ impl WideBvh {
                 3,
             );
             // Batch ratio 0.4 (obvhs' "medium" is 0.05) in large scenes: a slower build for
-            // faster traversal, the right trade for an offline renderer. Below
-            // `REINSERT_LARGE` primitives 0.1: there the traversal gain of more was within
-            // the noise, and reinsertion was most of the build.
-            let ratio = if n >= REINSERT_LARGE { 0.4 } else { 0.1 };
+            // faster traversal, the right trade for an offline renderer. Between
+            // `SMALL_SCENE` and `REINSERT_LARGE` primitives 0.1: there the traversal gain of
+            // more was within the noise, and reinsertion was most of the build. Small scenes
+            // keep 0.4 (their build takes microseconds either way): with 0.1, bench-cbox's
+            // tree cost 13 % more mispredicted branches (callgrind) and ran 5–6 % slower.
+            let ratio = if n >= REINSERT_LARGE || n <= SMALL_SCENE {
+                0.4
+            } else {
+                0.1
+            };
             ReinsertionOptimizer::default().run(&mut bvh2, ratio, None);
             let t = Tree2::from_bvh2(bvh2);
             // PLOC trees are shallow in practice; a degenerate input (e.g. thousands of
