@@ -199,6 +199,7 @@ pub trait Lanes:
     + std::ops::BitAnd<Output = Self>
     + std::ops::BitOr<Output = Self>
     + std::ops::BitXor<Output = Self>
+    + std::ops::Not<Output = Self>
 {
     /// Lanes.
     const N: usize;
@@ -209,6 +210,10 @@ pub trait Lanes:
     fn abs(self) -> Self;
     /// `maxps`: the second operand where either is NaN.
     fn max(self, o: Self) -> Self;
+    /// `minps`: the second operand where either is NaN.
+    fn min(self, o: Self) -> Self;
+    /// Per lane, `t` where `self` (a comparison result) is set, else `f`.
+    fn select(self, t: Self, f: Self) -> Self;
     fn lt(self, o: Self) -> Self;
     fn gt(self, o: Self) -> Self;
     fn eq(self, o: Self) -> Self;
@@ -241,6 +246,14 @@ macro_rules! lanes {
             #[inline(always)]
             fn max(self, o: Self) -> Self {
                 <$t>::fast_max(self, o)
+            }
+            #[inline(always)]
+            fn min(self, o: Self) -> Self {
+                <$t>::fast_min(self, o)
+            }
+            #[inline(always)]
+            fn select(self, t: Self, f: Self) -> Self {
+                <$t>::bitselect(self, t, f)
             }
             #[inline(always)]
             fn lt(self, o: Self) -> Self {
@@ -332,9 +345,11 @@ impl<L: Lanes> WoopRayN<L> {
     }
 }
 
-/// Result of the N-wide test before normalisation: a lane mask of hits and per-lane values.
+/// Result of the N-wide test before normalisation: the lanes hit (as a bit mask and as a
+/// comparison result) and per-lane values.
 struct TriEval<L> {
     mask: u32,
+    hit: L,
     v: L,
     w: L,
     t_scaled: L,
@@ -365,12 +380,14 @@ fn tri_eval<L: Lanes>(w: &WoopRayN<L>, tri: &TriPacket<L>, t_max: f32) -> TriEva
     }
     let neg = u.lt(zero) | v.lt(zero) | wg.lt(zero);
     let pos = u.gt(zero) | v.gt(zero) | wg.gt(zero);
-    let inside = !(neg & pos).bits() & ((1u32 << L::N) - 1);
+    let outside = neg & pos;
+    let inside = !outside.bits() & ((1u32 << L::N) - 1);
     let det = u + v + wg;
     if inside == 0 {
         // Most packets miss on the edge test: skip the depth test and its error bound.
         return TriEval {
             mask: 0,
+            hit: zero,
             v,
             w: wg,
             t_scaled: zero,
@@ -390,6 +407,7 @@ fn tri_eval<L: Lanes>(w: &WoopRayN<L>, tri: &TriPacket<L>, t_max: f32) -> TriEva
         // cannot accept these lanes; skip computing it.
         return TriEval {
             mask: 0,
+            hit: zero,
             v,
             w: wg,
             t_scaled,
@@ -407,9 +425,10 @@ fn tri_eval<L: Lanes>(w: &WoopRayN<L>, tri: &TriPacket<L>, t_max: f32) -> TriEva
         L::splat(2.0) * (L::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     let floor =
         L::splat(3.0) * (L::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e);
-    let ok = ts.gt(floor) & in_range & det.ne(zero);
+    let hit = ts.gt(floor) & in_range & det.ne(zero) & !outside;
     TriEval {
-        mask: ok.bits() & inside,
+        mask: hit.bits(),
+        hit,
         v,
         w: wg,
         t_scaled,
@@ -446,21 +465,24 @@ pub fn tri_closest<L: Lanes>(
     if e.mask == 0 {
         return None;
     }
-    let t = (e.t_scaled / e.det).to_array();
-    let mut best: Option<usize> = None;
-    let mut best_t = t_max;
-    let mut bits = e.mask;
-    while bits != 0 {
-        let i = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        let ti = t.as_ref()[i];
-        // (Excludes NaN and infinities too: `best_t` is at most `t_max`.)
-        if ti > 0.0 && ti < best_t {
-            best_t = ti;
-            best = Some(i);
-        }
+    // The lanes whose rounded `t` lies in (0, t_max) (NaN and infinities fail); the nearest
+    // of them without a loop over the lanes: leaves of fewer triangles repeat their first in
+    // the unused lanes, so the number of hit lanes varied and a loop over them mispredicted
+    // (7 % of bench-cbox's mispredicted branches). Ties keep the lowest lane, as the loop did.
+    let t = e.t_scaled / e.det;
+    let zero = L::splat(0.0);
+    let ok = e.hit & t.gt(zero) & t.lt(L::splat(t_max));
+    let bits = ok.bits();
+    if bits == 0 {
+        return None;
     }
-    let i = best?;
+    let tm = ok.select(t, L::splat(f32::INFINITY));
+    let best_t = tm
+        .to_array()
+        .as_ref()
+        .iter()
+        .fold(f32::INFINITY, |a, &b| if b < a { b } else { a });
+    let i = (tm.eq(L::splat(best_t)).bits() & bits).trailing_zeros() as usize;
     let det = e.det.to_array().as_ref()[i];
     let rcp = 1.0 / det;
     Some((
@@ -480,16 +502,8 @@ pub fn tri_any<L: Lanes>(w: &WoopRayN<L>, tri: &TriPacket<L>, t_max: f32) -> boo
     }
     // The integer-free tests above guarantee 0 < t < t_max up to the final division's rounding;
     // confirm with the same strict test the closest-hit path uses.
-    let t = (e.t_scaled / e.det).to_array();
-    let mut bits = e.mask;
-    while bits != 0 {
-        let i = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        if t.as_ref()[i] > 0.0 && t.as_ref()[i] < t_max {
-            return true;
-        }
-    }
-    false
+    let t = e.t_scaled / e.det;
+    (e.hit & t.gt(L::splat(0.0)) & t.lt(L::splat(t_max))).bits() != 0
 }
 
 /// Robust ray–sphere intersection (pbrt-v4 §6.8.1 / Ray Tracing Gems ch. 7): the discriminant
