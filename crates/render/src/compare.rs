@@ -1,7 +1,7 @@
 //! Image comparison against a reference render: relMSE and the block t-test of
 //! `shared/references/README.md`, whose executable definition is `shared/references/imgcmp.py`.
 //! This module computes the same figures as that script (checked to 4+ significant digits by
-//! `tests/compare.rs`).
+//! `tests/it/compare.rs`).
 //!
 //! A **reference** is a mean image and its per-pixel standard error (`NAME.exr`,
 //! `NAME.stderr.exr`), made from [`CompareOptions::reference_batches`] (32) independent batches.

@@ -1,6 +1,6 @@
 //! The upsampling round trip (issue 21, acceptance 2), measured on a computed table before it is
 //! written: every colour of an n³ grid of [0, 1]³ → spectrum → XYZ by the 1 nm CIE tables →
-//! linear sRGB, for the three spectrum kinds. `crates/render/tests/spectral.rs` asserts the
+//! linear sRGB, for the three spectrum kinds. `crates/render/tests/it/spectral.rs` asserts the
 //! same on the checked-in table.
 
 use render::spectral::colorspace::spectrum_to_srgb;

@@ -22,7 +22,7 @@
 //! the stratified set is the hero, and that average does not factor over vertices: past the
 //! first dispersive rough vertex the hero is no longer uniform among the lanes given the
 //! directions already sampled with it, and a path through two such vertices (the two faces
-//! of a glass object) is biased (`tests/dispersion.rs` measures it). A lane chosen per vertex
+//! of a glass object) is biased (`tests/it/dispersion.rs` measures it). A lane chosen per vertex
 //! makes each vertex an unbiased estimator on its own, whatever came before.
 
 use super::fresnel::{fresnel_dielectric, refract_m};

@@ -20,7 +20,7 @@
 //!   dimensions are decorrelated. The sub-strata are shuffled independently per row/column:
 //!   Kensler's *correlated* variant (one shuffle shared by all rows) measured an O(N^-1.5)
 //!   variance on a smooth non-separable integrand instead of jittering's O(N^-2) (see
-//!   `tests/sampling_stats.rs`). Sample indices `≥ spp` continue with independent samples.
+//!   `tests/it/sampling_stats.rs`). Sample indices `≥ spp` continue with independent samples.
 //! - **Halton**: the per-pixel Halton sequence (dimension `d` uses the `d`-th prime as base)
 //!   randomised by nested (Owen) scrambling: every digit goes through a hashed permutation
 //!   chosen by the seed, the dimension, the digit position and the digits already produced
@@ -238,7 +238,7 @@ const HALTON_DIGITS: [u8; N_PRIMES] = {
 /// (seed, j, the scrambled digits before it), i.e. one random permutation per node of the
 /// base-b tree. Full permutations rather than pbrt-v4's random cyclic shifts: a cyclic shift
 /// of the leading digit keeps the diagonal structure of high-base Halton pairs at low sample
-/// counts (χ²-detected in `tests/sampling_stats.rs`). The (zero) digits beyond the last digit
+/// counts (χ²-detected in `tests/it/sampling_stats.rs`). The (zero) digits beyond the last digit
 /// of `a` are scrambled too, so points fill their cells uniformly; since each of those nodes is
 /// visited by this point alone, that tail is one uniform draw.
 fn scrambled_radical_inverse(dim: usize, mut a: u32, seed: u64) -> f32 {

@@ -1,5 +1,5 @@
 //! Warps from the unit square to common domains, each with its pdf (χ²-tested in
-//! `tests/chi2_warps.rs`).
+//! `tests/it/chi2_warps.rs`).
 
 use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, Vec2, Vec3, Vec4};
 

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Write small.vdb and tiny.vdb, the OpenVDB test fixtures of VoxelGrid::read_vdb
-(crates/render/src/media/vdb.rs) and the seeds of the `vdb` fuzz target (crates/cli/tests/fuzz.rs).
+(crates/render/src/media/vdb.rs) and the seeds of the `vdb` fuzz target (crates/cli/tests/it/fuzz.rs).
 Needs Debian's python3-openvdb (OpenVDB 10.0.1 wrote the committed files).
 usage: /usr/bin/python3 make_vdb.py OUTDIR
 

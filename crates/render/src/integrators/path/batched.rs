@@ -33,7 +33,7 @@
 //!
 //! The one exception is `splitting`: the N − 1 split-off continuations are traced to their
 //! ends at once, with the immediate sink, so in the batched loop their contributions come
-//! before the splitting vertex's emitter samples instead of after (`tests/path_variants.rs`
+//! before the splitting vertex's emitter samples instead of after (`tests/it/path_variants.rs`
 //! compares every other variant bit for bit). Paths with a recorder, or with `only_depth`
 //! (which needs one), use the single-path loop.
 

@@ -27,7 +27,7 @@
 //! `scatter.rs`, splitting and the ambient term in `vertex.rs`, clamping in
 //! [`Integrator::li_stream`](crate::integrators::Integrator::li_stream). Every combination
 //! converges to the same image except `caustics: false`, `clamp` and `only_depth`, which
-//! change the mean on purpose (`tests/path_variants.rs`).
+//! change the mean on purpose (`tests/it/path_variants.rs`).
 
 use base::{DirectionSampling, RussianRoulette};
 

@@ -9,12 +9,10 @@
 //! χ² values; the tests only reject too large ones (non-uniformity, or structure between
 //! dimensions that a correct randomisation would not show).
 
-mod sampling_common;
-
+use crate::sampling_common::{Rng, assert_chi2, sidak};
 use base::SamplerKind;
 use glam::{UVec2, Vec2};
 use render::sampling::{AliasTable, Distribution1D, Distribution2D, Sampler};
-use sampling_common::{Rng, assert_chi2, sidak};
 
 const ALPHA: f64 = 0.01;
 

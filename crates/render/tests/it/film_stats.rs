@@ -5,15 +5,13 @@
 //! Significance: α = 0.01 per test function, split over its cases with the Šidák correction;
 //! fixed seeds.
 
-mod sampling_common;
-
+use crate::sampling_common::{Rng, sidak};
 use base::{CropWindow, FilterDesc, SamplerKind};
 use glam::{UVec2, Vec2};
 use rayon::prelude::*;
 use render::film::{Film, Filter};
 use render::math::Vec3;
 use render::sampling::Sampler;
-use sampling_common::{Rng, sidak};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 const ALPHA: f64 = 0.01;

@@ -4,10 +4,8 @@
 //! over its cases; z-tests are two-sided at the same family-wise level. All seeds are fixed, so
 //! the outcome is deterministic.
 
-mod sampling_common;
-
+use crate::sampling_common::{Rng, assert_chi2, sidak};
 use render::spectral::{SampledWavelengths, visible_wavelength_pdf};
-use sampling_common::{Rng, assert_chi2, sidak};
 
 const ALPHA: f64 = 0.01;
 

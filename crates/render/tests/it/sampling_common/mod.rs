@@ -1,7 +1,6 @@
 //! Helpers shared by the `sampling_*` and `film_*` integration tests: Pearson's χ² test with
 //! pooling of sparse cells, the Šidák correction and a small independent RNG (so the tests do
 //! not depend on the samplers under test for their own randomness).
-#![allow(dead_code)]
 
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 

@@ -596,6 +596,11 @@ fn every_loader_survives_mutated_inputs() {
         .map(|s| s.split(',').map(str::to_string).collect());
     let findings_dir = repo_root().join("target/fuzz-findings");
     let exe = std::env::current_exe().expect("the test binary");
+    // The child test's full name in this binary (its module path without the crate's name).
+    let child_test = match module_path!().split_once("::") {
+        Some((_, module)) => format!("{module}::fuzz_child"),
+        None => "fuzz_child".to_string(),
+    };
     let mut findings = Vec::new();
     for t in TARGETS {
         if wanted
@@ -611,7 +616,7 @@ fn every_loader_survives_mutated_inputs() {
         let mut child = Command::new("sh")
             .arg("-c")
             .arg(format!(
-                "ulimit -v {MEMORY_LIMIT_KIB} && exec \"$0\" fuzz_child --exact --nocapture --test-threads 1"
+                "ulimit -v {MEMORY_LIMIT_KIB} && exec \"$0\" {child_test} --exact --nocapture --test-threads 1"
             ))
             .arg(&exe)
             .env("PENUMBRA_FUZZ_CHILD", t.name)
@@ -643,10 +648,19 @@ fn every_loader_survives_mutated_inputs() {
         let output = child.wait_with_output().expect("child output");
         let stdout = String::from_utf8_lossy(&output.stdout);
         let tag = format!("fuzz {}:", t.name);
-        if let Some(i) = stdout.find(&tag) {
+        let report = stdout.find(&tag);
+        if let Some(i) = report {
             eprintln!("{}", stdout[i..].lines().next().unwrap_or_default());
         }
         let ok = status.is_some_and(|s| s.success());
+        // A child that ran no test (its name not found) exits with success having fuzzed
+        // nothing.
+        if ok && report.is_none() {
+            findings.push(format!(
+                "{}: the child ({child_test}) reported no run",
+                t.name
+            ));
+        }
         if !ok {
             let input = PathBuf::from(std::fs::read_to_string(&record).unwrap_or_default());
             std::fs::create_dir_all(&findings_dir).unwrap();

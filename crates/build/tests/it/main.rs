@@ -1,0 +1,28 @@
+//! The crate's integration tests as one binary (linked once instead of once per file:
+//! issue 36, the test suite's build time); each file is a module.
+
+mod bdpt_record;
+mod beer_media;
+mod bidirectional;
+mod camera_depth;
+mod chi2_lights;
+mod cutout;
+mod declared_spectra;
+mod dispersion_render;
+mod ellipsoid;
+mod furnace_media;
+mod furnace_render;
+mod instancing;
+mod light_selection;
+mod media_emission;
+mod motion_blur;
+mod nori;
+mod nori_vdb_box;
+mod normal_map;
+mod null_path;
+mod path_variants;
+mod photon_density;
+mod photon_emission;
+mod references;
+mod sppm;
+mod volpath_record;
