@@ -9,7 +9,7 @@ use super::{Kernel, Lookup};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::Ray;
 use crate::integrators::photons::PhotonHit;
-use crate::math::{Frame, PI, Vec2, Vec3};
+use crate::math::{Frame, INV_PI, PI, Vec2, Vec3};
 use crate::media::Phase;
 use crate::sampling::warp::square_to_uniform_sphere;
 use crate::spectral::lanes::{Color, PathMode};
@@ -119,17 +119,16 @@ impl<C: Color> PhotonMap<C> {
         }
     }
 
-    /// Σ `term`(photon, its index, d², r²) over the photons `lookup` finds around `p` whose
-    /// path fits in `budget` edges, r the radius of the region searched: [photons whose
-    /// wavelengths are all live, photons that terminated their secondaries] (spectral mode;
-    /// see [`Estimate`]).
-    fn sum(
+    /// Calls `each`(photon, its index, d², r²) for the photons `lookup` finds around `p`
+    /// whose path fits in `budget` edges, r the radius of the region searched (found
+    /// unsorted: only the farthest distance matters); returns r² (0: none).
+    fn visit(
         &self,
         lookup: Lookup,
         p: Vec3,
         budget: Option<u32>,
-        term: impl Fn(&StoredPhoton<C>, usize, f32, f32) -> C,
-    ) -> (Estimate<C>, f32) {
+        mut each: impl FnMut(&StoredPhoton<C>, usize, f32, f32),
+    ) -> f32 {
         let q = [p.x, p.y, p.z];
         let (found, r2) = match lookup {
             Lookup::Radius(r) => {
@@ -153,26 +152,27 @@ impl<C: Color> PhotonMap<C> {
                         .query(&q)
                         .nearest_n::<SquaredEuclidean<f32>>(k)
                         .within(max_radius * max_radius)
+                        .unsorted()
                         .execute()
                 } else {
                     self.tree
                         .query(&q)
                         .nearest_n::<SquaredEuclidean<f32>>(k)
+                        .unsorted()
                         .execute()
                 };
                 // The radius of the region the photons were found in: the k-th distance, or
                 // the cap when fewer were found within it.
                 let r2 = if found.len() == k.get() || !max_radius.is_finite() {
-                    found.last().map_or(0.0, |n| n.distance)
+                    found.iter().map(|n| n.distance).fold(0.0, f32::max)
                 } else {
                     max_radius * max_radius
                 };
                 (found, r2)
             }
         };
-        let mut sum = Estimate([C::ZERO; 2]);
         if r2.is_nan() || r2 <= 0.0 {
-            return (sum, 0.0);
+            return 0.0;
         }
         for n in &found {
             let i = n.item as usize;
@@ -180,8 +180,25 @@ impl<C: Color> PhotonMap<C> {
             if budget.is_some_and(|b| ph.edges > b) {
                 continue;
             }
-            sum.0[ph.terminated as usize] += term(ph, i, n.distance, r2);
+            each(ph, i, n.distance, r2);
         }
+        r2
+    }
+
+    /// Σ `term`(photon, its index, d², r²) over the photons [`PhotonMap::visit`] finds:
+    /// [photons whose wavelengths are all live, photons that terminated their secondaries]
+    /// (spectral mode; see [`Estimate`]), and r².
+    fn sum(
+        &self,
+        lookup: Lookup,
+        p: Vec3,
+        budget: Option<u32>,
+        term: impl Fn(&StoredPhoton<C>, usize, f32, f32) -> C,
+    ) -> (Estimate<C>, f32) {
+        let mut sum = Estimate([C::ZERO; 2]);
+        let r2 = self.visit(lookup, p, budget, |ph, i, d2, r2| {
+            sum.0[ph.terminated as usize] += term(ph, i, d2, r2);
+        });
         (sum, r2)
     }
 
@@ -209,6 +226,20 @@ impl<C: Color> PhotonMap<C> {
         (bsdf, frame, wo): (&Bsdf<C>, &Frame, Vec3),
         budget: Option<u32>,
     ) -> Estimate<C> {
+        if let Bsdf::Diffuse(d) = bsdf {
+            // f = R/π on the front side for both directions, else 0: one product.
+            if wo.z <= 0.0 {
+                return Estimate([C::ZERO; 2]);
+            }
+            let (sum, _) = self.sum(lookup, p, budget, |ph, _, d2, r2| {
+                if frame.n.dot(ph.wi) > 0.0 {
+                    ph.beta * kernel_weight(kernel, d2, r2)
+                } else {
+                    C::ZERO
+                }
+            });
+            return sum.times(d.reflectance * INV_PI);
+        }
         let (sum, _) = self.sum(lookup, p, budget, |ph, _, d2, r2| {
             let wl = frame.to_local(ph.wi);
             if wl.z == 0.0 {
@@ -338,6 +369,10 @@ pub(super) struct Estimate<C>([C; 2]);
 impl<C: Color> Estimate<C> {
     fn scaled(self, s: f32) -> Estimate<C> {
         Estimate(self.0.map(|c| c * s))
+    }
+
+    fn times(self, c: C) -> Estimate<C> {
+        Estimate(self.0.map(|e| e * c))
     }
 
     /// `beta` (the camera path's throughput) times the estimate, as linear sRGB for the
