@@ -17,7 +17,7 @@
 //! is estimated at one distance (`photons::segment_point`) instead of a free flight, as at a
 //! collision, and the walk crosses the segment with its exact transmittance.
 
-use super::map::{Enclosure, PhotonMap};
+use super::map::{Enclosure, Estimate, PhotonMap};
 use super::{Lookup, PhotonConfig, PhotonMaps};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraRay;
@@ -87,6 +87,16 @@ impl<'a, M: PathMode> Gather<'a, M> {
             }
         };
         self.rgb += est.to_rgb(weight, self.m);
+    }
+
+    /// The global map's precomputed estimate at a surface vertex `v`, where one serves
+    /// (`PhotonMap::precomputed`).
+    fn precomputed(&self, v: &Vertex<M::C>) -> Option<Estimate<M::C>> {
+        let Scatterer::Surface { bsdf, frame, wo } = v.at else {
+            return None;
+        };
+        let map = self.maps.global.as_ref()?;
+        map.precomputed(v.p, (bsdf, frame, wo), self.budget(v.depth))
     }
 
     /// The map of `v`'s kind and its lookup: the global map at a surface, the volume map in
@@ -207,7 +217,10 @@ impl<'a, M: PathMode> Gather<'a, M> {
             sampler,
             &mut |v: &Vertex<M::C>, sampler: &mut Sampler| {
                 let weight = self.weight(v, outer * v.beta);
-                self.add(self.map_at(v), v, weight, sampler);
+                match self.precomputed(v) {
+                    Some(est) => self.rgb += est.to_rgb(weight, self.m),
+                    None => self.add(self.map_at(v), v, weight, sampler),
+                }
                 M::C::ZERO
             },
         )

@@ -9,6 +9,7 @@ use super::{Kernel, Lookup};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::Ray;
 use crate::integrators::photons::PhotonHit;
+use crate::integrators::transport::Scatterer;
 use crate::math::{Frame, INV_PI, PI, Vec2, Vec3};
 use crate::media::Phase;
 use crate::sampling::warp::square_to_uniform_sphere;
@@ -44,6 +45,40 @@ fn bytes_per_photon<C>() -> u64 {
     16 + std::mem::size_of::<StoredPhoton<C>>() as u64
 }
 
+/// Every this many photons of a surface map (in emission order within a tracing chunk) get a
+/// precomputed estimate when the map serves final gathering ([`Irradiance`]).
+pub const RADIANCE_STRIDE: usize = 16;
+
+/// Normals agree when their cosine is at least this (about 25°; Christensen's 0.9).
+const NORMALS_AGREE: f32 = 0.9;
+
+/// A precomputed estimate at a photon's position (Christensen 1999's radiance photon).
+#[derive(Clone, Copy)]
+struct RadiancePhoton<C> {
+    /// The shading normal where the photon hit.
+    n: Vec3,
+    /// The squared radius of the region its estimate read.
+    r2: f32,
+    /// Σ K·β over the photons found around it that arrive on `n`'s side ([0]) and on the
+    /// other ([1]): the irradiance of either side times N.
+    e: [Estimate<C>; 2],
+}
+
+/// Precomputed estimates at a subset of a surface map's photons (Christensen 1999, "Faster
+/// photon map global illumination"; pbrt-v2's radiance photons): at a diffuse surface, where
+/// f is constant over each hemisphere, the exact estimate Σ K·f·β is f times the irradiance
+/// sum of wo's side, which the nearest precomputed one stands for (one nearest-neighbour
+/// query instead of k, and no BSDF evaluation per photon). See [`PhotonMap::precomputed`].
+struct Irradiance<C> {
+    tree: ImmutableKdTree<f32, 3>,
+    at: Vec<RadiancePhoton<C>>,
+    /// The most edges of the photons the sums hold (those that fit the budget they were
+    /// precomputed for, [`PhotonMap::precompute`]), and the fewest of the others (`None`:
+    /// every photon fits): the sums serve a vertex whose budget admits the same photons.
+    edges: u32,
+    next: Option<u32>,
+}
+
 /// A photon map.
 pub struct PhotonMap<C = Vec3> {
     tree: ImmutableKdTree<f32, 3>,
@@ -54,6 +89,8 @@ pub struct PhotonMap<C = Vec3> {
     /// Up to 1024 photon positions spread evenly over the emission order
     /// ([`PhotonMap::resolve`]).
     sample: Vec<[f32; 3]>,
+    /// Precomputed estimates for final gathering (surface maps that serve it).
+    irradiance: Option<Irradiance<C>>,
 }
 
 impl<C: Color> PhotonMap<C> {
@@ -74,7 +111,106 @@ impl<C: Color> PhotonMap<C> {
             photons,
             points: if keep_points { points } else { Vec::new() },
             sample,
+            irradiance: None,
         })
+    }
+
+    /// Precompute the estimates (read with `lookup` and `kernel`, of the photons whose path
+    /// fits in `budget` edges) at the photons `marked` (their index and shading normal), in
+    /// parallel on the current rayon pool.
+    pub fn precompute(
+        &mut self,
+        (lookup, kernel): (Lookup, Kernel),
+        budget: Option<u32>,
+        marked: &[(u32, Vec3)],
+    ) {
+        use rayon::prelude::*;
+        let at: Vec<([f32; 3], RadiancePhoton<C>)> = marked
+            .par_iter()
+            .filter_map(|&(i, n)| {
+                let q = self.tree_point(i as usize)?;
+                let mut e = [Estimate([C::ZERO; 2]); 2];
+                let r2 = self.visit(
+                    lookup,
+                    Vec3::new(q[0], q[1], q[2]),
+                    budget,
+                    |ph, _, d2, r2| {
+                        let c = n.dot(ph.wi);
+                        if c != 0.0 {
+                            let side = &mut e[(c < 0.0) as usize].0[ph.terminated as usize];
+                            *side += ph.beta * kernel_weight(kernel, d2, r2);
+                        }
+                    },
+                );
+                Some((q, RadiancePhoton { n, r2, e }))
+            })
+            .collect();
+        let points: Vec<[f32; 3]> = at.iter().map(|(q, _)| *q).collect();
+        let Ok(tree) = ImmutableKdTree::new_from_slice(&points) else {
+            return;
+        };
+        self.irradiance = Some(Irradiance {
+            tree,
+            at: at.into_iter().map(|(_, rp)| rp).collect(),
+            edges: (self.photons.iter().map(|p| p.edges))
+                .filter(|&e| budget.is_none_or(|b| e <= b))
+                .max()
+                .unwrap_or(0),
+            next: (self.photons.iter().map(|p| p.edges))
+                .filter(|&e| budget.is_some_and(|b| e > b))
+                .min(),
+        });
+    }
+
+    /// Photon `i`'s position, from the positions kept for precomputation.
+    fn tree_point(&self, i: usize) -> Option<[f32; 3]> {
+        self.points.get(i).copied()
+    }
+
+    /// The precomputed estimate standing for [`PhotonMap::surface_estimate`]'s at `p`, or
+    /// `None` where it does not serve: a BSDF other than diffuse, a `budget` that some photon
+    /// exceeds, no precomputed estimate whose region holds `p` with a normal agreeing with
+    /// the frame's (either way round: the other side's sum when they face apart). Its bias:
+    /// the estimate of the nearest marked photon y instead of p's, both read from the same
+    /// photons' density — a further blur of at most one lookup radius, correlated over a
+    /// cell of the marked photons' Voronoi diagram.
+    pub(super) fn precomputed(
+        &self,
+        p: Vec3,
+        (bsdf, frame, wo): (&Bsdf<C>, &Frame, Vec3),
+        budget: Option<u32>,
+    ) -> Option<Estimate<C>> {
+        let irr = self.irradiance.as_ref()?;
+        let Bsdf::Diffuse(d) = bsdf else { return None };
+        // The photons `budget` admits must be those the sums hold.
+        let fits = match budget {
+            None => irr.next.is_none(),
+            Some(b) => b >= irr.edges && irr.next.is_none_or(|n| b < n),
+        };
+        if !fits {
+            return None;
+        }
+        if wo.z <= 0.0 {
+            return Some(Estimate([C::ZERO; 2]));
+        }
+        let nn = irr
+            .tree
+            .query(&[p.x, p.y, p.z])
+            .nearest_one::<SquaredEuclidean<f32>>()
+            .execute();
+        let rp = irr.at.get(nn.item as usize)?;
+        if nn.distance > rp.r2 {
+            return None;
+        }
+        let c = frame.n.dot(rp.n);
+        let side = if c >= NORMALS_AGREE {
+            0
+        } else if c <= -NORMALS_AGREE {
+            1
+        } else {
+            return None;
+        };
+        Some(rp.e[side].times(d.reflectance * INV_PI))
     }
 
     /// Photons stored.
@@ -393,6 +529,8 @@ impl<C: Color> Estimate<C> {
 pub(super) struct MapData<C> {
     points: Vec<[f32; 3]>,
     photons: Vec<StoredPhoton<C>>,
+    /// Every [`RADIANCE_STRIDE`]th surface photon's index and shading normal.
+    marked: Vec<(u32, Vec3)>,
 }
 
 impl<C> Default for MapData<C> {
@@ -400,6 +538,7 @@ impl<C> Default for MapData<C> {
         MapData {
             points: Vec::new(),
             photons: Vec::new(),
+            marked: Vec::new(),
         }
     }
 }
@@ -408,6 +547,11 @@ impl<C: Color> MapData<C> {
     /// Store `hit`, carried by a photon now in mode `m`.
     pub(super) fn push<M: PathMode<C = C>>(&mut self, hit: &PhotonHit<C>, m: &M) {
         let p = hit.v.p;
+        if let Scatterer::Surface { frame, .. } = hit.v.at
+            && self.points.len() % RADIANCE_STRIDE == 0
+        {
+            self.marked.push((self.points.len() as u32, frame.n));
+        }
         self.points.push([p.x, p.y, p.z]);
         self.photons.push(StoredPhoton {
             wi: hit.wi,
@@ -418,13 +562,29 @@ impl<C: Color> MapData<C> {
     }
 
     pub(super) fn append(&mut self, mut other: MapData<C>) {
+        let offset = self.points.len() as u32;
+        (self.marked).extend(other.marked.iter().map(|&(i, n)| (i + offset, n)));
         self.points.append(&mut other.points);
         self.photons.append(&mut other.photons);
     }
 
-    /// The map; `volume`: a volume map, which keeps its photons' positions.
-    pub(super) fn build(self, volume: bool) -> Option<PhotonMap<C>> {
-        PhotonMap::new(self.points, self.photons, volume)
+    /// The map; `volume`: a volume map, which keeps its photons' positions; `precompute`:
+    /// the lookup and kernel of the estimates to precompute at the marked photons, and the
+    /// budget of the photons they hold.
+    pub(super) fn build(
+        self,
+        volume: bool,
+        precompute: Option<((Lookup, Kernel), Option<u32>)>,
+    ) -> Option<PhotonMap<C>> {
+        let keep = volume || precompute.is_some();
+        let mut map = PhotonMap::new(self.points, self.photons, keep)?;
+        if let Some((read, budget)) = precompute {
+            map.precompute(read, budget, &self.marked);
+            if !volume {
+                map.points = Vec::new();
+            }
+        }
+        Some(map)
     }
 }
 
@@ -480,5 +640,110 @@ mod tests {
         // Other lookups pass through.
         let r = Lookup::Radius(0.5);
         assert_eq!(map.resolve(r), r);
+    }
+
+    /// A small deterministic generator for the tests (SplitMix64).
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// A map of `n` photons spread uniformly over the unit square of the plane z = 0, of
+    /// power growing along x, arriving from the front (z > 0) seven times in ten, terminated
+    /// three times in ten, its estimates precomputed at every 16th.
+    fn plane_map(n: usize, rng: &mut Rng, lookup: Lookup) -> PhotonMap<Vec3> {
+        let mut points = Vec::new();
+        let mut photons = Vec::new();
+        for _ in 0..n {
+            let (x, y) = (rng.next(), rng.next());
+            points.push([x, y, 0.0]);
+            let z = if rng.next() < 0.7 { 0.6 } else { -0.6 };
+            photons.push(StoredPhoton {
+                wi: Vec3::new(0.8, 0.0, z),
+                beta: Vec3::new(1.0 + x, 2.0, 3.0 - x),
+                edges: 1 + (rng.next() * 4.0) as u32,
+                terminated: rng.next() < 0.3,
+            });
+        }
+        let marked: Vec<(u32, Vec3)> = (0..n)
+            .step_by(RADIANCE_STRIDE)
+            .map(|i| (i as u32, Vec3::Z))
+            .collect();
+        let mut map = PhotonMap::new(points, photons, true).unwrap();
+        map.precompute((lookup, Kernel::Box), None, &marked);
+        map
+    }
+
+    /// The precomputed estimates (radiance photons) equal the direct ones in expectation: over
+    /// `MAPS` independent maps (fixed seeds), the mean over 256 query points in the middle
+    /// of the square of precomputed − direct, for either side of the plane (the frame's
+    /// normal +z, and −z: a two-sided surface seen from the back) and either part of the
+    /// estimate (live, terminated), is z-tested against 0. Significance: 4 tests,
+    /// Šidák-corrected to α = 0.01 overall, with the t distribution of 39 degrees of
+    /// freedom: |t| < 3.25 each. Also: the direct estimate at a diffuse surface is f times
+    /// the irradiance sum of wo's side, and a budget some photon exceeds, or a glossy BSDF,
+    /// falls back to the direct estimate.
+    #[test]
+    fn precomputed_photon_estimates_match_the_direct_ones() {
+        const MAPS: usize = 40;
+        let lookup = Lookup::Nearest {
+            k: 64,
+            max_radius: f32::INFINITY,
+        };
+        let bsdf = Bsdf::Diffuse(crate::bsdf::Diffuse::new(Vec3::new(0.5, 0.6, 0.7)));
+        let frames = [Frame::from_normal(Vec3::Z), Frame::from_normal(-Vec3::Z)];
+        let wo = Vec3::new(0.0, 0.0, 1.0);
+        let mut rng = Rng(7);
+        // Per map, per (side, part): the mean difference (lanes summed).
+        let mut diffs = vec![[0.0f64; 4]; MAPS];
+        let mut served = 0usize;
+        for diff in diffs.iter_mut() {
+            let map = plane_map(20_000, &mut rng, lookup);
+            for _ in 0..256 {
+                let p = Vec3::new(0.3 + 0.4 * rng.next(), 0.3 + 0.4 * rng.next(), 0.0);
+                for (side, frame) in frames.iter().enumerate() {
+                    let direct =
+                        map.surface_estimate(lookup, Kernel::Box, p, (&bsdf, frame, wo), None);
+                    let Some(pre) = map.precomputed(p, (&bsdf, frame, wo), None) else {
+                        continue;
+                    };
+                    served += 1;
+                    for part in 0..2 {
+                        let d = pre.0[part] - direct.0[part];
+                        diff[side * 2 + part] += (d.x + d.y + d.z) as f64 / 256.0;
+                    }
+                    // Budgets: the photons have up to 4 edges.
+                    assert!(map.precomputed(p, (&bsdf, frame, wo), Some(3)).is_none());
+                    assert!(map.precomputed(p, (&bsdf, frame, wo), Some(4)).is_some());
+                }
+            }
+        }
+        // Most queries are served (the rest fall back: no region holds them).
+        assert!(served > MAPS * 256 * 2 * 9 / 10, "served {served}");
+        for t in 0..4 {
+            let xs: Vec<f64> = diffs.iter().map(|d| d[t]).collect();
+            let mean = xs.iter().sum::<f64>() / MAPS as f64;
+            let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (MAPS - 1) as f64;
+            let z = mean / (var / MAPS as f64).sqrt();
+            assert!(
+                var > 0.0 && z.abs() < 3.25,
+                "side/part {t}: mean {mean}, z {z}"
+            );
+        }
+        // A BSDF other than diffuse is not served.
+        let map = plane_map(2_000, &mut rng, lookup);
+        let glossy = Bsdf::Conductor(crate::bsdf::Conductor::new(Vec3::ONE, Vec3::ONE, Vec3::ONE));
+        let p = Vec3::new(0.5, 0.5, 0.0);
+        assert!(
+            map.precomputed(p, (&glossy, &frames[0], wo), None)
+                .is_none()
+        );
     }
 }

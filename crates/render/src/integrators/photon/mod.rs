@@ -19,10 +19,26 @@
 //! the estimates for its non-delta part and the path goes on when its BSDF samples a delta
 //! lobe. `max_depth` bounds camera edges + gather edges + photon edges.
 //!
+//! Final gathering reads precomputed estimates where they serve (Christensen 1999, "Faster
+//! photon map global illumination"; pbrt-v2's radiance photons): at every
+//! `map::RADIANCE_STRIDE`th (16th) photon of the global map (in emission order within a tracing
+//! chunk) the irradiance sums of either side of its surface, Σ K·β over the photons found
+//! around it; at a diffuse surface, where f is constant over a hemisphere, a gathering ray's
+//! estimate is then f times the sum of wo's side at the nearest such photon — one
+//! nearest-neighbour query instead of k, no BSDF evaluation per photon — if the photon's
+//! region holds the point, their normals agree (cosine ≥ 0.9, either way round) and the
+//! vertex's depth budget admits the photons the sums hold (those that fit two edges from
+//! the camera); else the exact estimate. Its bias: the estimate at the nearest marked photon
+//! instead of at the point, a further blur of at most one lookup radius (tested in
+//! `map.rs`: equal in expectation over a plane). Exact estimates at diffuse surfaces also
+//! sum K·β on the front side and multiply once.
+//!
 //! Memory: a stored photon is its position in the tree (12 bytes plus the tree's index,
 //! 4 bytes) and [`StoredPhoton`] (48 bytes: two 16-byte aligned vectors, RGB or four
 //! spectral lanes, and the edge count and flag): 64 bytes, counted by [`memory_needed`]; a
-//! volume map keeps its positions once more (12 bytes), within that bound.
+//! volume map keeps its positions once more (12 bytes), within that bound, and a global map
+//! that serves final gathering keeps them while it precomputes and then about 112 bytes per
+//! 16 photons (7 a photon), within the bound's slack (4 deposits a path counted, about 3 met).
 //!
 //! Media (the extended-Nori write-up's volumetric photon mapping): photons also deposit at
 //! scattering events in media, in a volume map read with the 4/3·π·r³ kernel where the
@@ -219,10 +235,13 @@ impl<C: Color + Send> PhotonMaps<C> {
             caustic.append(c);
             volume.append(v);
         }
-        let volume = volume.build(true);
+        let volume = volume.build(true, None);
+        // Precomputed estimates for final gathering hold the photons that fit at a gathering
+        // ray's vertex two edges from the camera (the common case; see `map::Irradiance`).
+        let budget = (cfg.max_depth >= 0).then(|| (cfg.max_depth as u32).saturating_sub(2));
         PhotonMaps {
-            global: global.build(false),
-            caustic: caustic.build(false),
+            global: global.build(false, gather.then_some(((cfg.global, cfg.kernel), budget))),
+            caustic: caustic.build(false, None),
             volume_lookup: volume
                 .as_ref()
                 .map_or(cfg.volume, |m| m.resolve(cfg.volume)),
