@@ -548,7 +548,7 @@ impl<C: Color> MapData<C> {
     pub(super) fn push<M: PathMode<C = C>>(&mut self, hit: &PhotonHit<C>, m: &M) {
         let p = hit.v.p;
         if let Scatterer::Surface { frame, .. } = hit.v.at
-            && self.points.len() % RADIANCE_STRIDE == 0
+            && self.points.len().is_multiple_of(RADIANCE_STRIDE)
         {
             self.marked.push((self.points.len() as u32, frame.n));
         }
