@@ -45,9 +45,8 @@ use crate::geometry::Ray;
 use crate::math::{Mat4, Vec3, Vec4};
 use wide::f32x8;
 
-/// Most primitives in a leaf (the collapse chooses leaf sizes up to this by SAH). Measured on
-/// the 1M-triangle benchmark before leaves were sized by SAH: 8 beat 2 and 4 (fewer dependent
-/// node fetches) and equalled 12.
+/// Most primitives in a leaf (the collapse chooses leaf sizes up to this by SAH): one 8-wide
+/// packet, which saves dependent node fetches over smaller leaves (`bench/README.md`).
 pub(crate) const LEAF_MAX: u32 = 8;
 
 /// Scenes with at most this many primitives use [`SMALL_LEAF_MAX`] instead: their tree fits
@@ -334,8 +333,9 @@ impl WideBvh {
             // faster traversal, the right trade for an offline renderer. Between
             // `SMALL_SCENE` and `REINSERT_LARGE` primitives 0.1: there the traversal gain of
             // more was within the noise, and reinsertion was most of the build. Small scenes
-            // keep 0.4 (their build takes microseconds either way): with 0.1, bench-cbox's
-            // tree cost 13 % more mispredicted branches (callgrind) and ran 5–6 % slower.
+            // keep 0.4 (their build takes microseconds either way): a lighter reinsertion
+            // leaves their trees with more mispredicted branches in traversal
+            // (`bench/README.md`).
             let ratio = if n >= REINSERT_LARGE || n <= SMALL_SCENE {
                 0.4
             } else {
@@ -944,9 +944,8 @@ impl Plan {
                 f32::INFINITY
             };
             // (Compared only when a leaf may hold the subtree: infinite areas make both costs
-            // infinite.) Small scenes make a leaf of every subtree that fits, as before the
-            // plan: their rays mostly start inside the scene's box, which the SAH does not
-            // model, and bench-cbox ran 1 % faster so.
+            // infinite.) Small scenes make a leaf of every subtree that fits: their rays mostly
+            // start inside the scene's box, which the SAH does not model.
             plan.leaf[i] = count[i] <= leaf_max && (leaf_max <= SMALL_LEAF_MAX || as_leaf <= inner);
             let one = if plan.leaf[i] { as_leaf } else { inner };
             let mut c = [one; WIDTH];
