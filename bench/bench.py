@@ -43,6 +43,10 @@ SCENES = {
                      "references/mitsuba-cbox.exr", "spp"),
     "bench-cbox": ("references/scenes/bench-cbox.xml", {"resx": "512", "resy": "512"},
                    "references/bench-cbox.exr", "bench_spp"),
+    # A real interior (issue 36): Bitterli's classroom, Mitsuba form, 104k triangles, no
+    # reference image (relMSE left blank).
+    "classroom": ("scenes/bench/classroom/scene.xml", {"resx": "640", "resy": "360"},
+                  None, "classroom_spp"),
     # Volumetric path tracing (issue 20): both renderers run the scenes' `volpath`.
     "media-homogeneous": ("references/scenes/media-homogeneous.xml", {"res": "128"},
                           "references/media-homogeneous.exr", "media_spp"),
@@ -231,6 +235,7 @@ def main() -> int:
     ap.add_argument("--runs", "-n", type=int, default=3, help="timed runs per scene and renderer (median)")
     ap.add_argument("--spp", type=int, default=1024, help="spp of the 128x128 scenes")
     ap.add_argument("--bench-spp", type=int, default=64, help="spp of bench-cbox (512x512)")
+    ap.add_argument("--classroom-spp", type=int, default=32, help="spp of classroom (640x360)")
     ap.add_argument("--media-spp", type=int, default=256, help="spp of the media scenes (128x128)")
     ap.add_argument("--scenes", nargs="+", choices=list(SCENES), default=list(SCENES))
     ap.add_argument("--renderers", nargs="+", choices=RENDERERS, default=RENDERERS)

@@ -102,6 +102,9 @@ pub enum EnvMapping {
     LatLong,
     /// Light probe (angular map, CENG795 `probe`).
     Probe,
+    /// pbrt-v4's equal-area octahedral square map (Clarberg 2008): every pixel subtends the
+    /// same solid angle.
+    EqualArea,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

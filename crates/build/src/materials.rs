@@ -252,6 +252,18 @@ impl MaterialResolver<'_> {
                 }
                 // The opacity acts in `Scene::intersect` (a cut-out is never hit).
                 Material::Mask { nested, .. } => id = *nested,
+                Material::DiffuseTransmission { .. }
+                | Material::CoatedDiffuse { .. }
+                | Material::CoatedConductor { .. }
+                | Material::Mix { .. } => {
+                    return Err(BuildError {
+                        loc: m.loc.clone(),
+                        message: format!(
+                            "material '{}' cannot be rendered yet",
+                            m.material.kind_name()
+                        ),
+                    });
+                }
                 _ => {
                     let kind = self.kind(id);
                     return done(perturbs, outer, Then::Model(kind));
@@ -442,7 +454,11 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
         | Material::TwoSided { .. }
         | Material::NormalMap { .. }
         | Material::BumpMap { .. }
-        | Material::Mask { .. } => return None,
+        | Material::Mask { .. }
+        | Material::DiffuseTransmission { .. }
+        | Material::CoatedDiffuse { .. }
+        | Material::CoatedConductor { .. }
+        | Material::Mix { .. } => return None,
     })
 }
 

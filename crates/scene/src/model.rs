@@ -655,6 +655,53 @@ pub enum Material {
     Unlit { color: ColorParam },
     /// Invisible interface (Mitsuba `null`).
     Null,
+    /// pbrt-v4's `diffusetransmission`: Lambertian reflection `reflectance` on the side the
+    /// light comes from and Lambertian transmission `transmittance` to the other side.
+    DiffuseTransmission {
+        reflectance: ColorParam,
+        transmittance: ColorParam,
+    },
+    /// pbrt-v4's `coateddiffuse`: a dielectric interface (index `eta`, GGX `alpha_u/v`,
+    /// smooth when both are 0) over a Lambertian base `reflectance`, the two separated by a
+    /// slab of optical `thickness` holding a medium of single-scattering `albedo` (none when
+    /// black) with Henyey–Greenstein `g`. Evaluated as pbrt-v4's stochastic layered BSDF:
+    /// random walks of at most `max_depth` scattering events, `n_samples` per evaluation.
+    CoatedDiffuse {
+        reflectance: ColorParam,
+        alpha_u: FloatParam,
+        alpha_v: FloatParam,
+        eta: f32,
+        thickness: FloatParam,
+        albedo: ColorParam,
+        g: FloatParam,
+        max_depth: u32,
+        n_samples: u32,
+    },
+    /// pbrt-v4's `coatedconductor`: as `CoatedDiffuse` with a conductor base (GGX
+    /// `conductor_alpha_u/v`; index `conductor_eta + i conductor_k`, or, when `reflectance` is
+    /// set, the index whose normal-incidence Fresnel reflectance is that colour, as pbrt-v4
+    /// derives it: k = 2√r/√(1−r), η = 1). The conductor's index is relative to the coating.
+    CoatedConductor {
+        interface_alpha_u: FloatParam,
+        interface_alpha_v: FloatParam,
+        interface_eta: f32,
+        thickness: FloatParam,
+        albedo: ColorParam,
+        g: FloatParam,
+        max_depth: u32,
+        n_samples: u32,
+        conductor_alpha_u: FloatParam,
+        conductor_alpha_v: FloatParam,
+        conductor_eta: ColorValue,
+        conductor_k: ColorValue,
+        reflectance: Option<ColorParam>,
+    },
+    /// pbrt-v4's `mix`: at each shading point one of `materials` is chosen, the second with
+    /// probability `amount` (a deterministic hash of the point and direction, as pbrt-v4 does).
+    Mix {
+        materials: [MaterialId; 2],
+        amount: FloatParam,
+    },
 }
 
 /// The ideal lobe of a CENG795 `mirror`, `conductor` or `dielectric` material, traced on top
@@ -703,6 +750,10 @@ impl Material {
             Material::NoriMicrofacet { .. } => "microfacet",
             Material::PhongFamily { .. } => "phong-family",
             Material::Null => "null",
+            Material::DiffuseTransmission { .. } => "diffusetransmission",
+            Material::CoatedDiffuse { .. } => "coateddiffuse",
+            Material::CoatedConductor { .. } => "coatedconductor",
+            Material::Mix { .. } => "mix",
         }
     }
 }

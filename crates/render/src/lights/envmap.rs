@@ -1,7 +1,10 @@
 //! Image-based environment lights: an equirectangular (lat-long) image, bilinearly
 //! interpolated, importance-sampled with a piecewise-constant 2D distribution of its pixel
-//! luminance weighted by sin θ; or a light probe (Debevec's angular map), sampled uniformly.
-//! Local directions map to uv = (atan2(x, −z) / 2π, acos(y) / π), y up, as in Mitsuba.
+//! luminance weighted by sin θ; or a light probe (Debevec's angular map), sampled uniformly;
+//! or pbrt-v4's equal-area octahedral square, looked up nearest-pixel as pbrt-v4 does and
+//! sampled in proportion to each pixel's luminance (every pixel subtends 4π/(w·h)).
+//! Lat-long local directions map to uv = (atan2(x, −z) / 2π, acos(y) / π), y up, as in
+//! Mitsuba; equal-area ones use the light's frame as it is (pbrt-v4's).
 
 use base::EnvMapping;
 
@@ -29,16 +32,33 @@ pub struct EnvMap {
 impl EnvMap {
     pub fn new(image: Image, scale: f32, to_world: &Mat4, mapping: EnvMapping) -> EnvMap {
         let (w, h) = (image.width as usize, image.height as usize);
+        let rot = Mat3::from_mat4(*to_world);
+        let lum = |x: usize, y: usize| {
+            let v = luminance(image.get(x as u32, y as u32));
+            if v.is_finite() { v.max(0.0) } else { 0.0 }
+        };
+        if mapping == EnvMapping::EqualArea {
+            // Nearest lookups make the radiance piecewise constant over pixels of equal
+            // solid angle: sampling by pixel luminance follows it exactly.
+            let weights: Vec<f32> = (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .map(|(x, y)| lum(x, y))
+                .collect();
+            return EnvMap {
+                distribution: Distribution2D::new(&weights, w, h),
+                image,
+                scale,
+                to_world: rot,
+                to_local: rot.inverse(),
+                mapping,
+            };
+        }
         // Mitsuba's lat-long grid: columns are pixel centres (u = (x + ½)/w), rows are grid
         // *vertices* (v = y/(h − 1)), so cell (x, y) of the sampling grid spans the rows y and
         // y + 1 and, through the bilinear lookup, the columns x − 1 … x + 1. Each cell gets the
         // largest luminance of those pixels times sin θ at its centre: the pdf is then never
         // small where the interpolated radiance is large (a one-pixel sun would otherwise
         // bleed into cells the pdf barely samples).
-        let lum = |x: usize, y: usize| {
-            let v = luminance(image.get(x as u32, y as u32));
-            if v.is_finite() { v.max(0.0) } else { 0.0 }
-        };
         let rows = h.saturating_sub(1).max(1);
         let mut weights = vec![0f32; w * rows];
         for y in 0..rows {
@@ -54,7 +74,6 @@ impl EnvMap {
                 weights[y * w + x] = m * sin_theta;
             }
         }
-        let rot = Mat3::from_mat4(*to_world);
         EnvMap {
             distribution: Distribution2D::new(&weights, w, rows),
             image,
@@ -85,16 +104,31 @@ impl EnvMap {
                 };
                 Vec2::new(0.5 + 0.5 * d.x * r, 0.5 - 0.5 * d.y * r)
             }
+            EnvMapping::EqualArea => warp::equal_area_sphere_to_square(d),
         }
     }
 
+    /// The world direction at `uv` of a lat-long or equal-area map, and the solid angle per
+    /// unit of uv there (0 at a lat-long pole).
     fn uv_to_dir(&self, uv: Vec2) -> (Vec3, f32) {
+        if self.mapping == EnvMapping::EqualArea {
+            let local = warp::equal_area_square_to_sphere(uv);
+            return ((self.to_world * local).normalize(), 4.0 * PI);
+        }
         let phi = uv.x * 2.0 * PI;
         let theta = uv.y * PI;
         let (st, ct) = theta.sin_cos();
         let (sp, cp) = phi.sin_cos();
         let local = Vec3::new(st * sp, ct, -st * cp);
-        ((self.to_world * local).normalize(), st)
+        ((self.to_world * local).normalize(), 2.0 * PI * PI * st)
+    }
+
+    /// The solid angle per unit of uv at `uv` (see [`Self::uv_to_dir`]).
+    fn uv_jacobian(&self, uv: Vec2) -> f32 {
+        match self.mapping {
+            EnvMapping::EqualArea => 4.0 * PI,
+            _ => 2.0 * PI * PI * (uv.y * PI).sin(),
+        }
     }
 
     /// Bilinear lookup on Mitsuba's grid: x = u·w − ½ (pixel centres, wrapping in u),
@@ -102,10 +136,14 @@ impl EnvMap {
     /// Probe maps use pixel centres in both axes.
     fn lookup(&self, uv: Vec2) -> Vec3 {
         let (w, h) = (self.image.width as i64, self.image.height as i64);
+        if self.mapping == EnvMapping::EqualArea {
+            let px = |t: f32, n: i64| ((t * n as f32) as i64).clamp(0, n - 1) as u32;
+            return self.image.get(px(uv.x, w), px(uv.y, h)) * self.scale;
+        }
         let x = uv.x * w as f32 - 0.5;
         let y = match self.mapping {
             EnvMapping::LatLong => uv.y * (h - 1) as f32,
-            EnvMapping::Probe => uv.y * h as f32 - 0.5,
+            EnvMapping::Probe | EnvMapping::EqualArea => uv.y * h as f32 - 0.5,
         };
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
@@ -134,11 +172,11 @@ impl EnvMap {
             return Some((d, self.eval(d), warp::uniform_sphere_pdf()));
         }
         let (uv, pdf_uv) = self.distribution.sample(u);
-        let (d, sin_theta) = self.uv_to_dir(uv);
-        if pdf_uv <= 0.0 || sin_theta <= 0.0 {
+        let (d, jacobian) = self.uv_to_dir(uv);
+        if pdf_uv <= 0.0 || jacobian <= 0.0 {
             return None;
         }
-        Some((d, self.lookup(uv), pdf_uv / (2.0 * PI * PI * sin_theta)))
+        Some((d, self.lookup(uv), pdf_uv / jacobian))
     }
 
     fn pdf(&self, d_world: Vec3) -> f32 {
@@ -146,11 +184,11 @@ impl EnvMap {
             return warp::uniform_sphere_pdf();
         }
         let uv = self.dir_to_uv(d_world);
-        let sin_theta = (uv.y * PI).sin();
-        if sin_theta <= 0.0 {
+        let jacobian = self.uv_jacobian(uv);
+        if jacobian <= 0.0 {
             return 0.0;
         }
-        self.distribution.pdf(uv) / (2.0 * PI * PI * sin_theta)
+        self.distribution.pdf(uv) / jacobian
     }
 }
 
@@ -238,7 +276,7 @@ impl LightModel for EnvMap {
             // Lat-long rows are spaced by θ: weight by sin θ for the solid-angle mean.
             let s = match self.mapping {
                 EnvMapping::LatLong => ((y as f32 + 0.5) / h as f32 * PI).sin() as f64,
-                EnvMapping::Probe => 1.0,
+                EnvMapping::Probe | EnvMapping::EqualArea => 1.0,
             };
             for x in 0..w {
                 let v = mean(self.image.get(x, y));

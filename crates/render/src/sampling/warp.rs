@@ -104,6 +104,41 @@ pub fn uniform_sphere_pdf() -> f32 {
     INV_4PI
 }
 
+/// Clarberg's equal-area octahedral map of the unit square onto the sphere (pbrt-v4's
+/// square environment maps): the square's diamond |u'| + |v'| ≤ 1 (u' = 2u − 1, v' = 2v − 1)
+/// is the upper hemisphere, its corners the lower one; equal areas map to equal solid
+/// angles, so the density is 1/4π per unit of square.
+pub fn equal_area_square_to_sphere(p: Vec2) -> Vec3 {
+    let (u, v) = (2.0 * p.x - 1.0, 2.0 * p.y - 1.0);
+    let (au, av) = (u.abs(), v.abs());
+    let signed = 1.0 - (au + av);
+    let r = 1.0 - signed.abs();
+    // φ ∈ [0, π/2] within the quadrant, by where the point lies along its diamond edge.
+    let phi = if r == 0.0 { 1.0 } else { (av - au) / r + 1.0 } * (PI / 4.0);
+    let z = (1.0 - r * r).copysign(signed);
+    let (sin_phi, cos_phi) = phi.sin_cos();
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    Vec3::new(cos_phi.copysign(u) * s, sin_phi.copysign(v) * s, z)
+}
+
+/// The inverse of [`equal_area_square_to_sphere`] for a unit vector.
+pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
+    let (x, y, z) = (d.x.abs(), d.y.abs(), d.z.abs());
+    let r = (1.0 - z).max(0.0).sqrt();
+    let (a, b) = (x.max(y), x.min(y));
+    let t = if a == 0.0 { 0.0 } else { b / a };
+    let mut phi = t.atan() * (2.0 / PI);
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let mut v = phi * r;
+    let mut u = r - v;
+    if d.z < 0.0 {
+        (u, v) = (1.0 - v, 1.0 - u);
+    }
+    Vec2::new(0.5 * (u.copysign(d.x) + 1.0), 0.5 * (v.copysign(d.y) + 1.0))
+}
+
 /// Uniform cone of directions around +z with cos θ ≥ `cos_max` (pdf 1 / (2π(1 − cos_max))).
 pub fn square_to_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     let cos_t = (1.0 - u.x) + u.x * cos_max;
@@ -205,5 +240,54 @@ mod tests {
             let b = square_to_uniform_triangle(u);
             assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
         }
+    }
+
+    #[test]
+    fn equal_area_map_round_trips_and_keeps_areas() {
+        assert!((equal_area_square_to_sphere(Vec2::splat(0.5)) - Vec3::Z).length() < 1e-6);
+        for corner in [Vec2::ZERO, Vec2::ONE, Vec2::X, Vec2::Y] {
+            assert!((equal_area_square_to_sphere(corner) + Vec3::Z).length() < 1e-6);
+        }
+        // Direction → square → direction, at cell centres of a fine grid.
+        let mut worst = 0f32;
+        for p in grid(257, Vec2::splat(0.5)) {
+            let d = equal_area_square_to_sphere(p);
+            assert!((d.length() - 1.0).abs() < 1e-5, "{p} → {d}");
+            let q = equal_area_sphere_to_square(d);
+            worst = worst.max((q - p).abs().max_element());
+            let d2 = equal_area_square_to_sphere(q);
+            assert!((d2 - d).length() < 1e-4, "{p}: {d} → {q} → {d2}");
+        }
+        assert!(worst < 2e-4, "worst square round trip {worst}");
+        // Equal areas: every small cell of the square covers 4π·(its area) of solid angle
+        // (the spherical triangle areas of its two halves, by Van Oosterom–Strackee).
+        let tri = |a: Vec3, b: Vec3, c: Vec3| {
+            let num = a.dot(b.cross(c)).abs() as f64;
+            let den = 1.0 + a.dot(b) as f64 + b.dot(c) as f64 + c.dot(a) as f64;
+            2.0 * num.atan2(den)
+        };
+        let (n, sub) = (32, 8);
+        let h = 1.0 / (n * sub) as f32;
+        let mut total = 0f64;
+        for p in grid(n, Vec2::ZERO) {
+            let mut omega = 0.0;
+            for q in grid(sub, Vec2::ZERO) {
+                let o = p + q / n as f32;
+                let m = |dx: f32, dy: f32| equal_area_square_to_sphere(o + Vec2::new(dx, dy));
+                let (a, b, c, d) = (m(0.0, 0.0), m(h, 0.0), m(h, h), m(0.0, h));
+                omega += tri(a, b, c) + tri(a, c, d);
+            }
+            let expect = 4.0 * std::f64::consts::PI / (n * n) as f64;
+            // Flat-sided sub-cells miss a little of the curved cell, never 1 %.
+            assert!(
+                (omega / expect - 1.0).abs() < 0.01,
+                "cell at {p}: {omega} vs {expect}"
+            );
+            total += omega;
+        }
+        assert!(
+            (total / (4.0 * std::f64::consts::PI) - 1.0).abs() < 2e-3,
+            "total {total}"
+        );
     }
 }
