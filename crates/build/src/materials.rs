@@ -6,7 +6,8 @@ use std::sync::Arc;
 
 use render::bsdf::{IdealLobe, Microfacet, MicrofacetType, NoriMicrofacet, RoughPlasticTables};
 use render::materials::{
-    ConductorSpectra, CourseLobe, Layer, MaterialKind, Perturb, RtMaterial, Then, alpha,
+    Coated, CoatedBase, ConductorSpectra, CourseLobe, Layer, MaterialKind, Perturb, RtMaterial,
+    Then, alpha,
 };
 use render::math::PVec3;
 use render::spectral::DeclaredSpectrum;
@@ -252,17 +253,25 @@ impl MaterialResolver<'_> {
                 }
                 // The opacity acts in `Scene::intersect` (a cut-out is never hit).
                 Material::Mask { nested, .. } => id = *nested,
-                Material::DiffuseTransmission { .. }
-                | Material::CoatedDiffuse { .. }
-                | Material::CoatedConductor { .. }
-                | Material::Mix { .. } => {
-                    return Err(BuildError {
-                        loc: m.loc.clone(),
-                        message: format!(
-                            "material '{}' cannot be rendered yet",
-                            m.material.kind_name()
-                        ),
-                    });
+                Material::Mix { materials, amount } => {
+                    if depth >= MAX_SIDE_NESTING {
+                        return Err(BuildError {
+                            loc: loc.clone(),
+                            message: format!(
+                                "twosided and mix materials nested more than {MAX_SIDE_NESTING} deep"
+                            ),
+                        });
+                    }
+                    let a = self.layer(materials[0], outer, depth + 1, loc)?;
+                    let b = self.layer(materials[1], outer, depth + 1, loc)?;
+                    return done(
+                        perturbs,
+                        outer,
+                        Then::Mix {
+                            amount: float_ref(amount),
+                            layers: Box::new([a, b]),
+                        },
+                    );
                 }
                 _ => {
                     let kind = self.kind(id);
@@ -309,6 +318,72 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
         Material::Mirror { reflectance } => MaterialKind::Mirror {
             reflectance: declared.color_ref(reflectance),
         },
+        Material::DiffuseTransmission {
+            reflectance,
+            transmittance,
+        } => MaterialKind::DiffuseTransmission {
+            reflectance: declared.color_ref(reflectance),
+            transmittance: declared.color_ref(transmittance),
+        },
+        Material::CoatedDiffuse {
+            reflectance,
+            alpha_u,
+            alpha_v,
+            remap_roughness,
+            eta,
+            thickness,
+            albedo,
+            g,
+            max_depth,
+            n_samples,
+        } => MaterialKind::Coated(Box::new(Coated {
+            alpha_u: float_ref(alpha_u),
+            alpha_v: float_ref(alpha_v),
+            remap_roughness: *remap_roughness,
+            eta: *eta,
+            thickness: float_ref(thickness),
+            albedo: declared.color_ref(albedo),
+            g: float_ref(g),
+            max_depth: *max_depth,
+            n_samples: *n_samples,
+            base: CoatedBase::Diffuse {
+                reflectance: declared.color_ref(reflectance),
+            },
+        })),
+        Material::CoatedConductor {
+            interface_alpha_u,
+            interface_alpha_v,
+            remap_roughness,
+            interface_eta,
+            thickness,
+            albedo,
+            g,
+            max_depth,
+            n_samples,
+            conductor_alpha_u,
+            conductor_alpha_v,
+            conductor_eta,
+            conductor_k,
+            reflectance,
+        } => MaterialKind::Coated(Box::new(Coated {
+            alpha_u: float_ref(interface_alpha_u),
+            alpha_v: float_ref(interface_alpha_v),
+            remap_roughness: *remap_roughness,
+            eta: *interface_eta,
+            thickness: float_ref(thickness),
+            albedo: declared.color_ref(albedo),
+            g: float_ref(g),
+            max_depth: *max_depth,
+            n_samples: *n_samples,
+            base: CoatedBase::Conductor {
+                alpha_u: float_ref(conductor_alpha_u),
+                alpha_v: float_ref(conductor_alpha_v),
+                eta: conductor_eta.rgb().into(),
+                k: conductor_k.rgb().into(),
+                spectra: declared.conductor(conductor_eta, conductor_k),
+                reflectance: reflectance.as_ref().map(|r| declared.color_ref(r)),
+            },
+        })),
         Material::RoughConductor {
             distribution,
             alpha_u,
@@ -455,9 +530,6 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
         | Material::NormalMap { .. }
         | Material::BumpMap { .. }
         | Material::Mask { .. }
-        | Material::DiffuseTransmission { .. }
-        | Material::CoatedDiffuse { .. }
-        | Material::CoatedConductor { .. }
         | Material::Mix { .. } => return None,
     })
 }
@@ -503,6 +575,7 @@ mod tests {
             Then::Model(Some(MaterialKind::Diffuse { .. })) => "diffuse".to_string(),
             Then::Model(Some(_)) => "other".to_string(),
             Then::Sides(s) => format!("[{} | {}]", shape(&s[0]), shape(&s[1])),
+            Then::Mix { layers: s, .. } => format!("mix({}, {})", shape(&s[0]), shape(&s[1])),
         };
         format!("{}{then}", "p".repeat(l.perturbs.len()))
     }
@@ -537,6 +610,14 @@ mod tests {
             desc(normal(3)),       // 9: a normal map around a twosided
             desc(two(9, Some(7))), // 10: twosided, normal map, twosided
             desc(Material::Null),  // 11
+            desc(Material::Mix {
+                materials: [MaterialId(0), MaterialId(4)],
+                amount: FloatParam::Const(0.3),
+            }), // 12
+            desc(Material::Mix {
+                materials: [MaterialId(12), MaterialId(2)],
+                amount: FloatParam::Const(0.5),
+            }), // 13
         ];
         let layer = |id| shape(&resolve(&mats, id).unwrap().surface);
         assert_eq!(layer(0), "diffuse");
@@ -549,12 +630,15 @@ mod tests {
         assert_eq!(layer(9), "p[diffuse | other]");
         assert_eq!(layer(10), "[p[diffuse | other] | pdiffuse]");
         assert_eq!(layer(11), "none");
+        assert_eq!(layer(12), "mix(diffuse, pdiffuse)");
+        assert_eq!(layer(13), "mix(mix(diffuse, pdiffuse), other)");
 
         let iso = |id| resolve(&mats, id).unwrap().isotropic();
         assert!(iso(0) && iso(1) && iso(5) && iso(6) && iso(8) && iso(11));
         assert!(!iso(2), "alpha_u != alpha_v");
         assert!(!iso(3), "anisotropic back side");
         assert!(!iso(4) && !iso(7) && !iso(9), "normal map");
+        assert!(!iso(12) && !iso(13), "a normal map or anisotropy in a mix");
         assert!(RtMaterial::default_diffuse().isotropic());
     }
 

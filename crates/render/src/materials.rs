@@ -14,11 +14,13 @@ use base::PhongModel;
 use base::dispersion::{Dispersion, DispersionSampling};
 
 use crate::bsdf::{
-    Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, IdealLobe, Microfacet, MicrofacetType,
-    NoriMicrofacet, PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic,
-    RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
+    Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, DiffuseTransmission, Ggx, IdealLobe,
+    Layered, LayeredBase, LayeredInterface, Microfacet, MicrofacetType, NoriMicrofacet,
+    PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic, RoughPlasticTables,
+    ThinDielectric, rgb_sampling_weight,
 };
 use crate::math::{Frame, Vec3};
+use crate::sampling::sampler::{hash2, u64_to_unit};
 use crate::shapes::SurfaceInteraction;
 use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::{Color, ColorMode, RgbMode};
@@ -47,6 +49,13 @@ pub enum Then {
     Model(Option<MaterialKind>),
     /// Front (`[0]`) and back (`[1]`) layers of a two-sided material.
     Sides(Box<[Layer; 2]>),
+    /// pbrt-v4's `mix`: `layers[1]` with probability `amount`, else `layers[0]`, chosen per
+    /// hit by a hash of the point and the outgoing direction (so every query at one vertex
+    /// sees the same choice).
+    Mix {
+        amount: FloatRef,
+        layers: Box<[Layer; 2]>,
+    },
 }
 
 /// A change of the shading frame before scattering.
@@ -133,6 +142,12 @@ pub enum MaterialKind {
     },
     /// Untextured: the BSDF itself.
     NoriMicrofacet(NoriMicrofacet),
+    DiffuseTransmission {
+        reflectance: ColorRef,
+        transmittance: ColorRef,
+    },
+    /// pbrt-v4's layered `coateddiffuse` / `coatedconductor` (boxed: rare and large).
+    Coated(Box<Coated>),
     /// The CENG795 Phong family, with the ideal lobe of a course mirror, conductor or
     /// dielectric on top when `ideal` is set.
     Phong {
@@ -145,6 +160,39 @@ pub enum MaterialKind {
         ior: f32,
         absorption: f32,
         ideal: Option<CourseLobe>,
+    },
+}
+
+/// The parameters of a pbrt-v4 coated material (see [`crate::bsdf::Layered`]).
+#[derive(Clone, Debug)]
+pub struct Coated {
+    pub alpha_u: FloatRef,
+    pub alpha_v: FloatRef,
+    /// The roughness values are pbrt-v4's: α = √r.
+    pub remap_roughness: bool,
+    pub eta: f32,
+    pub thickness: FloatRef,
+    pub albedo: ColorRef,
+    pub g: FloatRef,
+    pub max_depth: u32,
+    pub n_samples: u32,
+    pub base: CoatedBase,
+}
+
+#[derive(Clone, Debug)]
+pub enum CoatedBase {
+    Diffuse {
+        reflectance: ColorRef,
+    },
+    /// η and k as declared (or derived from `reflectance`), divided by the coating's index
+    /// when the BSDF is made.
+    Conductor {
+        alpha_u: FloatRef,
+        alpha_v: FloatRef,
+        eta: Vec3,
+        k: Vec3,
+        spectra: Option<Arc<ConductorSpectra>>,
+        reflectance: Option<ColorRef>,
     },
 }
 
@@ -209,6 +257,13 @@ impl RtMaterial {
             }
             match &layer.then {
                 Then::Model(kind) => return kind.as_ref().map(|k| (k, frame)),
+                Then::Mix { amount, layers } => {
+                    layer = &layers[usize::from(mix_picks_second(
+                        textures.float(amount, si.tex()),
+                        si.p,
+                        si.wo,
+                    ))];
+                }
                 Then::Sides(sides) => {
                     if si.wo.dot(frame.n) < 0.0 {
                         frame = Frame {
@@ -241,11 +296,30 @@ impl RtMaterial {
             l.perturbs.is_empty()
                 && match &l.then {
                     Then::Model(k) => k.as_ref().is_none_or(MaterialKind::isotropic),
-                    Then::Sides(s) => layer(&s[0]) && layer(&s[1]),
+                    Then::Sides(s) | Then::Mix { layers: s, .. } => layer(&s[0]) && layer(&s[1]),
                 }
         }
         layer(&self.surface)
     }
+}
+
+/// Whether a `mix` of weight `amount` takes its second material at point `p` seen from `wo`
+/// (pbrt-v4's rule: the second when a hash of the two in [0, 1) is at most `amount`).
+#[inline]
+pub fn mix_picks_second(amount: f32, p: Vec3, wo: Vec3) -> bool {
+    if amount <= 0.0 {
+        return false;
+    }
+    if amount >= 1.0 {
+        return true;
+    }
+    let bits = |v: Vec3| {
+        hash2(
+            hash2(u64::from(v.x.to_bits()), u64::from(v.y.to_bits())),
+            u64::from(v.z.to_bits()),
+        )
+    };
+    u64_to_unit(hash2(bits(p), bits(wo))) <= amount
 }
 
 impl Perturb {
@@ -281,6 +355,15 @@ impl MaterialKind {
             | MaterialKind::RoughDielectric {
                 alpha_u, alpha_v, ..
             } => alpha_u == alpha_v,
+            MaterialKind::Coated(c) => {
+                c.alpha_u == c.alpha_v
+                    && match &c.base {
+                        CoatedBase::Conductor {
+                            alpha_u, alpha_v, ..
+                        } => alpha_u == alpha_v,
+                        CoatedBase::Diffuse { .. } => true,
+                    }
+            }
             _ => true,
         }
     }
@@ -428,6 +511,18 @@ impl MaterialKind {
                 ))
             }
             MaterialKind::NoriMicrofacet(b) => Bsdf::NoriMicrofacet(b.map_lanes(|c| m.albedo(c))),
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+            } => {
+                let (r, t) = (p.color(reflectance, at), p.color(transmittance, at));
+                Bsdf::DiffuseTransmission(DiffuseTransmission::new(
+                    m.albedo_read(p, reflectance, r),
+                    m.albedo_read(p, transmittance, t),
+                    (r.max_element(), t.max_element()),
+                ))
+            }
+            MaterialKind::Coated(c) => Bsdf::Layered(Box::new(c.bsdf(p, at, m))),
             MaterialKind::Phong {
                 model,
                 normalized,
@@ -458,6 +553,64 @@ impl MaterialKind {
                 }
             }
         }
+    }
+}
+
+impl Coated {
+    fn bsdf<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Layered<M::C> {
+        let rough = |r: &FloatRef| {
+            let v = p.float(r, at).max(0.0);
+            if self.remap_roughness { v.sqrt() } else { v }
+        };
+        let top = LayeredInterface {
+            distrib: Ggx::new(rough(&self.alpha_u), rough(&self.alpha_v)),
+            eta: if self.eta > 0.0 { self.eta } else { 1.0 },
+        };
+        let base = match &self.base {
+            CoatedBase::Diffuse { reflectance } => {
+                LayeredBase::Diffuse(m.albedo_at(p, reflectance, at))
+            }
+            CoatedBase::Conductor {
+                alpha_u,
+                alpha_v,
+                eta,
+                k,
+                spectra,
+                reflectance,
+            } => {
+                let (eta, k) = match reflectance {
+                    Some(r) => {
+                        let r = m.albedo_at(p, r, at);
+                        let k = M::C::from_fn(|i| {
+                            let x = r.lane(i).clamp(0.0, 0.9999);
+                            2.0 * x.sqrt() / (1.0 - x).sqrt()
+                        });
+                        (M::C::ONE, k)
+                    }
+                    None => {
+                        let (eta_s, k_s) = ConductorSpectra::get(spectra);
+                        (
+                            m.unbounded_declared(*eta, eta_s),
+                            m.unbounded_declared(*k, k_s),
+                        )
+                    }
+                };
+                LayeredBase::Conductor {
+                    distrib: Ggx::new(rough(alpha_u), rough(alpha_v)),
+                    eta: eta / top.eta,
+                    k: k / top.eta,
+                }
+            }
+        };
+        Layered::new(
+            top,
+            base,
+            p.float(&self.thickness, at),
+            m.albedo_at(p, &self.albedo, at),
+            p.float(&self.g, at),
+            self.max_depth,
+            self.n_samples,
+        )
     }
 }
 

@@ -661,8 +661,9 @@ pub enum Material {
         reflectance: ColorParam,
         transmittance: ColorParam,
     },
-    /// pbrt-v4's `coateddiffuse`: a dielectric interface (index `eta`, GGX `alpha_u/v`,
-    /// smooth when both are 0) over a Lambertian base `reflectance`, the two separated by a
+    /// pbrt-v4's `coateddiffuse`: a dielectric interface (index `eta`, GGX `alpha_u/v`, or
+    /// pbrt-v4 roughnesses turned into α = √r per lookup when `remap_roughness`; smooth below
+    /// α = 10⁻³) over a Lambertian base `reflectance`, the two separated by a
     /// slab of optical `thickness` holding a medium of single-scattering `albedo` (none when
     /// black) with Henyey–Greenstein `g`. Evaluated as pbrt-v4's stochastic layered BSDF:
     /// random walks of at most `max_depth` scattering events, `n_samples` per evaluation.
@@ -670,6 +671,7 @@ pub enum Material {
         reflectance: ColorParam,
         alpha_u: FloatParam,
         alpha_v: FloatParam,
+        remap_roughness: bool,
         eta: f32,
         thickness: FloatParam,
         albedo: ColorParam,
@@ -678,12 +680,13 @@ pub enum Material {
         n_samples: u32,
     },
     /// pbrt-v4's `coatedconductor`: as `CoatedDiffuse` with a conductor base (GGX
-    /// `conductor_alpha_u/v`; index `conductor_eta + i conductor_k`, or, when `reflectance` is
-    /// set, the index whose normal-incidence Fresnel reflectance is that colour, as pbrt-v4
-    /// derives it: k = 2√r/√(1−r), η = 1). The conductor's index is relative to the coating.
+    /// `conductor_alpha_u/v`; index `conductor_eta + i conductor_k` as declared, or, when
+    /// `reflectance` is set, the index pbrt-v4 derives from it: η = 1, k = 2√r/√(1−r)). As
+    /// pbrt-v4 does, the renderer divides the conductor's index by the coating's.
     CoatedConductor {
         interface_alpha_u: FloatParam,
         interface_alpha_v: FloatParam,
+        remap_roughness: bool,
         interface_eta: f32,
         thickness: FloatParam,
         albedo: ColorParam,

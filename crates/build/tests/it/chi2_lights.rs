@@ -114,9 +114,12 @@ fn triangle_mesh() -> TriMesh {
     }
 }
 
-fn env_scene() -> SceneDesc {
-    // A small synthetic sky: smooth gradient plus a 2×1-pixel sun.
-    let (w, h) = (64u32, 32u32);
+fn env_scene(mapping: EnvMapping) -> SceneDesc {
+    // A small synthetic sky: smooth gradient plus a 2×1-pixel sun (square for equal-area).
+    let (w, h) = match mapping {
+        EnvMapping::EqualArea => (32u32, 32u32),
+        _ => (64u32, 32u32),
+    };
     let mut img = Image::new(w, h);
     for y in 0..h {
         for x in 0..w {
@@ -128,7 +131,7 @@ fn env_scene() -> SceneDesc {
     img.set(21, 9, Vec3::splat(250.0).into());
     let dir = std::env::temp_dir().join(format!("penumbra-chi2-env-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("sky.exr");
+    let path = dir.join(format!("sky-{mapping:?}.exr"));
     render::image_io::write_image(&path, &img).unwrap();
     let mut d = base();
     d.emitters.push(EmitterDesc {
@@ -137,7 +140,7 @@ fn env_scene() -> SceneDesc {
             path,
             scale: 1.0,
             to_world: Mat4::from_rotation_y(0.7),
-            mapping: EnvMapping::LatLong,
+            mapping,
         },
         loc: Default::default(),
     });
@@ -242,7 +245,12 @@ fn emitter_sampling_matches_its_pdf() {
                 Vec3::new(-2.0, 0.0, 2.1),
             ],
         ),
-        ("envmap", env_scene(), vec![Vec3::ZERO]),
+        ("envmap", env_scene(EnvMapping::LatLong), vec![Vec3::ZERO]),
+        (
+            "envmap, equal-area",
+            env_scene(EnvMapping::EqualArea),
+            vec![Vec3::ZERO],
+        ),
         (
             // A sphere under a non-uniform scale and rotation: an ellipsoid, sampled
             // uniformly on its object sphere (not by area) with the matching density.

@@ -20,7 +20,9 @@ mod conductor;
 mod course;
 mod dielectric;
 mod diffuse;
+mod diffuse_transmission;
 pub mod fresnel;
+mod layered;
 pub mod microfacet;
 mod nori_microfacet;
 mod phong;
@@ -34,6 +36,8 @@ pub use conductor::Conductor;
 pub use course::{CourseMaterial, IdealLobe};
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use diffuse_transmission::DiffuseTransmission;
+pub use layered::{Base as LayeredBase, Ggx, Interface as LayeredInterface, Layered};
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use nori_microfacet::NoriMicrofacet;
 pub use phong::PhongFamily;
@@ -125,6 +129,9 @@ pub enum Bsdf<C: Color = Vec3> {
     /// Boxed: the largest model by far, and only CENG795 scenes build it; inline it would grow
     /// every `Bsdf` moved through the path loop from 80 to 112 bytes.
     Course(Box<CourseMaterial<C>>),
+    DiffuseTransmission(DiffuseTransmission<C>),
+    /// Boxed for the same reason as `Course` (pbrt-v4 scenes only).
+    Layered(Box<Layered<C>>),
 }
 
 /// `$e` on the model inside `$self`.
@@ -142,6 +149,11 @@ macro_rules! dispatch {
             Bsdf::NoriMicrofacet($b) => $e,
             Bsdf::PhongFamily($b) => $e,
             Bsdf::Course($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::DiffuseTransmission($b) => $e,
+            Bsdf::Layered($b) => {
                 let $b = &**$b;
                 $e
             }
@@ -196,7 +208,10 @@ impl<C: Color> Bsdf<C> {
     /// Has a non-delta transmission lobe.
     #[inline]
     pub fn has_transmission(&self) -> bool {
-        matches!(self, Bsdf::RoughDielectric(_))
+        matches!(
+            self,
+            Bsdf::RoughDielectric(_) | Bsdf::DiffuseTransmission(_)
+        )
     }
 
     /// A colour for the albedo AOV.
@@ -225,12 +240,19 @@ impl_from!(
     Plastic,
     RoughPlastic,
     NoriMicrofacet,
-    PhongFamily
+    PhongFamily,
+    DiffuseTransmission
 );
 
 impl<C: Color> From<CourseMaterial<C>> for Bsdf<C> {
     fn from(b: CourseMaterial<C>) -> Bsdf<C> {
         Bsdf::Course(Box::new(b))
+    }
+}
+
+impl<C: Color> From<Layered<C>> for Bsdf<C> {
+    fn from(b: Layered<C>) -> Bsdf<C> {
+        Bsdf::Layered(Box::new(b))
     }
 }
 
@@ -278,13 +300,4 @@ pub(crate) fn mean(c: Vec3) -> f32 {
 #[inline]
 pub(crate) fn reflect_z_about(w: Vec3, m: Vec3) -> Vec3 {
     2.0 * w.dot(m) * m - w
-}
-#[test]
-fn tmp_size() {
-    eprintln!(
-        "SIZE Bsdf {} Phong {} Course {}",
-        size_of::<Bsdf>(),
-        size_of::<PhongFamily>(),
-        size_of::<CourseMaterial>()
-    );
 }

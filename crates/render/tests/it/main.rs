@@ -11,6 +11,7 @@ mod dispersion;
 mod film_stats;
 mod furnace_bsdf;
 mod image_io;
+mod layered_bsdf;
 mod sampling_common;
 mod sampling_stats;
 mod spectral;
