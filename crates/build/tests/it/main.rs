@@ -10,6 +10,7 @@ mod cutout;
 mod declared_spectra;
 mod dispersion_render;
 mod ellipsoid;
+mod equal_area_envmap;
 mod furnace_media;
 mod furnace_render;
 mod instancing;
