@@ -27,7 +27,7 @@ fn maps(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
     for y in 0..n {
         for x in 0..n {
             let uv = (Vec2::new(x as f32, y as f32) + 0.5) / n as f32;
-            square.set(x, y, sky(equal_area_square_to_sphere(uv)).into());
+            square.set(x, y, sky(equal_area_square_to_sphere(uv)));
         }
     }
     let (w, h) = (1024u32, 512u32);
