@@ -96,6 +96,26 @@ pub enum NoiseConversion {
     AbsVal,
 }
 
+/// The noise textures of pbrt-v4 and their parameters (`omega` is its `roughness`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NoiseKind {
+    Fbm {
+        octaves: u32,
+        omega: f32,
+    },
+    Wrinkled {
+        octaves: u32,
+        omega: f32,
+    },
+    Windy,
+    Marble {
+        octaves: u32,
+        omega: f32,
+        scale: f32,
+        variation: f32,
+    },
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EnvMapping {
     /// Equirectangular (Mitsuba `envmap`).

@@ -146,5 +146,32 @@ fn load_texture_kind(
             scale: *scale,
             offset: (*offset).into(),
         },
+        scene::Texture::Product { a, b } => Texture::Product(Box::new([
+            load_texture_kind(a, desc)?,
+            load_texture_kind(b, desc)?,
+        ])),
+        scene::Texture::Mix { a, b, amount } => Texture::Mix(Box::new([
+            load_texture_kind(a, desc)?,
+            load_texture_kind(b, desc)?,
+            load_texture_kind(amount, desc)?,
+        ])),
+        scene::Texture::Bilerp {
+            v00,
+            v01,
+            v10,
+            v11,
+            to_uv,
+        } => Texture::Bilerp {
+            corners: [*v00, *v10, *v01, *v11].map(Into::into),
+            to_uv: *to_uv,
+        },
+        scene::Texture::Checker3D { a, b, to_texture } => Texture::Checker3D {
+            textures: Box::new([load_texture_kind(a, desc)?, load_texture_kind(b, desc)?]),
+            to_texture: *to_texture,
+        },
+        scene::Texture::Noise { kind, to_texture } => Texture::Noise {
+            kind: *kind,
+            to_texture: *to_texture,
+        },
     })
 }

@@ -13,10 +13,10 @@
 use std::sync::Arc;
 
 use base::spectrum::DeclaredSpectrum;
-use base::{NoiseConversion, TextureFilter, WrapMode};
+use base::{NoiseConversion, NoiseKind, TextureFilter, WrapMode};
 
 use crate::film::Image;
-use crate::math::{Mat3, Vec2, Vec3};
+use crate::math::{Mat3, Mat4, Vec2, Vec3};
 
 /// Where a texture is looked up: the surface's uv and its world-space point.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -155,6 +155,23 @@ pub enum Texture {
         texture: Box<Texture>,
         scale: f32,
         offset: Vec3,
+    },
+    Product(Box<[Texture; 2]>),
+    /// `[a, b, amount]`: (1 − t)·a + t·b, t = amount's first channel.
+    Mix(Box<[Texture; 3]>),
+    /// Values at uv corners (0,0), (1,0), (0,1), (1,1) of `to_uv`·uv.
+    Bilerp {
+        corners: [Vec3; 4],
+        to_uv: Mat3,
+    },
+    /// `[even, odd]` cells of ⌊x⌋ + ⌊y⌋ + ⌊z⌋ at `to_texture`·p.
+    Checker3D {
+        textures: Box<[Texture; 2]>,
+        to_texture: Mat4,
+    },
+    Noise {
+        kind: NoiseKind,
+        to_texture: Mat4,
     },
     /// A constant the scene declared as a spectrum (made by `build` in spectral mode only):
     /// `rgb` wherever an RGB value is read (lobe-selection weights, light power), the
@@ -312,6 +329,30 @@ impl Texture {
                 scale,
                 offset,
             } => texture.eval(at) * *scale + *offset,
+            Texture::Product(t) => t[0].eval(at) * t[1].eval(at),
+            Texture::Mix(t) => {
+                let u = t[2].eval(at).x;
+                t[0].eval(at) * (1.0 - u) + t[1].eval(at) * u
+            }
+            Texture::Bilerp { corners, to_uv } => {
+                let q = to_uv.transform_point2(at.uv);
+                let (u, v) = (q.x, q.y);
+                corners[0] * ((1.0 - u) * (1.0 - v))
+                    + corners[1] * (u * (1.0 - v))
+                    + corners[2] * ((1.0 - u) * v)
+                    + corners[3] * (u * v)
+            }
+            Texture::Checker3D {
+                textures,
+                to_texture,
+            } => {
+                let c = to_texture.transform_point3a(at.p).floor();
+                let odd = (c.x as i64 + c.y as i64 + c.z as i64).rem_euclid(2) == 1;
+                textures[usize::from(odd)].eval(at)
+            }
+            Texture::Noise { kind, to_texture } => {
+                noise::texture(*kind, to_texture.transform_point3a(at.p))
+            }
             Texture::Spectrum { rgb, .. } => *rgb,
         }
     }
@@ -356,6 +397,8 @@ impl Texture {
                 1.0 / image.height as f32,
             )),
             Texture::Affine { texture, .. } => texture.texel_size(),
+            Texture::Product(t) => t.iter().find_map(Texture::texel_size),
+            Texture::Mix(t) => t.iter().find_map(Texture::texel_size),
             _ => None,
         }
     }
@@ -367,6 +410,15 @@ impl Texture {
                 1e-3 / scale.abs().max(1e-6)
             }
             Texture::Affine { texture, .. } => texture.solid_epsilon(),
+            // Features of about a unit in texture space.
+            Texture::Checker3D { to_texture, .. } | Texture::Noise { to_texture, .. } => {
+                let stretch = Mat3::from_mat4(*to_texture);
+                let s = [stretch.x_axis, stretch.y_axis, stretch.z_axis]
+                    .map(|c| c.length())
+                    .into_iter()
+                    .fold(0f32, f32::max);
+                1e-3 / s.max(1e-6)
+            }
             _ => 1e-3,
         }
     }
@@ -390,7 +442,208 @@ impl Texture {
                 scale,
                 offset,
             } => texture.mean() * *scale + *offset,
+            // Means of products and mixes as if the parts were independent.
+            Texture::Product(t) => t[0].mean() * t[1].mean(),
+            Texture::Mix(t) => {
+                let u = t[2].mean().x;
+                t[0].mean() * (1.0 - u) + t[1].mean() * u
+            }
+            Texture::Bilerp { corners, .. } => corners.iter().copied().sum::<Vec3>() * 0.25,
+            Texture::Checker3D { textures, .. } => 0.5 * (textures[0].mean() + textures[1].mean()),
+            Texture::Noise { kind, .. } => noise::mean(*kind),
             Texture::Spectrum { rgb, .. } => *rgb,
+        }
+    }
+}
+
+/// pbrt-v4's noise textures: Perlin's improved noise (2002), its fractional Brownian motion
+/// and turbulence sums, and the textures made of them. Without ray differentials every octave
+/// is summed (pbrt-v4's behaviour for a point seen at zero footprint).
+mod noise {
+    use super::{NoiseKind, Vec3};
+
+    /// Perlin's reference permutation of 0..255.
+    const PERM: [u8; 256] = [
+        151, 160, 137, 91, 90, 15, 131, 13, 201, 95, 96, 53, 194, 233, 7, 225, 140, 36, 103, 30,
+        69, 142, 8, 99, 37, 240, 21, 10, 23, 190, 6, 148, 247, 120, 234, 75, 0, 26, 197, 62, 94,
+        252, 219, 203, 117, 35, 11, 32, 57, 177, 33, 88, 237, 149, 56, 87, 174, 20, 125, 136, 171,
+        168, 68, 175, 74, 165, 71, 134, 139, 48, 27, 166, 77, 146, 158, 231, 83, 111, 229, 122, 60,
+        211, 133, 230, 220, 105, 92, 41, 55, 46, 245, 40, 244, 102, 143, 54, 65, 25, 63, 161, 1,
+        216, 80, 73, 209, 76, 132, 187, 208, 89, 18, 169, 200, 196, 135, 130, 116, 188, 159, 86,
+        164, 100, 109, 198, 173, 186, 3, 64, 52, 217, 226, 250, 124, 123, 5, 202, 38, 147, 118,
+        126, 255, 82, 85, 212, 207, 206, 59, 227, 47, 16, 58, 17, 182, 189, 28, 42, 223, 183, 170,
+        213, 119, 248, 152, 2, 44, 154, 163, 70, 221, 153, 101, 155, 167, 43, 172, 9, 129, 22, 39,
+        253, 19, 98, 108, 110, 79, 113, 224, 232, 178, 185, 112, 104, 218, 246, 97, 228, 251, 34,
+        242, 193, 238, 210, 144, 12, 191, 179, 162, 241, 81, 51, 145, 235, 249, 14, 239, 107, 49,
+        192, 214, 31, 181, 199, 106, 157, 184, 84, 204, 176, 115, 121, 50, 45, 127, 4, 150, 254,
+        138, 236, 205, 93, 222, 114, 67, 29, 24, 72, 243, 141, 128, 195, 78, 66, 215, 61, 156, 180,
+    ];
+
+    fn perm(i: usize) -> usize {
+        PERM[i & 255] as usize
+    }
+
+    fn grad(x: usize, y: usize, z: usize, d: Vec3) -> f32 {
+        let h = perm(perm(perm(x) + y) + z) & 15;
+        let u = if h < 8 || h == 12 || h == 13 {
+            d.x
+        } else {
+            d.y
+        };
+        let v = if h < 4 || h == 12 || h == 13 {
+            d.y
+        } else {
+            d.z
+        };
+        (if h & 1 != 0 { -u } else { u }) + (if h & 2 != 0 { -v } else { v })
+    }
+
+    fn fade(t: f32) -> f32 {
+        let t3 = t * t * t;
+        t3 * (t * (6.0 * t - 15.0) + 10.0)
+    }
+
+    fn lerp(t: f32, a: f32, b: f32) -> f32 {
+        (1.0 - t) * a + t * b
+    }
+
+    /// Improved noise in about [−1, 1]; 0 on the integer lattice.
+    pub fn perlin(p: Vec3) -> f32 {
+        let c = p.floor();
+        let d = p - c;
+        let (x, y, z) = (
+            (c.x as i64 & 255) as usize,
+            (c.y as i64 & 255) as usize,
+            (c.z as i64 & 255) as usize,
+        );
+        let g = |i: usize, j: usize, k: usize| {
+            grad(
+                x + i,
+                y + j,
+                z + k,
+                d - Vec3::new(i as f32, j as f32, k as f32),
+            )
+        };
+        let (wx, wy, wz) = (fade(d.x), fade(d.y), fade(d.z));
+        let x00 = lerp(wx, g(0, 0, 0), g(1, 0, 0));
+        let x10 = lerp(wx, g(0, 1, 0), g(1, 1, 0));
+        let x01 = lerp(wx, g(0, 0, 1), g(1, 0, 1));
+        let x11 = lerp(wx, g(0, 1, 1), g(1, 1, 1));
+        lerp(wz, lerp(wy, x00, x10), lerp(wy, x01, x11))
+    }
+
+    /// Σ ωⁱ·noise(1.99ⁱ p) over `octaves` octaves.
+    pub fn fbm(p: Vec3, omega: f32, octaves: u32) -> f32 {
+        let (mut sum, mut lambda, mut o) = (0.0, 1.0, 1.0);
+        for _ in 0..octaves {
+            sum += o * perlin(lambda * p);
+            lambda *= 1.99;
+            o *= omega;
+        }
+        sum
+    }
+
+    /// Σ ωⁱ·|noise(1.99ⁱ p)|, plus pbrt-v4's allowance of 0.2·ω^octaves for the octaves
+    /// beyond the last.
+    pub fn turbulence(p: Vec3, omega: f32, octaves: u32) -> f32 {
+        let (mut sum, mut lambda, mut o) = (0.0, 1.0, 1.0);
+        for _ in 0..octaves {
+            sum += o * perlin(lambda * p).abs();
+            lambda *= 1.99;
+            o *= omega;
+        }
+        sum + o * 0.2
+    }
+
+    pub fn texture(kind: NoiseKind, p: Vec3) -> Vec3 {
+        match kind {
+            NoiseKind::Fbm { octaves, omega } => Vec3::splat(fbm(p, omega, octaves)),
+            NoiseKind::Wrinkled { octaves, omega } => Vec3::splat(turbulence(p, omega, octaves)),
+            NoiseKind::Windy => {
+                let strength = fbm(0.1 * p, 0.5, 3);
+                Vec3::splat(strength.abs() * fbm(p, 0.5, 6))
+            }
+            NoiseKind::Marble {
+                octaves,
+                omega,
+                scale,
+                variation,
+            } => {
+                let p = p * scale;
+                let m = p.y + variation * fbm(p, omega, octaves);
+                marble(0.5 + 0.5 * m.sin())
+            }
+        }
+    }
+
+    /// pbrt-v4's marble colour spline at t ∈ [0, 1]: cubic Bézier segments through its
+    /// nine colours, times 1.5.
+    fn marble(t: f32) -> Vec3 {
+        const C: [[f32; 3]; 9] = [
+            [0.58, 0.58, 0.6],
+            [0.58, 0.58, 0.6],
+            [0.58, 0.58, 0.6],
+            [0.5, 0.5, 0.5],
+            [0.6, 0.59, 0.58],
+            [0.58, 0.58, 0.6],
+            [0.58, 0.58, 0.6],
+            [0.2, 0.2, 0.33],
+            [0.58, 0.58, 0.6],
+        ];
+        let segments = C.len() - 3;
+        let first = ((t * segments as f32).floor().max(0.0) as usize).min(segments - 1);
+        let t = t * segments as f32 - first as f32;
+        let cp = |i: usize| Vec3::from_array(C[first + i]);
+        let (a, b, c) = (
+            cp(0).lerp(cp(1), t),
+            cp(1).lerp(cp(2), t),
+            cp(2).lerp(cp(3), t),
+        );
+        let (d, e) = (a.lerp(b, t), b.lerp(c, t));
+        1.5 * d.lerp(e, t)
+    }
+
+    /// Noise has mean 0; turbulence's and marble's means are rough values for power
+    /// estimates.
+    pub fn mean(kind: NoiseKind) -> Vec3 {
+        match kind {
+            NoiseKind::Fbm { .. } | NoiseKind::Windy => Vec3::ZERO,
+            NoiseKind::Wrinkled { omega, .. } => Vec3::splat(0.25 / (1.0 - omega).max(0.1)),
+            NoiseKind::Marble { .. } => Vec3::splat(0.85),
+        }
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        #[test]
+        fn perlin_noise_vanishes_on_the_lattice_and_stays_bounded() {
+            for p in [
+                Vec3::ZERO,
+                Vec3::new(3.0, -2.0, 7.0),
+                Vec3::new(255.0, 256.0, -1.0),
+            ] {
+                assert_eq!(perlin(p), 0.0);
+            }
+            let mut max = 0f32;
+            let mut sum = 0f64;
+            let n = 100_000;
+            for i in 0..n {
+                let t = i as f32 * 0.0137;
+                let p = Vec3::new(t.sin() * 40.0 + t, t * 0.37, (t * 1.3).cos() * 17.0);
+                let v = perlin(p);
+                max = max.max(v.abs());
+                sum += v as f64;
+            }
+            assert!(max <= 1.1 && max > 0.5, "max |noise| {max}");
+            assert!((sum / n as f64).abs() < 0.02, "mean {}", sum / n as f64);
+        }
+
+        #[test]
+        fn marble_spline_ends_at_its_first_and_last_colours() {
+            assert!((marble(0.0) - 1.5 * Vec3::new(0.58, 0.58, 0.6)).length() < 1e-5);
+            assert!((marble(1.0) - 1.5 * Vec3::new(0.58, 0.58, 0.6)).length() < 1e-5);
         }
     }
 }
@@ -398,6 +651,39 @@ impl Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pbrt_texture_combinations() {
+        let c = |v: f32| Texture::Constant(Vec3::splat(v));
+        let at = TexCoord {
+            uv: Vec2::new(0.25, 0.75),
+            p: Vec3::new(0.5, 1.5, -0.5),
+        };
+        assert_eq!(
+            Texture::Product(Box::new([c(0.5), c(0.4)])).eval(at),
+            Vec3::splat(0.2)
+        );
+        let mix = Texture::Mix(Box::new([c(1.0), c(3.0), c(0.25)]));
+        assert_eq!(mix.eval(at), Vec3::splat(1.5));
+        let bilerp = Texture::Bilerp {
+            corners: [Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE],
+            to_uv: Mat3::IDENTITY,
+        };
+        // (1−u)(1−v)·X + u(1−v)·Y + (1−u)v·Z + uv·1 at u = ¼, v = ¾.
+        let want = Vec3::new(0.1875 + 0.1875, 0.0625 + 0.1875, 0.5625 + 0.1875);
+        assert!((bilerp.eval(at) - want).length() < 1e-6);
+        let checker = Texture::Checker3D {
+            textures: Box::new([c(0.0), c(1.0)]),
+            to_texture: Mat4::IDENTITY,
+        };
+        // ⌊0.5⌋ + ⌊1.5⌋ + ⌊−0.5⌋ = 0 + 1 − 1 = 0: even.
+        assert_eq!(checker.eval(at), Vec3::ZERO);
+        let moved = TexCoord {
+            p: at.p + Vec3::X,
+            ..at
+        };
+        assert_eq!(checker.eval(moved), Vec3::ONE);
+    }
 
     /// The noise is the course's formula: an independent, literal f64 evaluation of
     /// Σ G(i,j,k)·v f(vx) f(vy) f(vz) over the eight lattice points at a list of points, and

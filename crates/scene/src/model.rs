@@ -814,6 +814,39 @@ pub enum Texture {
         scale: f32,
         offset: Rgb,
     },
+    /// `a` · `b` channel by channel (pbrt-v4's `scale`: `tex` × `scale`).
+    Product {
+        a: Box<Texture>,
+        b: Box<Texture>,
+    },
+    /// (1 − t)·`a` + t·`b`, t the first channel of `amount` (pbrt-v4's `mix`).
+    Mix {
+        a: Box<Texture>,
+        b: Box<Texture>,
+        amount: Box<Texture>,
+    },
+    /// Bilinear interpolation of four values over the unit square of `to_uv`·uv: `v00` at
+    /// (0, 0), `v10` at (1, 0), `v01` at (0, 1), `v11` at (1, 1) (pbrt-v4's `bilerp`).
+    Bilerp {
+        v00: Rgb,
+        v01: Rgb,
+        v10: Rgb,
+        v11: Rgb,
+        to_uv: Mat3,
+    },
+    /// pbrt-v4's 3D `checkerboard`: `a` where ⌊x⌋ + ⌊y⌋ + ⌊z⌋ of the world point mapped by
+    /// `to_texture` is even, `b` where it is odd.
+    Checker3D {
+        a: Box<Texture>,
+        b: Box<Texture>,
+        to_texture: Mat4,
+    },
+    /// pbrt-v4's noise textures (Perlin's improved noise) at the world point mapped by
+    /// `to_texture`; grey but for `Marble`.
+    Noise {
+        kind: NoiseKind,
+        to_texture: Mat4,
+    },
 }
 
 // ---------------------------------------------------------------------------------------------
