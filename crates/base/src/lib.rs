@@ -78,6 +78,12 @@ pub enum PhongModel {
 pub enum TextureFilter {
     Nearest,
     Bilinear,
+    /// pbrt-v4's trilinear filtering over a MIP map, the level chosen by the lookup's
+    /// footprint.
+    Trilinear,
+    /// pbrt-v4's elliptically weighted average over a MIP map (Heckbert 1989, Gaussian
+    /// weights, anisotropy clamped to 8).
+    Ewa,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -235,7 +235,12 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
     let has_nulls = shapes
         .iter()
         .any(|s| s.material.is_some_and(|m| materials[m as usize].is_null()));
+    let filtered = textures
+        .iter()
+        .any(render::textures::Texture::uses_footprint);
+    let texture_footprint = filtered.then(|| (1.0 / (spp.max(1) as f32).sqrt()).max(0.125));
     let mut scene = Scene {
+        texture_footprint,
         accel,
         shapes,
         has_unlit: materials.iter().any(|m| m.unlit.is_some()),

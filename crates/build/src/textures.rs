@@ -6,9 +6,9 @@ use std::sync::Arc;
 use render::image_io::{self, Decode};
 use render::math::Vec3;
 use render::shapes::ShapeInfo;
-use render::textures::{TexRef, Texture};
+use render::textures::{MipMap, TexRef, Texture};
 
-use scene::SceneDesc;
+use scene::{SceneDesc, TextureFilter};
 
 use crate::BuildError;
 
@@ -73,6 +73,7 @@ fn alpha_texture(desc: &scene::TextureDesc) -> Result<Option<Texture>, BuildErro
         wrap: *wrap,
         to_uv: *to_uv,
         corner_texels: *corner_texels,
+        mips: None,
     }))
 }
 
@@ -114,12 +115,15 @@ fn load_texture_kind(
                 loc: desc.loc.clone(),
                 message: format!("cannot read texture: {e}"),
             })?;
+            let mips = matches!(filter, TextureFilter::Trilinear | TextureFilter::Ewa)
+                .then(|| Arc::new(MipMap::new(&image, *wrap)));
             Texture::Bitmap {
                 image: Arc::new(image),
                 filter: *filter,
                 wrap: *wrap,
                 to_uv: *to_uv,
                 corner_texels: *corner_texels,
+                mips,
             }
         }
         scene::Texture::Perlin { scale, conversion } => Texture::Perlin {

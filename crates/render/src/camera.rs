@@ -221,6 +221,38 @@ impl Camera {
         }
     }
 
+    /// How far the surface point `p` (normal `n`) moves per pixel step in x and in y: rays
+    /// through the neighbouring pixels (from the lens centre, or parallel for an
+    /// orthographic camera) meet the tangent plane at `p` there. The world-space analogue
+    /// of pbrt-v4's `Approximate_dp_dxy`, which texture filtering reads at every bounce.
+    /// Zero where the plane is seen edge-on.
+    pub fn approximate_dp_dxy(&self, p: Vec3, n: Vec3) -> (Vec3, Vec3) {
+        let pc = self.to_camera.transform_point3a(p);
+        // Normals go to camera space by the transpose of camera-to-world's inverse.
+        let nc = crate::math::Mat3::from_mat4(self.to_world).transpose() * n;
+        let step = 2.0 * self.half_extent / self.resolution;
+        let offsets = [Vec3::new(step.x, 0.0, 0.0), Vec3::new(0.0, step.y, 0.0)];
+        let on_plane = |o: Vec3, d: Vec3| {
+            let t = nc.dot(pc - o) / nc.dot(d);
+            let q = o + t * d;
+            let dp = self.to_world.transform_vector3a(q - pc);
+            if dp.is_finite() { dp } else { Vec3::ZERO }
+        };
+        let [dx, dy] = offsets.map(|off| match self.kind {
+            Kind::Orthographic => on_plane(
+                Vec3::new(pc.x, pc.y, 0.0) + off / self.half_extent.x,
+                Vec3::Z,
+            ),
+            _ => {
+                if pc.z <= 0.0 {
+                    return Vec3::ZERO;
+                }
+                on_plane(Vec3::ZERO, pc / pc.z + off)
+            }
+        });
+        (dx, dy)
+    }
+
     /// The film position in [0, 1]² (x right, y down) that the ray leaving the camera in
     /// world direction `d` (from `origin`, which only an orthographic camera reads) comes
     /// through: the inverse of [`Self::generate_ray`] for the lens centre. CENG795's
@@ -342,6 +374,40 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rays through neighbouring pixel centres land where `approximate_dp_dxy` says, on a
+    /// tilted plane seen by a perspective and an orthographic camera.
+    #[test]
+    fn surface_steps_per_pixel_follow_neighbouring_rays() {
+        // At (0.3, 0.5, −4), looking along +z, turned a little.
+        let to_world = Mat4::from_translation(glam::Vec3::new(0.3, 0.5, -4.0))
+            * Mat4::from_rotation_y(-0.07)
+            * Mat4::from_rotation_x(0.12);
+        let n = Vec3::new(0.2, 1.0, -0.6).normalize();
+        let plane_hit = |r: &Ray| {
+            let t = n.dot(-r.o) / n.dot(r.d);
+            r.o + t * r.d
+        };
+        for projection in [
+            Projection::Perspective {
+                fov: 40.0,
+                fov_axis: FovAxis::X,
+            },
+            Projection::Orthographic,
+        ] {
+            let cam = Camera::new(&projection, to_world, 0.01, 1e4, 160, 120);
+            let film = Vec2::new(70.5, 50.5);
+            let at = |f: Vec2| plane_hit(&cam.generate_ray(f, Vec2::ZERO).ray);
+            let p = at(film);
+            let (dx, dy) = cam.approximate_dp_dxy(p, n);
+            for (d, step) in [(dx, Vec2::X), (dy, Vec2::Y)] {
+                // Up to the sign convention of the film axes.
+                let q = 0.5 * (at(film + step) - at(film - step));
+                let err = (q - d).length().min((q + d).length());
+                assert!(err < 1e-2 * q.length(), "{projection:?}: {d} vs {q}");
+            }
+        }
+    }
 
     #[test]
     fn film_uv_inverts_generate_ray() {

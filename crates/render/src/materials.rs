@@ -248,21 +248,19 @@ impl RtMaterial {
         &self,
         textures: &Textures,
         si: &SurfaceInteraction,
+        at: TexCoord,
     ) -> Option<(&MaterialKind, Frame)> {
         let mut frame = si.shading;
         let mut layer = &self.surface;
         loop {
             for p in &layer.perturbs {
-                frame = p.apply(textures, si.tex(), frame);
+                frame = p.apply(textures, at, frame);
             }
             match &layer.then {
                 Then::Model(kind) => return kind.as_ref().map(|k| (k, frame)),
                 Then::Mix { amount, layers } => {
-                    layer = &layers[usize::from(mix_picks_second(
-                        textures.float(amount, si.tex()),
-                        si.p,
-                        si.wo,
-                    ))];
+                    layer = &layers
+                        [usize::from(mix_picks_second(textures.float(amount, at), si.p, si.wo))];
                 }
                 Then::Sides(sides) => {
                     if si.wo.dot(frame.n) < 0.0 {

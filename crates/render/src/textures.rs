@@ -18,17 +18,32 @@ use base::{NoiseConversion, NoiseKind, TextureFilter, WrapMode};
 use crate::film::Image;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
 
-/// Where a texture is looked up: the surface's uv and its world-space point.
+/// Where a texture is looked up: the surface's uv and its world-space point, and the
+/// lookup's footprint: the change of uv per pixel step in x and in y (zero when unknown:
+/// MIP-mapped textures then read their finest level).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TexCoord {
     pub uv: Vec2,
     pub p: Vec3,
+    pub duv: [Vec2; 2],
 }
 
 impl TexCoord {
     /// A lookup that only has a uv (surface textures ignore `p`).
+    /// A lookup without a footprint.
+    pub fn at(uv: Vec2, p: Vec3) -> TexCoord {
+        TexCoord {
+            uv,
+            p,
+            duv: [Vec2::ZERO; 2],
+        }
+    }
+
     pub fn uv(uv: Vec2) -> TexCoord {
-        TexCoord { uv, p: Vec3::ZERO }
+        TexCoord {
+            uv,
+            ..TexCoord::default()
+        }
     }
 }
 
@@ -135,6 +150,8 @@ pub enum Texture {
         wrap: WrapMode,
         to_uv: Mat3,
         corner_texels: bool,
+        /// The MIP pyramid of trilinear and EWA filtering.
+        mips: Option<Arc<MipMap>>,
     },
     Checkerboard {
         color0: Vec3,
@@ -241,6 +258,175 @@ pub fn perlin(p: Vec3) -> f32 {
     sum
 }
 
+/// Bilinear interpolation of `image` at continuous texel position (x, y) (texel i centred at
+/// i + ½).
+#[inline]
+fn bilerp(image: &Image, x: f32, y: f32, wrap: WrapMode) -> Vec3 {
+    let (w, h) = (image.width, image.height);
+    let (xs, ys) = (x - 0.5, y - 0.5);
+    let (x0, y0) = (xs.floor(), ys.floor());
+    let (fx, fy) = (xs - x0, ys - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let px =
+        |dx: i64, dy: i64| image.get(wrap_index(x0 + dx, w, wrap), wrap_index(y0 + dy, h, wrap));
+    (px(0, 0) * (1.0 - fx) + px(1, 0) * fx) * (1.0 - fy)
+        + (px(0, 1) * (1.0 - fx) + px(1, 1) * fx) * fy
+}
+
+/// An image pyramid for pbrt-v4's trilinear and EWA filtering: level 0 is the image
+/// resampled (bilinearly) to power-of-two sides, each next level the 2×2 box average of the
+/// one before, down to one texel.
+#[derive(Debug)]
+pub struct MipMap {
+    levels: Vec<Image>,
+}
+
+impl MipMap {
+    pub fn new(image: &Image, wrap: WrapMode) -> MipMap {
+        let (w, h) = (
+            image.width.next_power_of_two(),
+            image.height.next_power_of_two(),
+        );
+        let mut base = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let fx = (x as f32 + 0.5) / w as f32 * image.width as f32;
+                let fy = (y as f32 + 0.5) / h as f32 * image.height as f32;
+                base.set(x, y, bilerp(image, fx, fy, wrap));
+            }
+        }
+        let mut levels = vec![base];
+        while let Some(last) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+            let (w, h) = ((last.width / 2).max(1), (last.height / 2).max(1));
+            let mut next = Image::new(w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    let (x2, y2) = (2 * x, 2 * y);
+                    let at = |dx: u32, dy: u32| {
+                        last.get(
+                            (x2 + dx).min(last.width - 1),
+                            (y2 + dy).min(last.height - 1),
+                        )
+                    };
+                    next.set(x, y, (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1)) * 0.25);
+                }
+            }
+            levels.push(next);
+        }
+        MipMap { levels }
+    }
+
+    pub fn levels(&self) -> usize {
+        self.levels.len()
+    }
+
+    fn bilerp(&self, level: usize, st: Vec2, wrap: WrapMode) -> Vec3 {
+        let l = &self.levels[level.min(self.levels.len() - 1)];
+        bilerp(l, st.x * l.width as f32, st.y * l.height as f32, wrap)
+    }
+
+    fn texel(&self, level: usize, x: i64, y: i64, wrap: WrapMode) -> Vec3 {
+        let l = &self.levels[level];
+        l.get(wrap_index(x, l.width, wrap), wrap_index(y, l.height, wrap))
+    }
+
+    /// The filtered value at `st` for a footprint of `dst` (the change of st per pixel step
+    /// in x and y), as pbrt-v4's `MIPMap::Filter` computes it.
+    pub fn filter(&self, st: Vec2, dst: [Vec2; 2], filter: TextureFilter, wrap: WrapMode) -> Vec3 {
+        let n = self.levels.len();
+        if filter != TextureFilter::Ewa {
+            let width = 2.0 * dst[0].abs().max(dst[1].abs()).max_element();
+            let level = (n - 1) as f32 + width.max(1e-8).log2();
+            if level >= (n - 1) as f32 {
+                return self.texel(n - 1, 0, 0, wrap);
+            }
+            let il = level.floor().max(0.0) as usize;
+            return match filter {
+                TextureFilter::Nearest => {
+                    let l = &self.levels[il];
+                    let x = (st.x * l.width as f32).floor() as i64;
+                    let y = (st.y * l.height as f32).floor() as i64;
+                    self.texel(il, x, y, wrap)
+                }
+                TextureFilter::Bilinear => self.bilerp(il, st, wrap),
+                _ if il == 0 => self.bilerp(0, st, wrap),
+                _ => {
+                    let t = level - il as f32;
+                    self.bilerp(il, st, wrap) * (1.0 - t) + self.bilerp(il + 1, st, wrap) * t
+                }
+            };
+        }
+        let (mut major, mut minor) = (dst[0], dst[1]);
+        if major.length_squared() < minor.length_squared() {
+            std::mem::swap(&mut major, &mut minor);
+        }
+        let (long, mut short) = (major.length(), minor.length());
+        const MAX_ANISOTROPY: f32 = 8.0;
+        if short * MAX_ANISOTROPY < long && short > 0.0 {
+            let scale = long / (short * MAX_ANISOTROPY);
+            minor *= scale;
+            short *= scale;
+        }
+        if short == 0.0 || !short.is_finite() {
+            return self.bilerp(0, st, wrap);
+        }
+        let lod = ((n - 1) as f32 + short.log2()).max(0.0);
+        let il = lod.floor() as usize;
+        let t = lod - il as f32;
+        self.ewa(il, st, major, minor, wrap) * (1.0 - t)
+            + self.ewa(il + 1, st, major, minor, wrap) * t
+    }
+
+    /// Heckbert's elliptically weighted average at one level, Gaussian weights
+    /// e^(−2r²) − e^(−2) over the ellipse spanned by the two footprint vectors.
+    fn ewa(&self, level: usize, st: Vec2, d0: Vec2, d1: Vec2, wrap: WrapMode) -> Vec3 {
+        if level >= self.levels.len() {
+            return self.texel(self.levels.len() - 1, 0, 0, wrap);
+        }
+        let l = &self.levels[level];
+        let res = Vec2::new(l.width as f32, l.height as f32);
+        let c = st * res - Vec2::splat(0.5);
+        let (d0, d1) = (d0 * res, d1 * res);
+        let mut a = d0.y * d0.y + d1.y * d1.y + 1.0;
+        let mut b = -2.0 * (d0.x * d0.y + d1.x * d1.y);
+        let mut cc = d0.x * d0.x + d1.x * d1.x + 1.0;
+        let inv_f = 1.0 / (a * cc - b * b * 0.25);
+        a *= inv_f;
+        b *= inv_f;
+        cc *= inv_f;
+        let det = 4.0 * a * cc - b * b;
+        let inv_det = 1.0 / det;
+        let (us, vs) = ((det * cc).max(0.0).sqrt(), (a * det).max(0.0).sqrt());
+        let (s0, s1) = (
+            (c.x - 2.0 * inv_det * us).ceil() as i64,
+            (c.x + 2.0 * inv_det * us).floor() as i64,
+        );
+        let (t0, t1) = (
+            (c.y - 2.0 * inv_det * vs).ceil() as i64,
+            (c.y + 2.0 * inv_det * vs).floor() as i64,
+        );
+        let (mut sum, mut weights) = (Vec3::ZERO, 0f32);
+        let edge = (-2f32).exp();
+        for it in t0..=t1 {
+            let tt = it as f32 - c.y;
+            for is in s0..=s1 {
+                let ss = is as f32 - c.x;
+                let r2 = a * ss * ss + b * ss * tt + cc * tt * tt;
+                if r2 < 1.0 {
+                    let w = (-2.0 * r2).exp() - edge;
+                    sum += self.texel(level, is, it, wrap) * w;
+                    weights += w;
+                }
+            }
+        }
+        if weights > 0.0 {
+            sum / weights
+        } else {
+            self.bilerp(level, st, wrap)
+        }
+    }
+}
+
 #[inline]
 fn wrap_index(i: i64, n: u32, mode: WrapMode) -> u32 {
     let n = n as i64;
@@ -278,10 +464,15 @@ impl Texture {
                 wrap,
                 to_uv,
                 corner_texels,
+                mips,
             } => {
                 let p = to_uv.transform_point2(at.uv);
                 if !p.is_finite() {
                     return Vec3::ZERO;
+                }
+                if let Some(m) = mips {
+                    let d = at.duv.map(|d| to_uv.transform_vector2(d));
+                    return m.filter(p, d, *filter, *wrap);
                 }
                 let (w, h) = (image.width, image.height);
                 // Centred texels: texel i covers [i, i+1) of x; corner texels: [i-½, i+½).
@@ -294,16 +485,9 @@ impl Texture {
                         let yi = wrap_index(y.floor() as i64, h, *wrap);
                         image.get(xi, yi)
                     }
-                    TextureFilter::Bilinear => {
-                        let (xs, ys) = (x - 0.5, y - 0.5);
-                        let (x0, y0) = (xs.floor(), ys.floor());
-                        let (fx, fy) = (xs - x0, ys - y0);
-                        let (x0, y0) = (x0 as i64, y0 as i64);
-                        let px = |dx: i64, dy: i64| {
-                            image.get(wrap_index(x0 + dx, w, *wrap), wrap_index(y0 + dy, h, *wrap))
-                        };
-                        (px(0, 0) * (1.0 - fx) + px(1, 0) * fx) * (1.0 - fy)
-                            + (px(0, 1) * (1.0 - fx) + px(1, 1) * fx) * fy
+                    // Without a pyramid (not built for these filters) the finest level.
+                    TextureFilter::Bilinear | TextureFilter::Trilinear | TextureFilter::Ewa => {
+                        bilerp(image, x, y, *wrap)
                     }
                 }
             }
@@ -386,6 +570,18 @@ impl Texture {
                 };
                 Vec3::new(d(Vec3::X * eps), d(Vec3::Y * eps), d(Vec3::Z * eps)) / (2.0 * eps)
             }
+        }
+    }
+
+    /// Whether a lookup's footprint changes the value (a MIP-filtered bitmap inside).
+    pub fn uses_footprint(&self) -> bool {
+        match self {
+            Texture::Bitmap { mips, .. } => mips.is_some(),
+            Texture::Affine { texture, .. } => texture.uses_footprint(),
+            Texture::Product(t) => t.iter().any(Texture::uses_footprint),
+            Texture::Mix(t) => t.iter().any(Texture::uses_footprint),
+            Texture::Checker3D { textures, .. } => textures.iter().any(Texture::uses_footprint),
+            _ => false,
         }
     }
 
@@ -652,13 +848,80 @@ mod noise {
 mod tests {
     use super::*;
 
+    /// A checkerboard of single texels, 0 and 1.
+    fn texel_checker(w: u32, h: u32) -> Image {
+        let mut img = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                img.set(x, y, Vec3::splat(((x + y) % 2) as f32));
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn mip_pyramid_keeps_the_mean_and_filters_by_footprint() {
+        let m = MipMap::new(&texel_checker(64, 32), WrapMode::Repeat);
+        assert_eq!(m.levels(), 7, "64×32 → … → 1×1");
+        assert_eq!(m.levels[1].width, 32);
+        for l in &m.levels[1..] {
+            let mean = l.pixels.iter().copied().sum::<Vec3>() / l.pixels.len() as f32;
+            assert!((mean.x - 0.5).abs() < 1e-5, "level mean {mean}");
+        }
+        let st = Vec2::new(0.3, 0.6);
+        for filter in [TextureFilter::Trilinear, TextureFilter::Ewa] {
+            // No footprint: the finest level, bilinearly.
+            let v = m.filter(st, [Vec2::ZERO; 2], filter, WrapMode::Repeat);
+            assert!((v - m.bilerp(0, st, WrapMode::Repeat)).length() < 1e-6);
+            // A footprint of many texels: the average.
+            let wide = [Vec2::new(0.2, 0.0), Vec2::new(0.0, 0.2)];
+            let v = m.filter(st, wide, filter, WrapMode::Repeat);
+            assert!((v.x - 0.5).abs() < 0.02, "{filter:?}: {v}");
+            // Wider than the image: the one top texel.
+            let v = m.filter(
+                st,
+                [Vec2::splat(4.0), Vec2::splat(4.0)],
+                filter,
+                WrapMode::Repeat,
+            );
+            assert!((v.x - 0.5).abs() < 1e-5, "{filter:?}: {v}");
+        }
+        // EWA keeps detail along the short axis of a thin footprint: across the stripes of
+        // an image constant along y, a footprint long in y and short in x still resolves x.
+        let mut stripes = Image::new(64, 64);
+        for y in 0..64 {
+            for x in 0..64 {
+                stripes.set(x, y, Vec3::splat(if (x / 8) % 2 == 0 { 1.0 } else { 0.0 }));
+            }
+        }
+        let m = MipMap::new(&stripes, WrapMode::Repeat);
+        let thin = [Vec2::new(0.0, 0.1), Vec2::new(0.002, 0.0)];
+        let bright = m.filter(
+            Vec2::new(4.0 / 64.0, 0.5),
+            thin,
+            TextureFilter::Ewa,
+            WrapMode::Repeat,
+        );
+        let dark = m.filter(
+            Vec2::new(12.0 / 64.0, 0.5),
+            thin,
+            TextureFilter::Ewa,
+            WrapMode::Repeat,
+        );
+        assert!(bright.x > 0.9 && dark.x < 0.1, "EWA: {bright} / {dark}");
+        let tri = m.filter(
+            Vec2::new(4.0 / 64.0, 0.5),
+            thin,
+            TextureFilter::Trilinear,
+            WrapMode::Repeat,
+        );
+        assert!(tri.x < 0.75, "trilinear blurs by the long axis: {tri}");
+    }
+
     #[test]
     fn pbrt_texture_combinations() {
         let c = |v: f32| Texture::Constant(Vec3::splat(v));
-        let at = TexCoord {
-            uv: Vec2::new(0.25, 0.75),
-            p: Vec3::new(0.5, 1.5, -0.5),
-        };
+        let at = TexCoord::at(Vec2::new(0.25, 0.75), Vec3::new(0.5, 1.5, -0.5));
         assert_eq!(
             Texture::Product(Box::new([c(0.5), c(0.4)])).eval(at),
             Vec3::splat(0.2)
@@ -739,10 +1002,7 @@ mod tests {
             scale: 1.0,
             conversion: NoiseConversion::AbsVal,
         };
-        let at = TexCoord {
-            uv: Vec2::ZERO,
-            p: Vec3::new(0.5, 0.0, 0.0),
-        };
+        let at = TexCoord::at(Vec2::ZERO, Vec3::new(0.5, 0.0, 0.0));
         assert!((patch.eval(at).x - 0.625).abs() < 1e-6);
         assert!((vein.eval(at).x - 0.25).abs() < 1e-6);
     }
@@ -756,7 +1016,7 @@ mod tests {
             conversion: NoiseConversion::Linear,
         };
         let p = Vec3::new(0.37, -1.21, 2.03);
-        let g = t.height_gradient(TexCoord { uv: Vec2::ZERO, p }, Vec3::X, Vec3::Y);
+        let g = t.height_gradient(TexCoord::at(Vec2::ZERO, p), Vec3::X, Vec3::Y);
         let h = 1e-2;
         for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
             let d =
@@ -780,6 +1040,7 @@ mod tests {
             wrap: WrapMode::Repeat,
             to_uv: Mat3::IDENTITY,
             corner_texels: true,
+            mips: None,
         };
         // u·w = 1.4 → texel 1; 1.6 → texel 2; 3.6 → 4 wraps to 0.
         let at = |u: f32| t.eval(TexCoord::uv(Vec2::new(u / 4.0, 0.0))).x;
@@ -822,6 +1083,7 @@ mod tests {
             wrap: WrapMode::Clamp,
             to_uv: Mat3::IDENTITY,
             corner_texels: false,
+            mips: None,
         };
         assert!(
             (t.eval(TexCoord::uv(Vec2::new(0.25, 0.25))) - Vec3::new(1.0, 0.0, 0.0)).length()

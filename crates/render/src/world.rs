@@ -14,7 +14,7 @@ use crate::geometry::Ray;
 use crate::lights::select::LightSampler;
 use crate::lights::{Light, LightScene, Receiver};
 use crate::materials::RtMaterial;
-use crate::math::{Frame, Vec3};
+use crate::math::{Frame, Vec2, Vec3};
 use crate::media::Medium;
 use crate::sampling::sampler::{mix64, u64_to_unit};
 use crate::shapes::{ShapeInfo, SurfaceInteraction, interaction};
@@ -87,6 +87,10 @@ pub struct Scene {
     pub has_nulls: bool,
     /// Whether any shape moves (only then do camera rays draw a time).
     pub has_motion: bool,
+    /// Set when a texture is MIP-filtered: texture lookups then carry a footprint, the
+    /// camera's pixel spacing at the hit times this scale (pbrt-v4's max(1/8, 1/√spp):
+    /// pixels are sampled many times, so each sample filters over less than a pixel).
+    pub texture_footprint: Option<f32>,
 }
 
 impl Scene {
@@ -260,8 +264,23 @@ impl Scene {
         si: &SurfaceInteraction,
         m: &M,
     ) -> Option<(Bsdf<M::C>, Frame)> {
-        let (kind, frame) = self.material(si)?.resolve(&self.textures, si)?;
-        Some((kind.bsdf_in(&self.textures, si.tex(), m), frame))
+        let at = self.tex_at(si);
+        let (kind, frame) = self.material(si)?.resolve(&self.textures, si, at)?;
+        Some((kind.bsdf_in(&self.textures, at, m), frame))
+    }
+
+    /// Where textures are looked up at `si`, with the lookup's footprint in uv when the
+    /// scene filters textures (see [`Scene::texture_footprint`]).
+    #[inline]
+    pub fn tex_at(&self, si: &SurfaceInteraction) -> TexCoord {
+        let mut at = si.tex();
+        if let Some(scale) = self.texture_footprint
+            && let Some((dpdu, dpdv)) = self.shapes[si.shape as usize].geom.uv_derivatives(si.prim)
+        {
+            let (dpdx, dpdy) = self.camera.approximate_dp_dxy(si.p, si.ng);
+            at.duv = uv_footprint(dpdu, dpdv, [dpdx * scale, dpdy * scale]);
+        }
+        at
     }
 
     /// Whether the surface at `si` is an index-matched boundary (see [`RtMaterial::is_null`]).
@@ -331,6 +350,26 @@ impl Scene {
     pub fn albedo(&self, si: &SurfaceInteraction) -> Vec3 {
         self.bsdf_at(si).map_or(Vec3::ZERO, |(b, _)| b.albedo())
     }
+}
+
+/// The changes of uv that best explain the surface steps `dp` (least squares through ∂p/∂u
+/// and ∂p/∂v, as pbrt-v4's `SurfaceInteraction::ComputeDifferentials`); zero where the
+/// parameterisation degenerates.
+fn uv_footprint(dpdu: Vec3, dpdv: Vec3, dp: [Vec3; 2]) -> [Vec2; 2] {
+    let (a00, a01, a11) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
+    let inv = 1.0 / (a00 * a11 - a01 * a01);
+    if !inv.is_finite() {
+        return [Vec2::ZERO; 2];
+    }
+    dp.map(|d| {
+        let (b0, b1) = (dpdu.dot(d), dpdv.dot(d));
+        let duv = Vec2::new(a11 * b0 - a01 * b1, a00 * b1 - a01 * b0) * inv;
+        if duv.is_finite() {
+            duv.clamp(Vec2::splat(-1e8), Vec2::splat(1e8))
+        } else {
+            Vec2::ZERO
+        }
+    })
 }
 
 /// A 64-bit hash of a ray's origin and direction (the cut-out decision's randomness).
@@ -407,5 +446,22 @@ impl Closest {
             Closest::Hit(hit) => scene.surface(ray, t_max, hit, |si| si.copied()),
             Closest::Surface(si) => si,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uv_footprint_inverts_the_parameterisation() {
+        let (dpdu, dpdv) = (Vec3::new(2.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0));
+        let want = [Vec2::new(0.1, -0.2), Vec2::new(0.03, 0.05)];
+        let dp = want.map(|d| dpdu * d.x + dpdv * d.y);
+        let got = uv_footprint(dpdu, dpdv, dp);
+        for (g, w) in got.iter().zip(want) {
+            assert!((*g - w).length() < 1e-6, "{g} vs {w}");
+        }
+        assert_eq!(uv_footprint(dpdu, dpdu, dp), [Vec2::ZERO; 2], "degenerate");
     }
 }

@@ -16,6 +16,7 @@ mod furnace_render;
 mod instancing;
 mod light_selection;
 mod media_emission;
+mod mip_filtering;
 mod motion_blur;
 mod nori;
 mod nori_vdb_box;

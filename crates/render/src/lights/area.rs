@@ -151,7 +151,7 @@ impl LightModel for AreaLight {
                 let uv = if textured { sphere_uv(dir) } else { Vec2::ZERO };
                 return Some(LightSample {
                     wi,
-                    li: m.illuminant_at(scene, &self.radiance, TexCoord { uv, p }),
+                    li: m.illuminant_at(scene, &self.radiance, TexCoord::at(uv, p)),
                     pdf: pdf_solid,
                     delta: false,
                     target: ShadowTarget::Surface { p, p_error, n },
@@ -172,7 +172,7 @@ impl LightModel for AreaLight {
         }
         Some(LightSample {
             wi,
-            li: m.illuminant_at(scene, &self.radiance, TexCoord { uv, p }),
+            li: m.illuminant_at(scene, &self.radiance, TexCoord::at(uv, p)),
             pdf: pdf * d2 / cos_l.abs(),
             delta: false,
             target: ShadowTarget::Surface { p, p_error, n },
@@ -272,7 +272,7 @@ impl LightModel for AreaLight {
         }
         let w = Frame::from_normal(n).to_world(local);
         let pdf_dir = cos / (PI * sides);
-        let le = m.illuminant_at(scene, &self.radiance, TexCoord { uv, p });
+        let le = m.illuminant_at(scene, &self.radiance, TexCoord::at(uv, p));
         Some(EmissionSample {
             ray: Ray::new(offset_ray_origin(p, p_error, n, w), w),
             p,
@@ -431,7 +431,7 @@ fn sample_sphere<M: ColorMode>(
     };
     Some(LightSample {
         wi,
-        li: m.illuminant_at(scene, radiance, TexCoord { uv, p }),
+        li: m.illuminant_at(scene, radiance, TexCoord::at(uv, p)),
         pdf: pdf_solid,
         delta: false,
         target: ShadowTarget::Surface {

@@ -27,10 +27,7 @@ impl SurfaceInteraction {
     /// Where textures are looked up at this point.
     #[inline]
     pub fn tex(&self) -> crate::textures::TexCoord {
-        crate::textures::TexCoord {
-            uv: self.uv,
-            p: self.p,
-        }
+        crate::textures::TexCoord::at(self.uv, self.p)
     }
 
     /// A ray leaving the surface in direction `d`, origin offset to the side `d` points to.

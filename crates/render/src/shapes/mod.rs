@@ -74,6 +74,35 @@ pub enum ShapeGeom {
 }
 
 impl ShapeGeom {
+    /// ∂p/∂u and ∂p/∂v on primitive `prim` (world space), for texture footprints: meshes
+    /// only (their uvs, or the barycentrics that stand for missing ones); `None` elsewhere.
+    pub fn uv_derivatives(&self, prim: u32) -> Option<(Vec3, Vec3)> {
+        let ShapeGeom::Mesh {
+            positions,
+            uvs,
+            indices,
+            ..
+        } = self
+        else {
+            return None;
+        };
+        let idx = indices.get(prim as usize)?.map(|i| i as usize);
+        let [p0, p1, p2] = idx.map(|i| positions[i]);
+        let [t0, t1, t2] = match uvs {
+            Some(t) => idx.map(|i| t[i]),
+            None => [Vec2::ZERO, Vec2::X, Vec2::Y],
+        };
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let (du1, du2) = (t1 - t0, t2 - t0);
+        let det = du1.x * du2.y - du1.y * du2.x;
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let dpdu = (e1 * du2.y - e2 * du1.y) / det;
+        let dpdv = (e2 * du1.x - e1 * du2.x) / det;
+        Some((dpdu, dpdv))
+    }
+
     pub fn accel_shape(&self) -> AccelShape {
         match self {
             ShapeGeom::Mesh {
