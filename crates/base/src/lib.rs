@@ -57,6 +57,8 @@ pub enum SpotFalloff {
     Mitsuba,
     /// The CENG795/CENG477 course: ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴.
     Cosine4,
+    /// pbrt-v4: smoothstep of cos α from cos cutoff (0) to cos beam (1), t²(3 − 2t).
+    SmoothStep,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

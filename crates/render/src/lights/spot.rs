@@ -1,6 +1,7 @@
 //! Spot lights: a point light restricted to a cone, with Mitsuba 3's linear falloff in angle
-//! between `beam_width` and `cutoff_angle`, or the CENG795 course's
-//! ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴; a delta light.
+//! between `beam_width` and `cutoff_angle`, the CENG795 course's
+//! ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴, or pbrt-v4's smoothstep in cos α; a
+//! delta light.
 
 use super::LightScene;
 use super::bvh::LightBounds;
@@ -24,8 +25,7 @@ pub struct SpotLight {
     pub cos_beam: f32,
     pub cutoff: f32,
     pub inv_transition: f32,
-    /// The CENG795 course's profile instead of Mitsuba's.
-    pub course: bool,
+    pub profile: base::SpotFalloff,
 }
 
 impl SpotLight {
@@ -52,7 +52,7 @@ impl SpotLight {
             } else {
                 0.0
             },
-            course: falloff == base::SpotFalloff::Cosine4,
+            profile: falloff,
         }
     }
 
@@ -66,7 +66,7 @@ impl SpotLight {
             self.cos_beam,
             self.cutoff,
             self.inv_transition,
-            self.course,
+            self.profile,
         )
     }
 }
@@ -192,18 +192,21 @@ fn spot_falloff(
     cos_beam: f32,
     cutoff: f32,
     inv_trans: f32,
-    course: bool,
+    profile: base::SpotFalloff,
 ) -> f32 {
     if cos_t <= cos_cutoff {
-        0.0
-    } else if cos_t >= cos_beam {
-        1.0
-    } else if course {
-        // CENG795: ((cos α − cos cutoff) / (cos beam − cos cutoff))⁴.
-        let s = ((cos_t - cos_cutoff) / (cos_beam - cos_cutoff)).clamp(0.0, 1.0);
-        (s * s) * (s * s)
-    } else {
-        ((cutoff - cos_t.clamp(-1.0, 1.0).acos()) * inv_trans).clamp(0.0, 1.0)
+        return 0.0;
+    }
+    if cos_t >= cos_beam {
+        return 1.0;
+    }
+    let s = ((cos_t - cos_cutoff) / (cos_beam - cos_cutoff)).clamp(0.0, 1.0);
+    match profile {
+        base::SpotFalloff::Cosine4 => (s * s) * (s * s),
+        base::SpotFalloff::SmoothStep => s * s * (3.0 - 2.0 * s),
+        base::SpotFalloff::Mitsuba => {
+            ((cutoff - cos_t.clamp(-1.0, 1.0).acos()) * inv_trans).clamp(0.0, 1.0)
+        }
     }
 }
 
@@ -212,7 +215,8 @@ mod tests {
     use super::*;
 
     /// The CENG795 spot profile: full intensity inside the falloff cone, nothing outside the
-    /// coverage cone, ((cos α − cos c) / (cos f − cos c))⁴ between; Mitsuba's is linear in α.
+    /// coverage cone, ((cos α − cos c) / (cos f − cos c))⁴ between; Mitsuba's is linear in α,
+    /// pbrt-v4's the smoothstep of t = (cos α − cos c) / (cos f − cos c).
     #[test]
     fn course_spot_profile() {
         let light = |falloff| SpotLight::new(&Mat4::IDENTITY, Vec3::ONE, 30.0, 10.0, falloff);
@@ -235,6 +239,12 @@ mod tests {
             assert!((at(&course, deg) - expected).abs() < 1e-5, "{deg}°");
             let linear = (30.0 - deg) / 20.0;
             assert!((at(&mitsuba, deg) - linear).abs() < 1e-4, "{deg}°");
+            let t = (c - cc) / (cb - cc);
+            let pbrt = light(base::SpotFalloff::SmoothStep);
+            assert!(
+                (at(&pbrt, deg) - t * t * (3.0 - 2.0 * t)).abs() < 1e-5,
+                "{deg}°"
+            );
             assert!(
                 (at(&course, deg) - at(&mitsuba, deg)).abs() > 0.02,
                 "{deg}°"
