@@ -178,7 +178,7 @@ impl Loader {
             }
             Ty::Blackbody => {
                 let t = p.nums()[0];
-                if !(t > 0.0) {
+                if t <= 0.0 {
                     return Err(p.err("the temperature must be positive"));
                 }
                 let v = declared(SpectrumKind::Blackbody { temperature: t }, usage, &p.loc)?;
@@ -552,18 +552,20 @@ impl Loader {
             to_uv: flip * m,
             corner_texels: false,
         };
-        let texture = match (scale, invert) {
-            (s, false) if s == 1.0 => bitmap,
-            (s, false) => Texture::Affine {
+        let texture = if invert {
+            Texture::Affine {
                 texture: Box::new(bitmap),
-                scale: s,
-                offset: Rgb::ZERO,
-            },
-            (s, true) => Texture::Affine {
-                texture: Box::new(bitmap),
-                scale: -s,
+                scale: -scale,
                 offset: Rgb::ONE,
-            },
+            }
+        } else if scale != 1.0 {
+            Texture::Affine {
+                texture: Box::new(bitmap),
+                scale,
+                offset: Rgb::ZERO,
+            }
+        } else {
+            bitmap
         };
         Ok(TexVal::Tex(self.scene.add_texture(TextureDesc {
             texture,
@@ -930,26 +932,21 @@ impl Loader {
         };
         let mut id = self.add_material(m, name.clone(), loc);
         if !matches!(ty, "mix" | "interface" | "" | "none") {
-            if let Some(q) = p.get("displacement", &[Ty::Float, Ty::Texture])? {
-                match q.ty {
-                    Ty::Texture => {
-                        if let Some(TexVal::Tex(t)) =
-                            self.tex_param(p, "displacement", false, Usage::Unbounded)?
-                        {
-                            id = self.add_material(
-                                Material::BumpMap {
-                                    nested: id,
-                                    texture: t,
-                                    factor: 1.0,
-                                },
-                                name.clone(),
-                                loc,
-                            );
-                        }
-                    }
-                    // A constant displacement moves the surface without tilting it.
-                    _ => {}
-                }
+            // A constant displacement moves the surface without tilting it: no bump.
+            if p.get("displacement", &[Ty::Float, Ty::Texture])?
+                .is_some_and(|q| q.ty == Ty::Texture)
+                && let Some(TexVal::Tex(t)) =
+                    self.tex_param(p, "displacement", false, Usage::Unbounded)?
+            {
+                id = self.add_material(
+                    Material::BumpMap {
+                        nested: id,
+                        texture: t,
+                        factor: 1.0,
+                    },
+                    name.clone(),
+                    loc,
+                );
             }
             if let Some((file, fp)) = p.string_opt("normalmap")? {
                 let path = self.resolve(file);
@@ -1709,7 +1706,7 @@ impl Loader {
 }
 
 fn tabulated(v: &[f64], p: &Param) -> Result<SpectrumKind> {
-    if v.len() < 4 || v.len() % 2 != 0 {
+    if v.len() < 4 || !v.len().is_multiple_of(2) {
         return Err(p.err("a tabulated spectrum needs pairs of wavelength and value"));
     }
     let wavelengths: Vec<f64> = v.iter().step_by(2).copied().collect();

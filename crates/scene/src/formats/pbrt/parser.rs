@@ -4,6 +4,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
@@ -20,6 +21,10 @@ const MAX_ATTRIBUTE_DEPTH: usize = 1000;
 /// Parameter values (numbers, strings, booleans) in all files at most: the memory budget of
 /// a parse (8 bytes each: 2 GiB).
 pub(super) const MAX_VALUES: usize = 1 << 28;
+/// Shapes in the scene at most (instancing multiplies them without adding text).
+const MAX_SHAPES: usize = 1 << 24;
+/// `Attribute` parameters of one kind at most (every directive of that kind copies them).
+const MAX_ATTRIBUTES: usize = 4096;
 
 /// Which of the two transforms (shutter open and close) the transform directives change.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,7 +44,7 @@ pub(super) struct Gs {
     pub active: Active,
     pub reverse: bool,
     pub material: Option<MaterialId>,
-    pub area_light: Option<Arc<(String, Params)>>,
+    pub area_light: Option<Rc<(String, Params)>>,
     pub inside: Option<String>,
     pub outside: Option<String>,
     pub attrs: [Vec<Param>; 5],
@@ -680,6 +685,12 @@ impl Loader {
                 };
                 let list = self.param_list()?;
                 self.gs.attrs[k].extend(list);
+                if self.gs.attrs[k].len() > MAX_ATTRIBUTES {
+                    return Err(err(
+                        loc.clone(),
+                        format!("more than {MAX_ATTRIBUTES} \"{kind}\" Attribute parameters"),
+                    ));
+                }
             }
             "Option" => {
                 let p = self.param_list()?;
@@ -821,7 +832,7 @@ impl Loader {
                         format!("unknown area light \"{ty}\" (pbrt-v4 has \"diffuse\")"),
                     ));
                 }
-                self.gs.area_light = Some(Arc::new((ty, p)));
+                self.gs.area_light = Some(Rc::new((ty, p)));
             }
             "Shape" => {
                 let (ty, _) = self.string_arg(name)?;
@@ -856,6 +867,12 @@ impl Loader {
                 let Some(shapes) = self.objects.get(&n) else {
                     return Err(err(l, format!("unknown object '{n}'")));
                 };
+                if self.scene.shapes.len() + shapes.len() > MAX_SHAPES {
+                    return Err(err(
+                        loc.clone(),
+                        format!("more than {MAX_SHAPES} shapes (instances included)"),
+                    ));
+                }
                 let [m0, m1] = self.gs.ctm;
                 let motion = motion_of(&m0, &m1);
                 let mut out = Vec::with_capacity(shapes.len());
