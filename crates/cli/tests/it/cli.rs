@@ -323,8 +323,15 @@ fn pbrt_scenes_run_and_malformed_ones_fail_cleanly() {
     let scene = repo_root().join("scenes/pbrt/cbox-specular.pbrt");
     let out = penumbra().arg("info").arg(&scene).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(stdout.contains("sphere") && stdout.contains("128"), "{stdout}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("sphere") && stdout.contains("128"),
+        "{stdout}"
+    );
     let dir = temp_dir("pbrt");
     let exr = dir.join("cbox.exr");
     let out = penumbra()
@@ -334,7 +341,11 @@ fn pbrt_scenes_run_and_malformed_ones_fail_cleanly() {
         .arg(&exr)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(exr.is_file());
     let bad = dir.join("bad.pbrt");
     std::fs::write(&bad, "WorldBegin\nShape \"sphere\" \"float radius\" [ 1\n").unwrap();

@@ -44,6 +44,14 @@ fn error(text: &str) -> LoadError {
     }
 }
 
+/// The material inside the `twosided` wrapper pbrt's two-sided BSDFs get.
+fn base(s: &SceneDesc, id: MaterialId) -> &Material {
+    match &s.material(id).material {
+        Material::TwoSided { front, back: None } => &s.material(*front).material,
+        m => m,
+    }
+}
+
 fn warnings(s: &SceneDesc) -> Vec<String> {
     s.warnings.iter().map(|w| w.message.clone()).collect()
 }
@@ -181,7 +189,7 @@ fn materials_map_with_pbrt_defaults() {
          Material \"coateddiffuse\"\nShape \"sphere\"\n\
          Material \"interface\"\nShape \"sphere\"\n"
     ));
-    let mat = |i: usize| &s.material(s.shapes[i].material.unwrap()).material;
+    let mat = |i: usize| base(&s, s.shapes[i].material.unwrap());
     match mat(0) {
         Material::Conductor { eta, k, .. } => {
             let (e, kk) = scene::formats::mitsuba::ior::conductor("Cu").unwrap();
@@ -234,6 +242,10 @@ fn materials_map_with_pbrt_defaults() {
         m => panic!("{m:?}"),
     }
     assert!(matches!(mat(5), Material::Null));
+    // pbrt's conductors and diffuse surfaces reflect on both sides; dielectrics by nature.
+    let outer = |i: usize| &s.material(s.shapes[i].material.unwrap()).material;
+    assert!(matches!(outer(0), Material::TwoSided { .. }));
+    assert!(matches!(outer(2), Material::Dielectric { .. }));
     assert!(s.warnings.is_empty(), "{:?}", warnings(&s));
 }
 
@@ -310,7 +322,7 @@ fn pbrt_v3_materials_are_translated_with_a_notice() {
     let s = scene(&format!(
         "{CAMERA}Material \"matte\" \"color Kd\" [0.1 0.2 0.3]\nShape \"sphere\"\nMaterial \"glass\" \"float index\" 1.7\nShape \"sphere\"\n"
     ));
-    let mat = |i: usize| &s.material(s.shapes[i].material.unwrap()).material;
+    let mat = |i: usize| base(&s, s.shapes[i].material.unwrap());
     assert!(
         matches!(mat(0), Material::Diffuse { reflectance: ColorParam::Const(c) } if *c == Vec3::new(0.1, 0.2, 0.3))
     );

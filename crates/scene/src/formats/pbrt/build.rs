@@ -930,7 +930,26 @@ impl Loader {
                 ));
             }
         };
+        // pbrt-v4's BSDFs reflect on both sides of a surface; ours of these kinds (Mitsuba's)
+        // only on the side of the normal.
+        let one_sided = matches!(
+            m,
+            Material::Diffuse { .. }
+                | Material::Conductor { .. }
+                | Material::RoughConductor { .. }
+                | Material::Mirror { .. }
+        );
         let mut id = self.add_material(m, name.clone(), loc);
+        if one_sided {
+            id = self.add_material(
+                Material::TwoSided {
+                    front: id,
+                    back: None,
+                },
+                name.clone(),
+                loc,
+            );
+        }
         if !matches!(ty, "mix" | "interface" | "" | "none") {
             // A constant displacement moves the surface without tilting it: no bump.
             if p.get("displacement", &[Ty::Float, Ty::Texture])?
