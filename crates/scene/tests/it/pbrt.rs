@@ -527,3 +527,160 @@ fn a_million_triangle_inline_mesh_parses() {
     let a = (n - 2) * n + n - 2;
     assert_eq!(m.indices[last], [a, a + n + 1, a + n]);
 }
+
+#[test]
+fn shapes_made_into_triangles_and_ply_meshes() {
+    let mut m = TriMesh::default();
+    for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+        m.positions.push(Vec3::new(x, y, 0.0));
+    }
+    m.indices = vec![[0, 1, 2], [0, 2, 3]];
+    let dir = write_scene(&[("x.txt", b"")])
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    scene::formats::ply::write_ply(&dir.join("quad.ply"), &m).unwrap();
+    let raw = std::fs::read(dir.join("quad.ply")).unwrap();
+    let mut gz = flate2_gzip(&raw);
+    std::fs::write(dir.join("quad.ply.gz"), &mut gz).unwrap();
+    let text = format!(
+        "{CAMERA}Shape \"plymesh\" \"string filename\" \"quad.ply\"\n\
+         Shape \"plymesh\" \"string filename\" \"quad.ply.gz\"\n\
+         Shape \"plymesh\" \"string filename\" \"quad.ply\"\n\
+         Shape \"cylinder\" \"float phimax\" 180\n\
+         Shape \"disk\" \"float innerradius\" 0.5\n\
+         Shape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]\n\
+         Shape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 1]\n\
+         Shape \"loopsubdiv\" \"integer levels\" 2 \"point3 P\" [1 1 1 -1 -1 1 -1 1 -1 1 -1 -1] \"integer indices\" [0 1 2 0 3 1 0 2 3 1 3 2]\n"
+    );
+    std::fs::write(dir.join("s.pbrt"), text).unwrap();
+    let Document::Scene(s) = load(&dir.join("s.pbrt"), &LoadOptions::default()).unwrap() else {
+        panic!()
+    };
+    let tris = |i: usize| match &s.shapes[i].shape {
+        Shape::Mesh(m) => m.indices.len(),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!((tris(0), tris(1)), (2, 2));
+    // The same file is read once and shared.
+    let (Shape::Mesh(a), Shape::Mesh(b)) = (&s.shapes[0].shape, &s.shapes[2].shape) else {
+        panic!()
+    };
+    assert!(std::sync::Arc::ptr_eq(a, b));
+    assert_eq!(tris(3), 2 * 128);
+    assert_eq!(tris(4), 2 * 256);
+    assert_eq!(tris(5), 2, "a planar patch is two triangles");
+    assert_eq!(tris(6), 2 * 64, "a curved one is a grid");
+    assert_eq!(tris(7), 4 * 16);
+    assert!(s.warnings.is_empty(), "{:?}", warnings(&s));
+}
+
+fn flate2_gzip(data: &[u8]) -> Vec<u8> {
+    // A stored (uncompressed) gzip member: header, deflate blocks of ≤ 65535 bytes, CRC, size.
+    let mut out = vec![0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 0, 255];
+    let chunks: Vec<&[u8]> = data.chunks(65535).collect();
+    for (i, c) in chunks.iter().enumerate() {
+        out.push(u8::from(i + 1 == chunks.len()));
+        let n = c.len() as u16;
+        out.extend(n.to_le_bytes());
+        out.extend((!n).to_le_bytes());
+        out.extend_from_slice(c);
+    }
+    let mut crc = 0xffff_ffffu32;
+    for &b in data {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    out.extend((!crc).to_le_bytes());
+    out.extend((data.len() as u32).to_le_bytes());
+    out
+}
+
+#[test]
+fn textures_spectra_and_environment_maps() {
+    let dir = write_scene(&[("x.txt", b"")])
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    std::fs::write(
+        dir.join("img.pfm"),
+        b"PF\n1 1\n-1\n\0\0\x80?\0\0\x80?\0\0\x80?",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("refl.spd"),
+        "# a flat spectrum\n400 0.5\n700 0.5\n",
+    )
+    .unwrap();
+    let text = format!(
+        "{CAMERA}Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"img.pfm\" \"float uscale\" 2 \"string encoding\" \"linear\"\n\
+         Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n\
+         Texture \"s\" \"spectrum\" \"scale\" \"texture tex\" \"t\" \"float scale\" 0.5\n\
+         Material \"diffuse\" \"texture reflectance\" \"s\"\nShape \"sphere\"\n\
+         Material \"diffuse\" \"spectrum reflectance\" \"refl.spd\"\nShape \"sphere\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"c\"\nShape \"sphere\"\n\
+         Rotate 90 1 0 0\nLightSource \"infinite\" \"string filename\" \"img.pfm\" \"float scale\" 3\n"
+    );
+    std::fs::write(dir.join("s.pbrt"), text).unwrap();
+    let Document::Scene(s) = load(&dir.join("s.pbrt"), &LoadOptions::default()).unwrap() else {
+        panic!()
+    };
+    assert!(s.warnings.is_empty(), "{:?}", warnings(&s));
+    let refl = |i: usize| match base(&s, s.shapes[i].material.unwrap()) {
+        Material::Diffuse { reflectance } => reflectance.clone(),
+        m => panic!("{m:?}"),
+    };
+    let ColorParam::Texture(t) = refl(0) else {
+        panic!()
+    };
+    match &s.texture(t).texture {
+        Texture::Affine {
+            texture,
+            scale,
+            offset,
+        } => {
+            assert_eq!((*scale, *offset), (0.5, Vec3::ZERO));
+            let Texture::Bitmap { raw, to_uv, .. } = texture.as_ref() else {
+                panic!()
+            };
+            assert!(*raw);
+            // pbrt looks up (u·2, 1 − v).
+            let uv = *to_uv * Vec3::new(0.25, 0.25, 1.0);
+            assert!((uv - Vec3::new(0.5, 0.75, 1.0)).length() < 1e-6, "{uv}");
+        }
+        t => panic!("{t:?}"),
+    }
+    let ColorParam::Spectrum(d) = refl(1) else {
+        panic!()
+    };
+    assert!(
+        (d.rgb - Vec3::splat(0.5)).abs().max_element() < 0.02,
+        "{}",
+        d.rgb
+    );
+    let ColorParam::Texture(t) = refl(2) else {
+        panic!()
+    };
+    let Texture::Checkerboard { color0, to_uv, .. } = &s.texture(t).texture else {
+        panic!()
+    };
+    assert_eq!(*color0, Vec3::X);
+    assert_eq!(to_uv.x_axis.x, 0.5);
+    let Emitter::EnvMap {
+        scale,
+        to_world,
+        mapping,
+        ..
+    } = &s.emitters[0].emitter
+    else {
+        panic!()
+    };
+    assert_eq!((*scale, *mapping), (3.0, EnvMapping::EqualArea));
+    assert!(to_world.abs_diff_eq(Mat4::from_rotation_x(90f32.to_radians()), 1e-6));
+}
