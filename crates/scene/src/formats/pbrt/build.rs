@@ -1561,13 +1561,19 @@ impl Loader {
             },
             "sppm" => {
                 let photons = ip.int("photonsperiteration", -1)?;
-                let iterations = ip.int_in("iterations", 64, 1, 1 << 24)?;
+                // pbrt-v4 runs one iteration per pixel sample; pbrt-v3 named the count.
+                let mut passes = None;
+                for n in ["iterations", "numiterations"] {
+                    if ip.has(n) {
+                        passes = Some(ip.int_in(n, 64, 1, 1 << 24)? as u32);
+                    }
+                }
                 let _ = ip.int("seed", 0)?;
                 IntegratorDesc::Sppm(SppmDesc {
                     max_depth: depth,
                     photons: (photons > 0).then_some(photons as u64),
                     initial_radius: Some(ip.float("radius", 1.0)?),
-                    passes: Some(iterations as u32),
+                    passes,
                     ..SppmDesc::default()
                 })
             }

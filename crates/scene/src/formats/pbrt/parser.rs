@@ -736,6 +736,7 @@ impl Loader {
                 self.options_only(name, loc)?;
                 self.world = true;
                 self.gs.ctm = [Mat4::IDENTITY; 2];
+                self.gs.active = Active::All;
                 self.named_coords
                     .insert("world".to_string(), [Mat4::IDENTITY; 2]);
             }
