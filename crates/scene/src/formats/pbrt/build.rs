@@ -957,6 +957,14 @@ impl Loader {
                 && let Some(TexVal::Tex(t)) =
                     self.tex_param(p, "displacement", false, Usage::Unbounded)?
             {
+                self.warn_once(
+                    "displacement",
+                    loc,
+                    "'displacement' is rendered as our bump map, whose slope is the height \
+                     difference between neighbouring texels (pbrt-v4 divides by the texel's \
+                     size in uv and scales with the surface's parametrisation): bumps differ \
+                     in strength",
+                );
                 id = self.add_material(
                     Material::BumpMap {
                         nested: id,

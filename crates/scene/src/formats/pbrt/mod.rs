@@ -24,8 +24,16 @@
 //!
 //! Refused with an error: partial spheres, `curve`, `hair`/`measured`/`subsurface`
 //! materials, grid media, `goniometric`/`projection` lights, `realistic`/`spherical`
-//! cameras, unknown names of any kind. Approximated with a warning: spot falloff, textures
-//! we lack (constant 0.5), motion other than translation, film sensor/white balance.
+//! cameras, unknown names of any kind. Approximated with a warning: spot falloff (ours is
+//! Mitsuba's), `displacement` (our bump map's slope is per texel), textures we lack (constant
+//! 0.5), motion other than translation, film sensor/white balance/ISO. Mapped without a
+//! warning, as the nearest we have: image filters `trilinear`/`ewa` → bilinear (no MIP
+//! maps), samplers `zsobol`/`paddedsobol`/`pmj02bn` → Sobol; read and without effect, as in
+//! pbrt-v4 for what we support: `maxanisotropy` (EWA only), film `diagonal` (realistic
+//! camera only), `savefp16`.
+//!
+//! pbrt-v4's BSDFs reflect on both sides of a surface: diffuse and conductor materials are
+//! wrapped in `twosided` (Mitsuba's, ours, reflect on the normal's side only).
 
 mod build;
 mod lexer;
