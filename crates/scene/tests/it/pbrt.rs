@@ -684,3 +684,28 @@ fn textures_spectra_and_environment_maps() {
     assert_eq!((*scale, *mapping), (3.0, EnvMapping::EqualArea));
     assert!(to_world.abs_diff_eq(Mat4::from_rotation_x(90f32.to_radians()), 1e-6));
 }
+
+#[test]
+fn pbrt_v3_mix_and_names_are_upgraded() {
+    let s = scene(&format!(
+        "{CAMERA}MakeNamedMaterial \"a\" \"string type\" \"matte\"\n\
+         MakeNamedMaterial \"b\" \"string type\" \"mirror\"\n\
+         Material \"mix\" \"string namedmaterial1\" \"a\" \"string namedmaterial2\" \"b\" \"float amount\" 0.25\n\
+         AreaLightSource \"area\" \"color L\" [1 1 1]\nShape \"sphere\"\n"
+    ));
+    let Material::Mix { materials, amount } = &s.material(s.shapes[0].material.unwrap()).material
+    else {
+        panic!()
+    };
+    // pbrt-v3 weighs namedmaterial1 by amount; pbrt-v4 picks materials[1] with probability
+    // amount: the order is swapped.
+    assert_eq!(s.material(materials[0]).name.as_deref(), Some("b"));
+    assert_eq!(s.material(materials[1]).name.as_deref(), Some("a"));
+    assert_eq!(*amount, FloatParam::Const(0.25));
+    assert!(s.shapes[0].emission.is_some());
+    assert!(
+        warnings(&s).iter().all(|w| w.contains("pbrt-v3")),
+        "{:?}",
+        warnings(&s)
+    );
+}

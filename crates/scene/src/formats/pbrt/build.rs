@@ -522,7 +522,21 @@ impl Loader {
             }
             w => return Err(err(loc, format!("imagemap '{name}': unknown wrap \"{w}\""))),
         };
-        let (raw, gamma) = match p.string("encoding", "sRGB")? {
+        // pbrt-v3: `bool gamma` (sRGB or linear) and `bool trilinear`.
+        let v3_encoding = match p.get("gamma", &[Ty::Bool])? {
+            Some(_) => Some(if p.bool("gamma", false)? {
+                "sRGB"
+            } else {
+                "linear"
+            }),
+            None => None,
+        };
+        let _ = p.bool("trilinear", false)?;
+        let encoding = match v3_encoding {
+            Some(e) if !p.has("encoding") => e,
+            _ => p.string("encoding", "sRGB")?,
+        };
+        let (raw, gamma) = match encoding {
             "sRGB" | "srgb" => (false, None),
             "linear" => (true, None),
             e => match e
@@ -828,14 +842,32 @@ impl Loader {
                 }
             }
             "mix" => {
-                let Some(q) = p.get("materials", &[Ty::Str])? else {
-                    return Err(err(loc, "mix needs \"string materials\" [ \"a\" \"b\" ]"));
-                };
-                let [a, b] = q.strs() else {
-                    return Err(q.err("expected two material names"));
+                let names: Vec<(String, Param)> = match p.get("materials", &[Ty::Str])? {
+                    Some(q) => match q.strs() {
+                        [a, b] => vec![(a.clone(), q.clone()), (b.clone(), q.clone())],
+                        _ => return Err(q.err("expected two material names")),
+                    },
+                    None => {
+                        // pbrt-v3: `amount` weighs namedmaterial1, which pbrt-v4 picks with
+                        // probability 1 − amount.
+                        let one = p.string_opt("namedmaterial1")?;
+                        let two = p.string_opt("namedmaterial2")?;
+                        match (one, two) {
+                            (Some((a, qa)), Some((b, qb))) => {
+                                self.upgrade(ty, loc);
+                                vec![(b.to_string(), qb.clone()), (a.to_string(), qa.clone())]
+                            }
+                            _ => {
+                                return Err(err(
+                                    loc,
+                                    "mix needs \"string materials\" [ \"a\" \"b\" ]",
+                                ));
+                            }
+                        }
+                    }
                 };
                 let mut ids = [MaterialId(0); 2];
-                for (i, n) in [a, b].into_iter().enumerate() {
+                for (i, (n, q)) in names.iter().enumerate() {
                     ids[i] = match self.named_materials.get(n) {
                         Some(&id) => id,
                         None => return Err(q.err(format!("unknown named material '{n}'"))),
@@ -952,10 +984,20 @@ impl Loader {
         }
         if !matches!(ty, "mix" | "interface" | "" | "none") {
             // A constant displacement moves the surface without tilting it: no bump.
-            if p.get("displacement", &[Ty::Float, Ty::Texture])?
+            let displacement = if p.has("bumpmap") && !p.has("displacement") {
+                self.warn_once(
+                    "v3 bumpmap",
+                    loc,
+                    "pbrt-v3's 'bumpmap' read as 'displacement'",
+                );
+                "bumpmap"
+            } else {
+                "displacement"
+            };
+            if p.get(displacement, &[Ty::Float, Ty::Texture])?
                 .is_some_and(|q| q.ty == Ty::Texture)
                 && let Some(TexVal::Tex(t)) =
-                    self.tex_param(p, "displacement", false, Usage::Unbounded)?
+                    self.tex_param(p, displacement, false, Usage::Unbounded)?
             {
                 self.warn_once(
                     "displacement",
@@ -1331,7 +1373,13 @@ impl Loader {
                 loc: loc0.clone(),
             },
         ));
-        if film_ty != "rgb" {
+        if film_ty == "image" {
+            self.warn_once(
+                "v3 film",
+                &fp.loc,
+                "pbrt-v3's film \"image\" read as \"rgb\"",
+            );
+        } else if film_ty != "rgb" {
             self.warn(
                 &fp.loc,
                 format!("film \"{film_ty}\" is rendered as an \"rgb\" film"),
@@ -1478,7 +1526,9 @@ impl Loader {
                 "independent" => SamplerKind::Independent,
                 "stratified" => SamplerKind::Stratified,
                 "halton" => SamplerKind::Halton,
-                "sobol" | "zsobol" | "paddedsobol" | "pmj02bn" => SamplerKind::Sobol,
+                // pbrt-v3's names as pbrt-v4's --upgrade renames them.
+                "sobol" | "zsobol" | "paddedsobol" | "pmj02bn" | "lowdiscrepancy"
+                | "02sequence" | "maxmindist" => SamplerKind::Sobol,
                 _ => return Err(err(&q.loc, format!("unknown sampler \"{ty}\""))),
             };
             sampler.spp = if ty == "stratified" {
@@ -1596,6 +1646,15 @@ impl Loader {
                     samples: 1,
                     length: d.is_finite().then_some(d),
                 }
+            }
+            "directlighting" | "whitted" => {
+                self.warn_once(
+                    "v3 integrator",
+                    &ip.loc,
+                    format!("pbrt-v3 integrator \"{ity}\" rendered by the path tracer"),
+                );
+                let _ = ip.string("strategy", "");
+                path(true)
             }
             "aov" => {
                 self.warn(&ip.loc, "integrator \"aov\" is not supported: volpath used");

@@ -827,7 +827,13 @@ impl Loader {
                 let (ty, _) = self.string_arg(name)?;
                 let p = self.params_of(Some(1), loc)?;
                 self.world_only(name, loc)?;
-                if ty != "diffuse" {
+                if ty == "area" {
+                    self.warn_once(
+                        "v3 area light",
+                        loc,
+                        "pbrt-v3's area light \"area\" read as \"diffuse\"",
+                    );
+                } else if ty != "diffuse" {
                     return Err(err(
                         loc.clone(),
                         format!("unknown area light \"{ty}\" (pbrt-v4 has \"diffuse\")"),
