@@ -17,7 +17,7 @@ use crate::{LoadError, Loc, Result};
 /// the true circle by less than 1 - cos(π/N) of the radius: 1.2e-4 at 256).
 const SEGMENTS: u32 = 256;
 /// Most triangles a load-time tessellation (subdivision, patches) may make.
-const MAX_GENERATED: usize = 1 << 26;
+const MAX_GENERATED: usize = 1 << 24;
 
 fn err(loc: &Loc, m: impl Into<String>) -> LoadError {
     LoadError::new(loc.clone(), m)

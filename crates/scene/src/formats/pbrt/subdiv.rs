@@ -11,7 +11,7 @@ use crate::model::TriMesh;
 use crate::{LoadError, Loc, Result};
 
 /// Most triangles the subdivided mesh may have.
-const MAX_TRIANGLES: usize = 1 << 26;
+const MAX_TRIANGLES: usize = 1 << 22;
 
 pub(super) fn loop_subdivide(p: &Params, levels: u32, loc: &Loc) -> Result<TriMesh> {
     let Some(pq) = p.nums("P", Ty::Point3)? else {
