@@ -709,3 +709,40 @@ fn pbrt_v3_mix_and_names_are_upgraded() {
         warnings(&s)
     );
 }
+
+#[test]
+fn screen_windows_lenses_and_crop() {
+    let s = scene(
+        "Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100 \"float cropwindow\" [0.25 0.75 0 0.5]\n\
+         Camera \"perspective\" \"float fov\" 90 \"float screenwindow\" [0 1 -0.5 0.5]\nWorldBegin\n",
+    );
+    let c = &s.sensors[0];
+    let Projection::Window {
+        left,
+        right,
+        bottom,
+        top,
+    } = c.camera.projection
+    else {
+        panic!()
+    };
+    assert!((left - 0.0).abs() < 1e-6 && (right - 1.0).abs() < 1e-6);
+    assert!((bottom + 0.5).abs() < 1e-6 && (top - 0.5).abs() < 1e-6);
+    assert_eq!(
+        c.film.crop,
+        Some(CropWindow {
+            offset_x: 50,
+            offset_y: 0,
+            width: 100,
+            height: 50
+        })
+    );
+    let s = scene(
+        "Camera \"perspective\" \"float lensradius\" 0.1 \"float focaldistance\" 4\nWorldBegin\n",
+    );
+    assert!(matches!(
+        s.sensors[0].camera.projection,
+        Projection::ThinLens { aperture_radius, focus_distance, fov_axis: FovAxis::Smaller, .. }
+            if aperture_radius == 0.1 && focus_distance == 4.0
+    ));
+}

@@ -1703,14 +1703,20 @@ impl Loader {
             cp.float("shutteropen", 0.0)?,
             cp.float("shutterclose", 1.0)?,
         );
-        let aspect = cp
-            .float_opt("frameaspectratio")?
-            .unwrap_or(w as f32 / h as f32);
+        let frame = cp.float_opt("frameaspectratio")?.filter(|a| *a > 0.0);
+        let aspect = frame.unwrap_or(w as f32 / h as f32);
         let screen = match cp.get("screenwindow", &[Ty::Float])? {
             Some(q) => match q.nums() {
                 [a, b, c, d] => Some([*a as f32, *b as f32, *c as f32, *d as f32]),
                 _ => return Err(q.err("expected 4 values")),
             },
+            // A frame aspect ratio other than the film's: pbrt's default window for it (the
+            // shorter side spans [-1, 1]), stretched over the film.
+            None if frame.is_some_and(|a| a != w as f32 / h as f32) => Some(if aspect > 1.0 {
+                [-aspect, aspect, -1.0, 1.0]
+            } else {
+                [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect]
+            }),
             None => None,
         };
         let lens = cp.float("lensradius", 0.0)?;
