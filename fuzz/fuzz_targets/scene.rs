@@ -2,7 +2,7 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 
-const EXTENSIONS: [&str; 5] = ["xml", "json", "txt", "obj", "dae"];
+const EXTENSIONS: [&str; 6] = ["xml", "json", "txt", "obj", "dae", "pbrt"];
 
 fuzz_target!(|data: &[u8]| {
     let Some((&pick, body)) = data.split_first() else {

@@ -26,11 +26,11 @@ use scene::{Document, LoadOptions, RenderMode};
 
 const BATCHES: u64 = 16;
 /// Samples per pixel of one batch (envmap-materials uses more: see its test).
-const SPP: u32 = 32;
+pub(crate) const SPP: u32 = 32;
 /// The noise-parity figure is taken at 256 spp (the first 256 / batch-spp batches).
 const PARITY_SPP: u32 = 256;
 
-fn shared() -> Option<PathBuf> {
+pub(crate) fn shared() -> Option<PathBuf> {
     scene::testing::shared_dir("references").map(|r| r.join(".."))
 }
 
@@ -49,6 +49,10 @@ fn render_batches(
     let Document::Scene(desc) = scene::load(scene_file, &opts).expect("scene loads") else {
         panic!("not a scene")
     };
+    render_desc_batches(&desc, spp, mode)
+}
+
+fn render_desc_batches(desc: &scene::SceneDesc, spp: u32, mode: RenderMode) -> Vec<Image> {
     (0..BATCHES)
         .map(|seed| {
             let opts = BuildOptions {
@@ -57,7 +61,7 @@ fn render_batches(
                 mode,
                 ..Default::default()
             };
-            let out = render_desc(&desc, &opts).expect("scene builds");
+            let out = render_desc(desc, &opts).expect("scene builds");
             assert_eq!(out.film.nonfinite_count(), 0, "NaN/Inf samples");
             out.film.develop()
         })
@@ -103,7 +107,7 @@ fn check_with(
 }
 
 /// [`check_with`] for a scene file anywhere (the reference is still `references/<name>`).
-fn check_file(
+pub(crate) fn check_file(
     name: &str,
     scene_file: &Path,
     defines: &[(&str, &str)],
@@ -112,9 +116,26 @@ fn check_file(
     mode: RenderMode,
 ) {
     let Some(shared) = shared() else { return };
+    let batches = render_batches(scene_file, defines, spp, mode);
+    check_batches(&shared, name, batches, mitsuba_rel_mse, spp)
+}
+
+/// [`check_file`] for a scene already loaded (and perhaps adjusted by the caller).
+pub(crate) fn check_desc(
+    name: &str,
+    desc: &scene::SceneDesc,
+    mitsuba_rel_mse: f64,
+    spp: u32,
+    mode: RenderMode,
+) {
+    let Some(shared) = shared() else { return };
+    let batches = render_desc_batches(desc, spp, mode);
+    check_batches(&shared, name, batches, mitsuba_rel_mse, spp)
+}
+
+fn check_batches(shared: &Path, name: &str, batches: Vec<Image>, mitsuba_rel_mse: f64, spp: u32) {
     let refs = shared.join("references");
     let reference = load_reference(&refs.join(name)).expect("reference loads");
-    let batches = render_batches(scene_file, defines, spp, mode);
     let parity = mean_image(&batches[..(PARITY_SPP / spp) as usize]);
     let rel_mse = rel_mse(&parity, &reference.mean).expect("same size");
     let result = compare(&reference, &TestImages::Batches(batches)).expect("comparable");

@@ -315,3 +315,43 @@ fn integrator_path_and_volpath_are_selectable() {
     assert!(stderr.contains("ignores participating media"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// pbrt-v4 scenes through the command line: `info` describes one, `render` renders it, and a
+/// malformed one exits with 2 and a `file:line:col` diagnostic.
+#[test]
+fn pbrt_scenes_run_and_malformed_ones_fail_cleanly() {
+    let scene = repo_root().join("scenes/pbrt/cbox-specular.pbrt");
+    let out = penumbra().arg("info").arg(&scene).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("sphere") && stdout.contains("128"),
+        "{stdout}"
+    );
+    let dir = temp_dir("pbrt");
+    let exr = dir.join("cbox.exr");
+    let out = penumbra()
+        .arg("render")
+        .arg(&scene)
+        .args(["--res", "16x16", "--spp", "2", "-q", "-o"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(exr.is_file());
+    let bad = dir.join("bad.pbrt");
+    std::fs::write(&bad, "WorldBegin\nShape \"sphere\" \"float radius\" [ 1\n").unwrap();
+    let out = penumbra().arg("info").arg(&bad).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("bad.pbrt:2:31: "), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -1,6 +1,7 @@
 //! Structure-aware fuzzing of every loader on stable Rust (issue 18).
 //!
 //! Targets: Mitsuba/Nori XML, COMP30019 text, CENG795 JSON and XML, OBJ+MTL scenes, COLLADA,
+//! pbrt-v4,
 //! PLY (ASCII and binary), OBJ meshes, image textures (PNG, EXR) and medium grids (Mitsuba
 //! `.vol`, OpenVDB `.vdb`). Seeds are the files of each kind under `scenes/` and
 //! `../shared/scenes` (up to 256 KiB; generated ones where there are none, and for grids the
@@ -117,6 +118,13 @@ const TARGETS: &[Target] = &[
         name: "collada",
         kind: Kind::Scene,
         extensions: &["dae"],
+        text: true,
+        accept: any,
+    },
+    Target {
+        name: "pbrt",
+        kind: Kind::Scene,
+        extensions: &["pbrt"],
         text: true,
         accept: any,
     },
@@ -400,6 +408,18 @@ fn generated_seeds(t: &Target, dir: &Path) -> Vec<PathBuf> {
                 out.push(ascii);
             }
         }
+        "pbrt" => {
+            // Directives the shared scenes do not use: objects, media, textures, lights,
+            // shapes made into triangles, pbrt-v3 materials, Attribute, Import.
+            let p = dir.join("generated.pbrt");
+            std::fs::write(&p, GENERATED_PBRT).expect("write a seed");
+            std::fs::write(
+                dir.join("generated-import.pbrt"),
+                "Translate 1 0 0\nShape \"sphere\"\n",
+            )
+            .expect("write a seed");
+            out.push(p);
+        }
         "vol" => {
             // 3×2×2 voxels of one channel and 2×2×1 of three (the two layouts read_vol takes).
             for (name, res, channels) in [("one", [3i32, 2, 2], 1i32), ("rgb", [2, 2, 1], 3)] {
@@ -441,6 +461,56 @@ fn generated_seeds(t: &Target, dir: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+const GENERATED_PBRT: &str = r#"Option "integer seed" 3
+LookAt 0 1 -5  0 1 0  0 1 0
+Camera "perspective" "float fov" 45 "float lensradius" 0.01 "float focaldistance" 5
+Film "rgb" "integer xresolution" 32 "integer yresolution" 24 "float cropwindow" [0 1 0.25 0.75]
+Sampler "stratified" "integer xsamples" 2 "integer ysamples" 2
+PixelFilter "mitchell" "float xradius" 2 "float yradius" 2
+Integrator "sppm" "integer maxdepth" 4 "float radius" 0.1
+ColorSpace "srgb"
+WorldBegin
+Attribute "shape" "float radius" 0.5
+MakeNamedMedium "fog" "string type" "homogeneous" "spectrum sigma_a" [400 0.1 700 0.2] "rgb sigma_s" [1 1 1] "float g" -0.3
+Texture "checks" "spectrum" "checkerboard" "float uscale" 4 "float vscale" 4 "rgb tex1" [1 0 0] "rgb tex2" [0 0 1]
+Texture "half" "float" "scale" "float tex" 0.5 "float scale" 0.5
+Texture "blend" "spectrum" "mix" "texture tex1" "checks" "rgb tex2" [0 1 0] "float amount" 0.25
+MakeNamedMaterial "a" "string type" "diffuse" "texture reflectance" "blend"
+MakeNamedMaterial "b" "string type" "coatedconductor" "float interface.roughness" 0.1 "spectrum conductor.eta" "metal-Ag-eta" "spectrum conductor.k" "metal-Ag-k"
+MakeNamedMaterial "m" "string type" "mix" "string materials" ["a" "b"] "texture amount" "half"
+LightSource "spot" "point3 from" [0 4 0] "point3 to" [0 0 0] "blackbody I" 3000 "float power" 100
+LightSource "distant" "point3 from" [1 1 1] "point3 to" [0 0 0] "float illuminance" 2
+LightSource "infinite" "spectrum L" "stdillum-D65" "float scale" 0.1
+AttributeBegin
+  MediumInterface "fog" ""
+  Material "interface"
+  Shape "sphere" "float radius" 2
+AttributeEnd
+ObjectBegin "thing"
+  NamedMaterial "m"
+  Shape "cylinder" "float zmin" 0 "float zmax" 1 "float phimax" 270
+  Shape "disk" "float innerradius" 0.2 "float alpha" 0.5
+ObjectEnd
+AttributeBegin
+  ActiveTransform EndTime
+  Translate 0 0.1 0
+  ActiveTransform All
+  ObjectInstance "thing"
+AttributeEnd
+TransformBegin
+  ReverseOrientation
+  AreaLightSource "diffuse" "blackbody L" 6500 "float power" 10 "bool twosided" true
+  Shape "bilinearmesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0.5] "integer indices" [0 1 2 3]
+TransformEnd
+CoordinateSystem "here"
+Material "plastic" "color Kd" [0.5 0.2 0.1] "float roughness" 0.05
+Shape "loopsubdiv" "integer levels" 2 "point3 P" [1 1 1 -1 -1 1 -1 1 -1 1 -1 -1] "integer indices" [0 1 2 0 3 1 0 2 3 1 3 2]
+CoordSysTransform "camera"
+Material "dielectric" "spectrum eta" "glass-F11" "float roughness" 0.2
+Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "normal N" [0 0 1 0 0 1 0 0 1] "point2 uv" [0 0 1 0 0 1]
+Import "generated-import.pbrt"
+"#;
 
 fn seeds(t: &Target, gen_dir: &Path) -> Vec<PathBuf> {
     let mut files = Vec::new();

@@ -7,6 +7,7 @@ pub mod comp30019;
 pub mod mitsuba;
 pub mod obj;
 pub mod objmtl;
+pub mod pbrt;
 pub mod ply;
 
 use std::path::Path;
@@ -37,10 +38,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
         "txt" => comp30019::load(path, opts),
         "obj" => objmtl::load(path, opts),
         "dae" => collada::load(path, opts),
+        "pbrt" => pbrt::load(path, opts),
         _ => Err(LoadError::new(
             Loc::file(path),
             format!(
-                "unsupported scene file extension '.{ext}' (supported: .xml (Mitsuba, Nori, CENG795), .json (CENG795), .txt (COMP30019), .obj (OBJ+MTL), .dae (COLLADA))"
+                "unsupported scene file extension '.{ext}' (supported: .xml (Mitsuba, Nori, CENG795), .json (CENG795), .txt (COMP30019), .obj (OBJ+MTL), .dae (COLLADA), .pbrt (pbrt-v4, pbrt-v3))"
             ),
         )),
     }

@@ -6,3 +6,4 @@ mod collada;
 mod meshes;
 mod mitsuba;
 mod objmtl;
+mod pbrt;
