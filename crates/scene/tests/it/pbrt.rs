@@ -746,3 +746,134 @@ fn screen_windows_lenses_and_crop() {
             if aperture_radius == 0.1 && focus_distance == 4.0
     ));
 }
+
+/// pbrt-v4's procedural and combining textures, MIP filters, its spot falloff and the
+/// coated materials' per-lookup roughness remapping reach the model as such.
+#[test]
+fn procedural_textures_filters_spots_and_coated_roughness() {
+    let dir = write_scene(&[("x.txt", b"")])
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    std::fs::write(
+        dir.join("img.pfm"),
+        b"PF\n1 1\n-1\n\0\0\x80?\0\0\x80?\0\0\x80?",
+    )
+    .unwrap();
+    let text = format!(
+        "{CAMERA}Texture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"img.pfm\" \"string filter\" \"trilinear\"\n\
+         Texture \"e\" \"spectrum\" \"imagemap\" \"string filename\" \"img.pfm\" \"string filter\" \"ewa\"\n\
+         Translate 1 2 3\n\
+         Texture \"f\" \"float\" \"fbm\" \"integer octaves\" 4 \"float roughness\" 0.3\n\
+         Texture \"p\" \"spectrum\" \"scale\" \"texture tex\" \"i\" \"texture scale\" \"f\"\n\
+         Texture \"m\" \"spectrum\" \"mix\" \"texture tex1\" \"i\" \"texture tex2\" \"e\" \"texture amount\" \"f\"\n\
+         Texture \"c3\" \"spectrum\" \"checkerboard\" \"integer dimension\" 3 \"texture tex1\" \"i\" \"rgb tex2\" [0 1 0]\n\
+         Texture \"b\" \"spectrum\" \"bilerp\" \"rgb v00\" [1 0 0] \"rgb v11\" [0 0 1]\n\
+         Texture \"w\" \"float\" \"wrinkled\"\nTexture \"marble\" \"spectrum\" \"marble\" \"float scale\" 2\n\
+         Material \"diffuse\" \"texture reflectance\" \"m\"\nShape \"sphere\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"c3\"\nShape \"sphere\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"b\"\nShape \"sphere\"\n\
+         Material \"coateddiffuse\" \"texture roughness\" \"w\"\nShape \"sphere\"\n\
+         Material \"coateddiffuse\" \"float roughness\" 0.04 \"bool remaproughness\" false \"texture reflectance\" \"marble\"\nShape \"sphere\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"p\"\nShape \"sphere\"\n\
+         LightSource \"spot\" \"float coneangle\" 30 \"float conedelta\" 10\n"
+    );
+    std::fs::write(dir.join("s.pbrt"), text).unwrap();
+    let Document::Scene(s) = load(&dir.join("s.pbrt"), &LoadOptions::default()).unwrap() else {
+        panic!()
+    };
+    assert!(s.warnings.is_empty(), "{:?}", warnings(&s));
+    let refl = |i: usize| match base(&s, s.shapes[i].material.unwrap()) {
+        Material::Diffuse {
+            reflectance: ColorParam::Texture(t),
+        } => s.texture(*t).texture.clone(),
+        m => panic!("{m:?}"),
+    };
+    let Texture::Mix { a, b, amount } = refl(0) else {
+        panic!("mix")
+    };
+    assert!(matches!(
+        *a,
+        Texture::Bitmap {
+            filter: TextureFilter::Trilinear,
+            ..
+        }
+    ));
+    assert!(matches!(
+        *b,
+        Texture::Bitmap {
+            filter: TextureFilter::Ewa,
+            ..
+        }
+    ));
+    let Texture::Noise {
+        kind: NoiseKind::Fbm { octaves: 4, omega },
+        to_texture,
+    } = *amount
+    else {
+        panic!("fbm")
+    };
+    assert_eq!(omega, 0.3);
+    // The texture space is the CTM's at the definition: world (1, 2, 3) is its origin.
+    assert!(
+        to_texture
+            .transform_point3(Vec3::new(1.0, 2.0, 3.0))
+            .length()
+            < 1e-6
+    );
+    let Texture::Checker3D { a, b, .. } = refl(1) else {
+        panic!("checker3d")
+    };
+    assert!(matches!(*a, Texture::Bitmap { .. }));
+    assert!(matches!(*b, Texture::Constant(c) if c == Vec3::Y));
+    let Texture::Bilerp { v00, v01, v11, .. } = refl(2) else {
+        panic!("bilerp")
+    };
+    assert_eq!((v00, v01, v11), (Vec3::X, Vec3::ONE, Vec3::Z));
+    match &s.material(s.shapes[3].material.unwrap()).material {
+        Material::CoatedDiffuse {
+            alpha_u: FloatParam::Texture(t),
+            remap_roughness: true,
+            ..
+        } => assert!(matches!(
+            s.texture(*t).texture,
+            Texture::Noise {
+                kind: NoiseKind::Wrinkled { .. },
+                ..
+            }
+        )),
+        m => panic!("{m:?}"),
+    }
+    match &s.material(s.shapes[4].material.unwrap()).material {
+        Material::CoatedDiffuse {
+            alpha_u: FloatParam::Const(a),
+            remap_roughness: false,
+            reflectance: ColorParam::Texture(t),
+            ..
+        } => {
+            assert_eq!(*a, 0.04);
+            assert!(matches!(
+                s.texture(*t).texture,
+                Texture::Noise {
+                    kind: NoiseKind::Marble { scale: 2.0, .. },
+                    ..
+                }
+            ));
+        }
+        m => panic!("{m:?}"),
+    }
+    assert!(matches!(refl(5), Texture::Product { .. }));
+    let Emitter::Spot {
+        falloff,
+        cutoff_angle,
+        beam_width,
+        ..
+    } = &s.emitters[0].emitter
+    else {
+        panic!()
+    };
+    assert_eq!(
+        (*falloff, *cutoff_angle, *beam_width),
+        (SpotFalloff::SmoothStep, 30.0, 20.0)
+    );
+}

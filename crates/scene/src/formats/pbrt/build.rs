@@ -357,14 +357,11 @@ impl Loader {
                     (a, b) => match (const_of(&a), const_of(&b)) {
                         (Some(a), Some(b)) => TexVal::Const(a * b),
                         _ => {
-                            self.warn(
-                                loc,
-                                format!(
-                                    "scale texture '{name}': a product of two textures is not \
-                                     supported; the first is used unscaled"
-                                ),
-                            );
-                            a
+                            let product = Texture::Product {
+                                a: Box::new(self.inline(&a)),
+                                b: Box::new(self.inline(&b)),
+                            };
+                            self.add_tex(product, &name, loc)
                         }
                     },
                 }
@@ -390,21 +387,68 @@ impl Loader {
                         self.affine(t, a.x, x * (1.0 - a.x), &name, loc)
                     }
                     _ => {
-                        self.warn(
-                            loc,
-                            format!(
-                                "mix texture '{name}': only a constant amount with at most one \
-                                 texture is supported; 'tex1' is used"
-                            ),
-                        );
-                        t1
+                        let mix = Texture::Mix {
+                            a: Box::new(self.inline(&t1)),
+                            b: Box::new(self.inline(&t2)),
+                            amount: Box::new(self.inline(&a)),
+                        };
+                        self.add_tex(mix, &name, loc)
                     }
                 }
             }
             "imagemap" => self.imagemap(&name, &p, loc)?,
             "checkerboard" => self.checkerboard(&name, &p, loc)?,
-            "bilerp" | "directionmix" | "dots" | "fbm" | "marble" | "ptex" | "windy"
-            | "wrinkled" => {
+            "bilerp" => {
+                let to_uv = self.uv_mapping(&p, &name, loc)?;
+                let mut v = [Rgb::ZERO; 4];
+                for (i, (key, default)) in [("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0)]
+                    .iter()
+                    .enumerate()
+                {
+                    let t = self.tex_param(&p, key, spectrum, usage)?;
+                    v[i] = match t {
+                        None => Rgb::splat(*default),
+                        Some(t) => match const_of(&t) {
+                            Some(c) => c,
+                            None => {
+                                return Err(err(
+                                    loc,
+                                    format!("bilerp '{name}': '{key}' must be a constant"),
+                                ));
+                            }
+                        },
+                    };
+                }
+                let bilerp = Texture::Bilerp {
+                    v00: v[0],
+                    v01: v[1],
+                    v10: v[2],
+                    v11: v[3],
+                    to_uv,
+                };
+                self.add_tex(bilerp, &name, loc)
+            }
+            "fbm" | "wrinkled" | "windy" | "marble" => {
+                let octaves = p.int_in("octaves", 8, 1, 64)? as u32;
+                let omega = p.float("roughness", 0.5)?;
+                let kind = match class {
+                    "fbm" => NoiseKind::Fbm { octaves, omega },
+                    "wrinkled" => NoiseKind::Wrinkled { octaves, omega },
+                    "windy" => NoiseKind::Windy,
+                    _ => NoiseKind::Marble {
+                        octaves,
+                        omega,
+                        scale: p.float("scale", 1.0)?,
+                        variation: p.float("variation", 0.2)?,
+                    },
+                };
+                let noise = Texture::Noise {
+                    kind,
+                    to_texture: self.texture_space(),
+                };
+                self.add_tex(noise, &name, loc)
+            }
+            "directionmix" | "dots" | "ptex" => {
                 self.warn(
                     loc,
                     format!(
@@ -436,6 +480,29 @@ impl Loader {
         };
         map.insert(name, val);
         Ok(())
+    }
+
+    /// `t` as an inline model texture (a constant, or a copy of the texture it names).
+    fn inline(&self, t: &TexVal) -> Texture {
+        match t {
+            TexVal::Tex(id) => self.scene.texture(*id).texture.clone(),
+            other => Texture::Constant(const_of(other).unwrap_or(Rgb::ZERO)),
+        }
+    }
+
+    fn add_tex(&mut self, texture: Texture, name: &str, loc: &Loc) -> TexVal {
+        TexVal::Tex(self.scene.add_texture(TextureDesc {
+            texture,
+            name: Some(name.to_string()),
+            loc: loc.clone(),
+        }))
+    }
+
+    /// The world-to-texture transform of a 3D texture: the inverse of the CTM at its
+    /// definition (pbrt-v4's `PointTransformMapping`).
+    fn texture_space(&self) -> Mat4 {
+        let inv = self.gs.ctm[0].inverse();
+        if inv.is_finite() { inv } else { Mat4::IDENTITY }
     }
 
     fn affine(&mut self, t: TextureId, scale: f32, offset: Rgb, name: &str, loc: &Loc) -> TexVal {
@@ -490,8 +557,9 @@ impl Loader {
         let flip = Mat3::from_cols(Vec3::X, Vec3::new(0.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 1.0));
         let filter = match p.string("filter", "bilinear")? {
             "point" => TextureFilter::Nearest,
-            // Trilinear and EWA are MIP-map filters; ours filter bilinearly.
-            "bilinear" | "trilinear" | "ewa" | "EWA" => TextureFilter::Bilinear,
+            "bilinear" => TextureFilter::Bilinear,
+            "trilinear" => TextureFilter::Trilinear,
+            "ewa" | "EWA" => TextureFilter::Ewa,
             f => {
                 return Err(err(
                     loc,
@@ -531,7 +599,17 @@ impl Loader {
             }),
             None => None,
         };
-        let _ = p.bool("trilinear", false)?;
+        let v3_trilinear = p.bool("trilinear", false)?;
+        // pbrt-v3 filtered with EWA unless `trilinear` was set.
+        let filter = if p.has("trilinear") && !p.has("filter") {
+            if v3_trilinear {
+                TextureFilter::Trilinear
+            } else {
+                TextureFilter::Ewa
+            }
+        } else {
+            filter
+        };
         let encoding = match v3_encoding {
             Some(e) if !p.has("encoding") => e,
             _ => p.string("encoding", "sRGB")?,
@@ -596,14 +674,14 @@ impl Loader {
         let t2 = self
             .tex_param(p, "tex2", true, Usage::Albedo)?
             .unwrap_or(TexVal::Const(Rgb::ZERO));
-        let (Some(c1), Some(c2)) = (const_of(&t1), const_of(&t2)) else {
-            return Err(err(
-                loc,
-                format!("checkerboard '{name}': textured tex1/tex2 are not supported"),
-            ));
-        };
         let texture = match dim {
             2 => {
+                let (Some(c1), Some(c2)) = (const_of(&t1), const_of(&t2)) else {
+                    return Err(err(
+                        loc,
+                        format!("checkerboard '{name}': textured tex1/tex2 are not supported"),
+                    ));
+                };
                 let m = self.uv_mapping(p, name, loc)?;
                 // Our checkerboard has two cells per unit of uv, pbrt's one.
                 Texture::Checkerboard {
@@ -612,24 +690,12 @@ impl Loader {
                     to_uv: Mat3::from_diagonal(Vec3::new(0.5, 0.5, 1.0)) * m,
                 }
             }
-            3 => {
-                if self.gs.ctm[0] != Mat4::IDENTITY {
-                    self.warn(
-                        loc,
-                        format!(
-                            "checkerboard '{name}': a 3D checkerboard is evaluated in world \
-                             space (its transform is ignored)"
-                        ),
-                    );
-                }
-                // pbrt: tex1 where ⌊x⌋ + ⌊y⌋ + ⌊z⌋ is even.
-                Texture::SolidChecker {
-                    black: c2,
-                    white: c1,
-                    scale: 1.0,
-                    offset: 0.0,
-                }
-            }
+            // pbrt: tex1 where ⌊x⌋ + ⌊y⌋ + ⌊z⌋ of the point in texture space is even.
+            3 => Texture::Checker3D {
+                a: Box::new(self.inline(&t1)),
+                b: Box::new(self.inline(&t2)),
+                to_texture: self.texture_space(),
+            },
             d => {
                 return Err(err(
                     loc,
@@ -637,11 +703,7 @@ impl Loader {
                 ));
             }
         };
-        Ok(TexVal::Tex(self.scene.add_texture(TextureDesc {
-            texture,
-            name: Some(name.to_string()),
-            loc: loc.clone(),
-        })))
+        Ok(self.add_tex(texture, name, loc))
     }
 
     // -----------------------------------------------------------------------------------------
@@ -690,6 +752,26 @@ impl Loader {
             f => f,
         };
         Ok((map(u, self), map(v, self)))
+    }
+
+    /// uroughness/vroughness (defaulting to roughness) as declared, and whether they are to
+    /// be remapped (α = √r): coated materials remap per lookup, so textures remap too.
+    fn raw_roughness(
+        &mut self,
+        p: &Params,
+        prefix: &str,
+        default: f32,
+    ) -> Result<(FloatParam, FloatParam, bool)> {
+        let r = self.float(p, &format!("{prefix}roughness"), default)?;
+        let u = match self.tex_param(p, &format!("{prefix}uroughness"), false, Usage::Unbounded)? {
+            Some(t) => float_of(t),
+            None => r.clone(),
+        };
+        let v = match self.tex_param(p, &format!("{prefix}vroughness"), false, Usage::Unbounded)? {
+            Some(t) => float_of(t),
+            None => r,
+        };
+        Ok((u, v, p.bool("remaproughness", true)?))
     }
 
     fn conductor_index(
@@ -806,12 +888,13 @@ impl Loader {
                 }
             }
             "coateddiffuse" => {
-                let (au, av) = self.roughness(p, "", 0.0, loc)?;
+                let (au, av, remap) = self.raw_roughness(p, "", 0.0)?;
                 let (eta, _) = self.eta(p, "eta", 1.5)?;
                 Material::CoatedDiffuse {
                     reflectance: self.color(p, "reflectance", 0.5, Usage::Albedo)?,
                     alpha_u: au,
                     alpha_v: av,
+                    remap_roughness: remap,
                     eta,
                     thickness: self.float(p, "thickness", 0.01)?,
                     albedo: self.color(p, "albedo", 0.0, Usage::Albedo)?,
@@ -821,13 +904,14 @@ impl Loader {
                 }
             }
             "coatedconductor" => {
-                let (iu, iv) = self.roughness(p, "interface.", 0.0, loc)?;
-                let (cu, cv) = self.roughness(p, "conductor.", 0.0, loc)?;
+                let (iu, iv, remap) = self.raw_roughness(p, "interface.", 0.0)?;
+                let (cu, cv, _) = self.raw_roughness(p, "conductor.", 0.0)?;
                 let (ieta, _) = self.eta(p, "interface.eta", 1.5)?;
                 let (ce, ck, refl) = self.conductor_index(p, "conductor.")?;
                 Material::CoatedConductor {
                     interface_alpha_u: iu,
                     interface_alpha_v: iv,
+                    remap_roughness: remap,
                     interface_eta: ieta,
                     thickness: self.float(p, "thickness", 0.01)?,
                     albedo: self.color(p, "albedo", 0.0, Usage::Albedo)?,
@@ -901,13 +985,14 @@ impl Loader {
                     "substrate" => (0.5, 0.1),
                     _ => (0.25, 0.0),
                 };
-                let (au, av) = self.roughness(p, "", rough_default, loc)?;
+                let (au, av, remap) = self.raw_roughness(p, "", rough_default)?;
                 let (eta, _) = self.eta(p, if ty == "uber" { "index" } else { "eta" }, 1.5)?;
                 let _ = p.get("Ks", &[Ty::Rgb, Ty::Spectrum, Ty::Texture, Ty::Float])?;
                 Material::CoatedDiffuse {
                     reflectance: self.color(p, "Kd", kd_default, Usage::Albedo)?,
                     alpha_u: au,
                     alpha_v: av,
+                    remap_roughness: remap,
                     eta,
                     thickness: FloatParam::Const(0.01),
                     albedo: ColorParam::constant(0.0),
@@ -1224,20 +1309,12 @@ impl Loader {
                         * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
                     s *= phi / k;
                 }
-                if delta > 0.0 {
-                    self.warn_once(
-                        "spot falloff",
-                        loc,
-                        "spot: pbrt-v4's smoothstep falloff between coneangle − conedelta and \
-                         coneangle is rendered with Mitsuba's (linear in the angle)",
-                    );
-                }
                 Emitter::Spot {
                     to_world,
                     intensity: self.light_value(p, "I", s)?,
                     cutoff_angle: cone,
                     beam_width: (cone - delta).max(0.0),
-                    falloff: SpotFalloff::Mitsuba,
+                    falloff: SpotFalloff::SmoothStep,
                 }
             }
             "distant" => {

@@ -24,13 +24,14 @@
 //!
 //! Refused with an error: partial spheres, `curve`, `hair`/`measured`/`subsurface`
 //! materials, grid media, `goniometric`/`projection` lights, `realistic`/`spherical`
-//! cameras, unknown names of any kind. Approximated with a warning: spot falloff (ours is
-//! Mitsuba's), `displacement` (our bump map's slope is per texel), textures we lack (constant
-//! 0.5), motion other than translation, film sensor/white balance/ISO. Mapped without a
-//! warning, as the nearest we have: image filters `trilinear`/`ewa` → bilinear (no MIP
-//! maps), samplers `zsobol`/`paddedsobol`/`pmj02bn` → Sobol; read and without effect, as in
-//! pbrt-v4 for what we support: `maxanisotropy` (EWA only), film `diagonal` (realistic
-//! camera only), `savefp16`.
+//! cameras, the `directionmix`, `dots` and `ptex` textures, unknown names of any kind.
+//! Approximated with a warning: `displacement` (our bump map's slope is per texel), motion
+//! other than translation, film sensor/white balance/ISO. Mapped without a warning, as the
+//! nearest we have: samplers `zsobol`/`paddedsobol`/`pmj02bn` → Sobol; read and without
+//! effect, as in pbrt-v4 for what we support: `maxanisotropy` (ours is pbrt-v4's default, 8),
+//! film `diagonal` (realistic camera only), `savefp16`. Image filters `trilinear` and `ewa`
+//! are pbrt-v4's MIP-map filters (the footprint from the camera at every hit); `bilinear`
+//! reads the finest level where pbrt-v4 also picks a level by the footprint.
 //!
 //! pbrt-v4's BSDFs reflect on both sides of a surface: diffuse and conductor materials are
 //! wrapped in `twosided` (Mitsuba's, ours, reflect on the normal's side only).
