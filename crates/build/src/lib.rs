@@ -276,6 +276,37 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
     })
 }
 
+/// Build `desc` once and render it once per seed of `seeds`, each render the image
+/// [`render_desc`] gives with that seed in `opts` (the seed is read only at render time):
+/// the batches of the statistical tests, without building the scene for every batch (for
+/// scenes with environment maps, grids or rough plastic, building is most of a batch's time).
+pub fn render_seeds(
+    desc: &SceneDesc,
+    opts: &BuildOptions,
+    seeds: impl IntoIterator<Item = u64>,
+) -> Result<Vec<RenderOutcome>, String> {
+    let Built {
+        mut scene,
+        integrator,
+        spp,
+    } = build(desc, opts).map_err(|e| e.to_string())?;
+    Ok(seeds
+        .into_iter()
+        .map(|seed| {
+            scene.sampler.seed = seed;
+            render(
+                &scene,
+                &integrator,
+                &RenderOptions {
+                    spp,
+                    ..Default::default()
+                },
+                &Silent,
+            )
+        })
+        .collect())
+}
+
 /// Build `desc` with `opts` and render it to the end with no observer: the convenience of
 /// tests and tools that need one image (at [`Built::spp`]).
 pub fn render_desc(desc: &SceneDesc, opts: &BuildOptions) -> Result<RenderOutcome, String> {

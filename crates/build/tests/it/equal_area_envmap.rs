@@ -5,7 +5,7 @@
 //! spp equal-area renders against 8 × 128 spp lat-long ones (α = 0.01, Šidák-corrected
 //! inside `compare`).
 
-use build::{BuildOptions, render_desc};
+use build::{BuildOptions, render_seeds};
 use render::compare::{Reference, TestImages, compare};
 use render::film::Image;
 use render::image_io::write_image;
@@ -71,14 +71,14 @@ fn scene_xml(latlong: &std::path::Path) -> String {
 }
 
 fn batches(desc: &scene::SceneDesc, count: u64, spp: u32) -> Vec<Image> {
-    (0..count)
-        .map(|seed| {
-            let opts = BuildOptions {
-                seed: Some(300 + seed),
-                spp: Some(spp),
-                ..Default::default()
-            };
-            let out = render_desc(desc, &opts).unwrap();
+    let opts = BuildOptions {
+        spp: Some(spp),
+        ..Default::default()
+    };
+    render_seeds(desc, &opts, 300..300 + count)
+        .unwrap()
+        .into_iter()
+        .map(|out| {
             assert_eq!(out.film.nonfinite_count(), 0);
             out.film.develop()
         })

@@ -27,5 +27,6 @@ mod pbrt_references;
 mod photon_density;
 mod photon_emission;
 mod references;
+mod render_seeds;
 mod sppm;
 mod volpath_record;

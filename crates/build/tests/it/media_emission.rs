@@ -184,14 +184,14 @@ fn glowing_sphere(integrator: &str) -> String {
 /// `count` renders of the glowing sphere with `integrator` at `spp`, seeds 100, 101, ….
 fn batches(integrator: &str, count: u64, spp: u32) -> Vec<render::film::Image> {
     let desc = scene::load_xml_text("glow", &glowing_sphere(integrator)).unwrap();
-    (0..count)
-        .map(|seed| {
-            let opts = BuildOptions {
-                seed: Some(100 + seed),
-                spp: Some(spp),
-                ..Default::default()
-            };
-            let out = render_desc(&desc, &opts).unwrap();
+    let opts = BuildOptions {
+        spp: Some(spp),
+        ..Default::default()
+    };
+    build::render_seeds(&desc, &opts, 100..100 + count)
+        .unwrap()
+        .into_iter()
+        .map(|out| {
             assert_eq!(out.film.nonfinite_count(), 0, "{integrator}");
             out.film.develop()
         })

@@ -152,19 +152,15 @@ fn bitterli_cornell_box_pbrt_matches_mitsuba() {
     p.max_depth = 9;
     pbrt.sensors[0].film.filter = mitsuba.sensors[0].film.filter;
     let batches = |desc: &scene::SceneDesc, first_seed: u64| -> Vec<render::film::Image> {
-        (0..16)
-            .map(|i| {
-                let opts = build::BuildOptions {
-                    spp: Some(32),
-                    seed: Some(first_seed + i),
-                    resolution: Some((64, 64)),
-                    ..Default::default()
-                };
-                build::render_desc(desc, &opts)
-                    .expect("builds")
-                    .film
-                    .develop()
-            })
+        let opts = build::BuildOptions {
+            spp: Some(32),
+            resolution: Some((64, 64)),
+            ..Default::default()
+        };
+        build::render_seeds(desc, &opts, first_seed..first_seed + 16)
+            .expect("builds")
+            .into_iter()
+            .map(|out| out.film.develop())
             .collect()
     };
     let reference = Reference::from_batches(&batches(&mitsuba, 1000)).expect("a reference");

@@ -19,7 +19,6 @@
 use std::path::{Path, PathBuf};
 
 use build::BuildOptions;
-use build::render_desc;
 use render::compare::{TestImages, compare, load_reference, rel_mse};
 use render::film::Image;
 use scene::{Document, LoadOptions, RenderMode};
@@ -53,15 +52,15 @@ fn render_batches(
 }
 
 fn render_desc_batches(desc: &scene::SceneDesc, spp: u32, mode: RenderMode) -> Vec<Image> {
-    (0..BATCHES)
-        .map(|seed| {
-            let opts = BuildOptions {
-                spp: Some(spp),
-                seed: Some(seed),
-                mode,
-                ..Default::default()
-            };
-            let out = render_desc(desc, &opts).expect("scene builds");
+    let opts = BuildOptions {
+        spp: Some(spp),
+        mode,
+        ..Default::default()
+    };
+    build::render_seeds(desc, &opts, 0..BATCHES)
+        .expect("scene builds")
+        .into_iter()
+        .map(|out| {
             assert_eq!(out.film.nonfinite_count(), 0, "NaN/Inf samples");
             out.film.develop()
         })
