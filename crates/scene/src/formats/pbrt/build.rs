@@ -1468,37 +1468,32 @@ impl Loader {
             return Err(err(&fp.loc, format!("film of {w}×{h} pixels is too large")));
         }
         let (w, h) = (w as u32, h as u32);
+        // The pixel window [x0, x1) × [y0, y1) of a crop window (fractions of the film,
+        // rounded up as pbrt-v4 does) or of pixel bounds (pixels); the latter wins.
         let mut crop = None;
-        if let Some(q) = fp.get("cropwindow", &[Ty::Float])? {
+        for (key, ty, what) in [
+            ("cropwindow", Ty::Float, "crop window"),
+            ("pixelbounds", Ty::Integer, "pixel bounds"),
+        ] {
+            let Some(q) = fp.get(key, &[ty])? else {
+                continue;
+            };
             let [x0, x1, y0, y1] = q.nums() else {
                 return Err(q.err("expected 4 values"));
             };
-            let px = |f: f64, n: u32| ((f.clamp(0.0, 1.0) * f64::from(n)).ceil() as u32).min(n);
+            let px = |v: f64, n: u32| match ty {
+                Ty::Float => ((v.clamp(0.0, 1.0) * f64::from(n)).ceil() as u32).min(n),
+                _ => (v.max(0.0) as u32).min(n),
+            };
             let (a, b, c, d) = (px(*x0, w), px(*x1, w), px(*y0, h), px(*y1, h));
             if b <= a || d <= c {
-                return Err(q.err("empty crop window"));
+                return Err(q.err(format!("empty {what}")));
             }
             crop = Some(CropWindow {
                 offset_x: a,
                 offset_y: c,
                 width: b - a,
                 height: d - c,
-            });
-        }
-        if let Some(q) = fp.get("pixelbounds", &[Ty::Integer])? {
-            let [x0, x1, y0, y1] = q.nums() else {
-                return Err(q.err("expected 4 values"));
-            };
-            let c = |v: f64, n: u32| (v.max(0.0) as u32).min(n);
-            let (a, b, cc, d) = (c(*x0, w), c(*x1, w), c(*y0, h), c(*y1, h));
-            if b <= a || d <= cc {
-                return Err(q.err("empty pixel bounds"));
-            }
-            crop = Some(CropWindow {
-                offset_x: a,
-                offset_y: cc,
-                width: b - a,
-                height: d - cc,
             });
         }
         let output = fp
