@@ -747,7 +747,8 @@ fn screen_windows_lenses_and_crop() {
     ));
 }
 
-/// pbrt-v4's procedural and combining textures, MIP filters, its spot falloff and the
+/// pbrt-v4's procedural and combining textures (a 2D checkerboard of textures too), MIP
+/// filters, its spot falloff and the
 /// coated materials' per-lookup roughness remapping reach the model as such.
 #[test]
 fn procedural_textures_filters_spots_and_coated_roughness() {
@@ -769,6 +770,7 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
          Texture \"m\" \"spectrum\" \"mix\" \"texture tex1\" \"i\" \"texture tex2\" \"e\" \"texture amount\" \"f\"\n\
          Texture \"c3\" \"spectrum\" \"checkerboard\" \"integer dimension\" 3 \"texture tex1\" \"i\" \"rgb tex2\" [0 1 0]\n\
          Texture \"b\" \"spectrum\" \"bilerp\" \"rgb v00\" [1 0 0] \"rgb v11\" [0 0 1]\n\
+         Texture \"c2\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"i\" \"rgb tex2\" [0 0 1]\n\
          Texture \"w\" \"float\" \"wrinkled\"\nTexture \"marble\" \"spectrum\" \"marble\" \"float scale\" 2\n\
          Material \"diffuse\" \"texture reflectance\" \"m\"\nShape \"sphere\"\n\
          Material \"diffuse\" \"texture reflectance\" \"c3\"\nShape \"sphere\"\n\
@@ -776,6 +778,7 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
          Material \"coateddiffuse\" \"texture roughness\" \"w\"\nShape \"sphere\"\n\
          Material \"coateddiffuse\" \"float roughness\" 0.04 \"bool remaproughness\" false \"texture reflectance\" \"marble\"\nShape \"sphere\"\n\
          Material \"diffuse\" \"texture reflectance\" \"p\"\nShape \"sphere\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"c2\"\nShape \"sphere\"\n\
          LightSource \"spot\" \"float coneangle\" 30 \"float conedelta\" 10\n"
     );
     std::fs::write(dir.join("s.pbrt"), text).unwrap();
@@ -863,6 +866,15 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
         m => panic!("{m:?}"),
     }
     assert!(matches!(refl(5), Texture::Product { .. }));
+    let Texture::Mix { a, b, amount } = refl(6) else {
+        panic!("a textured 2D checkerboard")
+    };
+    assert!(matches!(*a, Texture::Bitmap { .. }));
+    assert!(matches!(*b, Texture::Constant(c) if c == Vec3::Z));
+    assert!(
+        matches!(*amount, Texture::Checkerboard { color0, color1, .. }
+        if color0 == Vec3::ZERO && color1 == Vec3::ONE)
+    );
     let Emitter::Spot {
         falloff,
         cutoff_angle,

@@ -676,18 +676,25 @@ impl Loader {
             .unwrap_or(TexVal::Const(Rgb::ZERO));
         let texture = match dim {
             2 => {
-                let (Some(c1), Some(c2)) = (const_of(&t1), const_of(&t2)) else {
-                    return Err(err(
-                        loc,
-                        format!("checkerboard '{name}': textured tex1/tex2 are not supported"),
-                    ));
-                };
                 let m = self.uv_mapping(p, name, loc)?;
                 // Our checkerboard has two cells per unit of uv, pbrt's one.
-                Texture::Checkerboard {
-                    color0: c1,
-                    color1: c2,
-                    to_uv: Mat3::from_diagonal(Vec3::new(0.5, 0.5, 1.0)) * m,
+                let to_uv = Mat3::from_diagonal(Vec3::new(0.5, 0.5, 1.0)) * m;
+                match (const_of(&t1), const_of(&t2)) {
+                    (Some(c1), Some(c2)) => Texture::Checkerboard {
+                        color0: c1,
+                        color1: c2,
+                        to_uv,
+                    },
+                    // Textured cells: the two textures mixed by a 0/1 checkerboard.
+                    _ => Texture::Mix {
+                        a: Box::new(self.inline(&t1)),
+                        b: Box::new(self.inline(&t2)),
+                        amount: Box::new(Texture::Checkerboard {
+                            color0: Rgb::ZERO,
+                            color1: Rgb::ONE,
+                            to_uv,
+                        }),
+                    },
                 }
             }
             // pbrt: tex1 where ⌊x⌋ + ⌊y⌋ + ⌊z⌋ of the point in texture space is even.
