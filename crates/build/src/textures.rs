@@ -104,6 +104,7 @@ fn load_texture_kind(
             gamma,
             to_uv,
             corner_texels,
+            mipmapped,
         } => {
             // Loaders resolve file names (absolute, or relative to the working directory).
             let decode = match (raw, gamma) {
@@ -115,8 +116,9 @@ fn load_texture_kind(
                 loc: desc.loc.clone(),
                 message: format!("cannot read texture: {e}"),
             })?;
-            let mips = matches!(filter, TextureFilter::Trilinear | TextureFilter::Ewa)
-                .then(|| Arc::new(MipMap::new(&image, *wrap)));
+            let mips = (*mipmapped
+                || matches!(filter, TextureFilter::Trilinear | TextureFilter::Ewa))
+            .then(|| Arc::new(MipMap::new(&image, *wrap)));
             Texture::Bitmap {
                 image: Arc::new(image),
                 filter: *filter,

@@ -787,6 +787,10 @@ pub enum Texture {
         /// Texel (i, j) sits at uv (i/w, j/h) — the CENG795 course's addressing, where nearest
         /// is texel (round(u·w), round(v·h)) — instead of at its centre ((i+½)/w, (j+½)/h).
         corner_texels: bool,
+        /// Every filter reads a MIP level chosen by the lookup's footprint (pbrt-v4's image
+        /// textures); otherwise only trilinear and EWA filtering use MIP maps and nearest and
+        /// bilinear read the image itself (Mitsuba's and the courses' textures).
+        mipmapped: bool,
     },
     Checkerboard {
         color0: Rgb,

@@ -1,6 +1,7 @@
 //! pbrt-v4's MIP-mapped texture filtering, driven by the camera's per-pixel footprint: a
 //! plane seen at a grazing angle under a fine texel checkerboard (512², repeated 8 times).
-//! Far away many texels fall in a pixel: trilinear and EWA lookups average them, so 4 spp
+//! Far away many texels fall in a pixel: trilinear and EWA lookups (and pbrt-v4's bilinear
+//! one, which reads the level the footprint picks) average them, so 4 spp
 //! renders vary far less from seed to seed than bilinear ones (under a directional light,
 //! whose light sampling adds no noise of its own), while the image mean stays
 //! that of bilinear lookups (within 1 %; filtering only moves where in the pixel the texture
@@ -50,11 +51,16 @@ fn scene(dir: &std::path::Path) -> scene::SceneDesc {
 }
 
 /// Mean of the image and mean over pixels of the variance between seeds.
-fn stats(desc: &scene::SceneDesc, filter: TextureFilter) -> (f64, f64) {
+fn stats(desc: &scene::SceneDesc, filter: TextureFilter, mipmapped: bool) -> (f64, f64) {
     let mut desc = desc.clone();
     for t in &mut desc.textures {
-        if let Texture::Bitmap { filter: f, .. } = &mut t.texture {
-            *f = filter;
+        if let Texture::Bitmap {
+            filter: f,
+            mipmapped: m,
+            ..
+        } = &mut t.texture
+        {
+            (*f, *m) = (filter, mipmapped);
         }
     }
     let images: Vec<Image> = (0..8)
@@ -83,11 +89,16 @@ fn mip_filtering_averages_far_texels_and_keeps_the_mean() {
     let dir = std::env::temp_dir().join(format!("penumbra-mip-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let desc = scene(&dir);
-    let (m_bi, v_bi) = stats(&desc, TextureFilter::Bilinear);
-    for filter in [TextureFilter::Trilinear, TextureFilter::Ewa] {
-        let (m, v) = stats(&desc, filter);
+    let (m_bi, v_bi) = stats(&desc, TextureFilter::Bilinear, false);
+    // pbrt-v4's bilinear filter reads the level the footprint picks, too.
+    for (filter, mipmapped) in [
+        (TextureFilter::Trilinear, false),
+        (TextureFilter::Ewa, false),
+        (TextureFilter::Bilinear, true),
+    ] {
+        let (m, v) = stats(&desc, filter, mipmapped);
         println!(
-            "{filter:?}: mean {m:.4} (bilinear {m_bi:.4}), variance {v:.3e} (bilinear {v_bi:.3e})"
+            "{filter:?} (mipmapped {mipmapped}): mean {m:.4} (bilinear {m_bi:.4}), variance {v:.3e} (bilinear {v_bi:.3e})"
         );
         assert!(
             (m / m_bi - 1.0).abs() < 0.01,

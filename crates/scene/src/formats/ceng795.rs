@@ -717,6 +717,7 @@ impl Builder {
                     return Err(self.ctx.err(n, "the normalizer must be positive"));
                 }
                 let bitmap = Texture::Bitmap {
+                    mipmapped: false,
                     path,
                     filter,
                     wrap: WrapMode::Repeat,

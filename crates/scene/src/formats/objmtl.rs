@@ -555,6 +555,7 @@ fn texture(
     let id = if path.is_file() {
         Some(desc.add_texture(TextureDesc {
             texture: Texture::Bitmap {
+                mipmapped: false,
                 path: path.to_path_buf(),
                 filter: TextureFilter::Bilinear,
                 wrap: WrapMode::Repeat,

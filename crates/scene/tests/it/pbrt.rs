@@ -799,6 +799,7 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
         *a,
         Texture::Bitmap {
             filter: TextureFilter::Trilinear,
+            mipmapped: true,
             ..
         }
     ));

@@ -587,6 +587,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 };
                 let raw = pl.props.bool("raw", false)?;
                 Texture::Bitmap {
+                    mipmapped: false,
                     path,
                     filter,
                     wrap,

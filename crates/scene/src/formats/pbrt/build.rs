@@ -636,6 +636,7 @@ impl Loader {
         let scale = p.float("scale", 1.0)?;
         let invert = p.bool("invert", false)?;
         let bitmap = Texture::Bitmap {
+            mipmapped: true,
             path,
             filter,
             wrap,
@@ -1116,6 +1117,8 @@ impl Loader {
                 }
                 let texture = self.scene.add_texture(TextureDesc {
                     texture: Texture::Bitmap {
+                        // pbrt-v4 reads normal maps bilinearly at full resolution.
+                        mipmapped: false,
                         path,
                         filter: TextureFilter::Bilinear,
                         wrap: WrapMode::Repeat,

@@ -30,9 +30,9 @@
 //! other than translation, film sensor/white balance/ISO. Mapped without a warning, as the
 //! nearest we have: samplers `zsobol`/`paddedsobol`/`pmj02bn` → Sobol; read and without
 //! effect, as in pbrt-v4 for what we support: `maxanisotropy` (ours is pbrt-v4's default, 8),
-//! film `diagonal` (realistic camera only), `savefp16`. Image filters `trilinear` and `ewa`
-//! are pbrt-v4's MIP-map filters (the footprint from the camera at every hit); `bilinear`
-//! reads the finest level where pbrt-v4 also picks a level by the footprint.
+//! film `diagonal` (realistic camera only), `savefp16`. Image textures are MIP-mapped as in
+//! pbrt-v4: every filter (`point`, `bilinear`, `trilinear`, `ewa`) reads the level the
+//! lookup's footprint picks, the footprint coming from the camera at every hit.
 //!
 //! pbrt-v4's BSDFs reflect on both sides of a surface: diffuse and conductor materials are
 //! wrapped in `twosided` (Mitsuba's, ours, reflect on the normal's side only).
