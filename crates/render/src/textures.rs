@@ -190,6 +190,11 @@ pub enum Texture {
         kind: NoiseKind,
         to_texture: Mat4,
     },
+    /// `[inside, outside]` of pbrt-v4's polka dots over `to_uv`·uv.
+    Dots {
+        textures: Box<[Texture; 2]>,
+        to_uv: Mat3,
+    },
     /// A constant the scene declared as a spectrum (made by `build` in spectral mode only):
     /// `rgb` wherever an RGB value is read (lobe-selection weights, light power), the
     /// spectrum where spectral mode converts the parameter ([`Params::spectrum`]).
@@ -537,6 +542,10 @@ impl Texture {
             Texture::Noise { kind, to_texture } => {
                 noise::texture(*kind, to_texture.transform_point3a(at.p))
             }
+            Texture::Dots { textures, to_uv } => {
+                let inside = noise::in_dot(to_uv.transform_point2(at.uv));
+                textures[usize::from(!inside)].eval(at)
+            }
             Texture::Spectrum { rgb, .. } => *rgb,
         }
     }
@@ -580,7 +589,9 @@ impl Texture {
             Texture::Affine { texture, .. } => texture.uses_footprint(),
             Texture::Product(t) => t.iter().any(Texture::uses_footprint),
             Texture::Mix(t) => t.iter().any(Texture::uses_footprint),
-            Texture::Checker3D { textures, .. } => textures.iter().any(Texture::uses_footprint),
+            Texture::Checker3D { textures, .. } | Texture::Dots { textures, .. } => {
+                textures.iter().any(Texture::uses_footprint)
+            }
             _ => false,
         }
     }
@@ -647,6 +658,11 @@ impl Texture {
             Texture::Bilerp { corners, .. } => corners.iter().copied().sum::<Vec3>() * 0.25,
             Texture::Checker3D { textures, .. } => 0.5 * (textures[0].mean() + textures[1].mean()),
             Texture::Noise { kind, .. } => noise::mean(*kind),
+            // About a fifth of the plane is inside a dot (half the cells, π·0.35² each).
+            Texture::Dots { textures, .. } => {
+                let f = 0.5 * std::f32::consts::PI * 0.35 * 0.35;
+                textures[0].mean() * f + textures[1].mean() * (1.0 - f)
+            }
             Texture::Spectrum { rgb, .. } => *rgb,
         }
     }
@@ -751,6 +767,24 @@ mod noise {
         sum + o * 0.2
     }
 
+    /// Whether `st` lies in one of pbrt-v4's polka dots: cells centred on the integer
+    /// lattice, the ones where noise at the cell centre is positive hold a disk of radius
+    /// 0.35 whose centre noise shifts by up to 0.15.
+    pub fn in_dot(st: super::Vec2) -> bool {
+        let (sc, tc) = ((st.x + 0.5).floor(), (st.y + 0.5).floor());
+        let n = |x: f32, y: f32| perlin(Vec3::new(x, y, 0.5));
+        if n(sc + 0.5, tc + 0.5) <= 0.0 {
+            return false;
+        }
+        const RADIUS: f32 = 0.35;
+        let shift = 0.5 - RADIUS;
+        let centre = super::Vec2::new(
+            sc + shift * n(sc + 1.5, tc + 2.8),
+            tc + shift * n(sc + 4.5, tc + 9.8),
+        );
+        (st - centre).length_squared() < RADIUS * RADIUS
+    }
+
     pub fn texture(kind: NoiseKind, p: Vec3) -> Vec3 {
         match kind {
             NoiseKind::Fbm { octaves, omega } => Vec3::splat(fbm(p, omega, octaves)),
@@ -834,6 +868,37 @@ mod noise {
             }
             assert!(max <= 1.1 && max > 0.5, "max |noise| {max}");
             assert!((sum / n as f64).abs() < 0.02, "mean {}", sum / n as f64);
+        }
+
+        /// Dots sit inside their cells (centre shift 0.15 + radius 0.35 = ½), about half the
+        /// cells hold one, and a dot is the disk it should be.
+        #[test]
+        fn polka_dots_stay_in_their_cells() {
+            let (mut inside, mut cells_with) = (0usize, 0usize);
+            for cy in 0..40 {
+                for cx in 0..40 {
+                    let mut any = false;
+                    for j in 0..10 {
+                        for i in 0..10 {
+                            let st = super::super::Vec2::new(
+                                cx as f32 - 0.5 + (i as f32 + 0.5) / 10.0,
+                                cy as f32 - 0.5 + (j as f32 + 0.5) / 10.0,
+                            );
+                            if in_dot(st) {
+                                inside += 1;
+                                any = true;
+                            }
+                        }
+                    }
+                    cells_with += usize::from(any);
+                }
+            }
+            let cells = 1600.0;
+            let with = cells_with as f64 / cells;
+            assert!((0.3..0.7).contains(&with), "{with} of the cells hold a dot");
+            // Each dot covers π·0.35² ≈ 0.385 of its cell.
+            let per_dot = inside as f64 / (100.0 * cells_with as f64);
+            assert!((per_dot - 0.385).abs() < 0.03, "{per_dot}");
         }
 
         #[test]

@@ -845,6 +845,13 @@ pub enum Texture {
         b: Box<Texture>,
         to_texture: Mat4,
     },
+    /// pbrt-v4's `dots`: in each unit cell of `to_uv`·uv that noise selects, a disk of
+    /// radius 0.35 at a noise-jittered centre shows `inside`; everything else `outside`.
+    Dots {
+        inside: Box<Texture>,
+        outside: Box<Texture>,
+        to_uv: Mat3,
+    },
     /// pbrt-v4's noise textures (Perlin's improved noise) at the world point mapped by
     /// `to_texture`; grey but for `Marble`.
     Noise {

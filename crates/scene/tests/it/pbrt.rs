@@ -771,6 +771,7 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
          Texture \"c3\" \"spectrum\" \"checkerboard\" \"integer dimension\" 3 \"texture tex1\" \"i\" \"rgb tex2\" [0 1 0]\n\
          Texture \"b\" \"spectrum\" \"bilerp\" \"rgb v00\" [1 0 0] \"rgb v11\" [0 0 1]\n\
          Texture \"c2\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"i\" \"rgb tex2\" [0 0 1]\n\
+         Texture \"d\" \"spectrum\" \"dots\" \"rgb inside\" [1 0 0] \"float uscale\" 4\n\
          Texture \"w\" \"float\" \"wrinkled\"\nTexture \"marble\" \"spectrum\" \"marble\" \"float scale\" 2\n\
          Material \"diffuse\" \"texture reflectance\" \"m\"\nShape \"sphere\"\n\
          Material \"diffuse\" \"texture reflectance\" \"c3\"\nShape \"sphere\"\n\
@@ -779,6 +780,7 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
          Material \"coateddiffuse\" \"float roughness\" 0.04 \"bool remaproughness\" false \"texture reflectance\" \"marble\"\nShape \"sphere\"\n\
          Material \"diffuse\" \"texture reflectance\" \"p\"\nShape \"sphere\"\n\
          Material \"diffuse\" \"texture reflectance\" \"c2\"\nShape \"sphere\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"d\"\nShape \"sphere\"\n\
          LightSource \"spot\" \"float coneangle\" 30 \"float conedelta\" 10\n"
     );
     std::fs::write(dir.join("s.pbrt"), text).unwrap();
@@ -876,6 +878,17 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
         matches!(*amount, Texture::Checkerboard { color0, color1, .. }
         if color0 == Vec3::ZERO && color1 == Vec3::ONE)
     );
+    let Texture::Dots {
+        inside,
+        outside,
+        to_uv,
+    } = refl(7)
+    else {
+        panic!("dots")
+    };
+    assert!(matches!(*inside, Texture::Constant(c) if c == Vec3::X));
+    assert!(matches!(*outside, Texture::Constant(c) if c == Vec3::ZERO));
+    assert_eq!(to_uv.x_axis.x, 4.0);
     let Emitter::Spot {
         falloff,
         cutoff_angle,

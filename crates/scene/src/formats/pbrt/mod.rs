@@ -24,7 +24,7 @@
 //!
 //! Refused with an error: partial spheres, `curve`, `hair`/`measured`/`subsurface`
 //! materials, grid media, `goniometric`/`projection` lights, `realistic`/`spherical`
-//! cameras, the `directionmix`, `dots` and `ptex` textures, textured conductor indices,
+//! cameras, the `directionmix` and `ptex` textures, textured conductor indices,
 //! unknown names of any kind.
 //! Approximated with a warning: `displacement` (our bump map's slope is per texel), motion
 //! other than translation, film sensor/white balance/ISO. Mapped without a warning, as the
