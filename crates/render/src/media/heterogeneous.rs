@@ -23,6 +23,9 @@ use crate::spectral::lanes::{Color, ColorMode, RgbMode};
 pub enum Albedo {
     Const(Vec3),
     Grid(VoxelGrid),
+    /// σs/σt with σs from its own grid (in the density's units, on the density's lattice):
+    /// the two are interpolated apart and then divided, as pbrt-v4's `rgbgrid` does.
+    Ratio(VoxelGrid),
 }
 
 #[derive(Clone, Debug)]
@@ -43,7 +46,11 @@ pub struct Heterogeneous {
 impl Heterogeneous {
     pub fn new(density: VoxelGrid, albedo: Albedo, scale: f32, to_world: Mat4) -> Heterogeneous {
         let majorant = scale * density.max_value();
-        let min_density = density.data.iter().fold(f32::INFINITY, |m, &v| m.min(v));
+        let min_density = if density.zero_outside {
+            0.0
+        } else {
+            density.data.iter().fold(f32::INFINITY, |m, &v| m.min(v))
+        };
         Heterogeneous {
             min_density,
             majorants: MajorantGrid::new(&density, scale),
@@ -67,6 +74,23 @@ impl Heterogeneous {
         let near = t0.min(t1).max_element().max(0.0);
         let far = t0.max(t1).min_element().min(d_max);
         (near < far && self.majorant > 0.0).then_some((near, far, o, d))
+    }
+
+    /// The single-scattering albedo at the grid-space point `p`.
+    #[inline]
+    fn albedo_at(&self, p: Vec3) -> Vec3 {
+        match &self.albedo {
+            Albedo::Const(a) => *a,
+            Albedo::Grid(g) => g.rgb(p),
+            Albedo::Ratio(s) => {
+                let d = self.density.scalar(p);
+                if d > 0.0 {
+                    (s.rgb(p) / d).min(Vec3::ONE)
+                } else {
+                    Vec3::ZERO
+                }
+            }
+        }
     }
 
     #[inline]
@@ -109,10 +133,7 @@ impl Heterogeneous {
                 }
                 let p = o + d * t;
                 if u() * hi < self.sigma_t(p) {
-                    let albedo = m.albedo(match &self.albedo {
-                        Albedo::Const(a) => *a,
-                        Albedo::Grid(g) => g.rgb(p),
-                    });
+                    let albedo = m.albedo(self.albedo_at(p));
                     flight = Flight::Scatter {
                         d: t,
                         weight: albedo,
@@ -137,10 +158,7 @@ impl Heterogeneous {
         if !grid::inside(q) {
             return M::C::ZERO;
         }
-        let albedo = m.albedo(match &self.albedo {
-            Albedo::Const(a) => *a,
-            Albedo::Grid(g) => g.rgb(q),
-        });
+        let albedo = m.albedo(self.albedo_at(q));
         (M::C::ONE - albedo) * self.sigma_t(q)
     }
 
