@@ -475,12 +475,17 @@ pub enum MediumEmission {
 pub enum VolumeParam {
     Const(Rgb),
     Grid(Box<VolumeDesc>),
+    /// Only as a heterogeneous medium's albedo: σs from its own grid, in the units of the
+    /// `sigma_t` grid (before `scale`) and on its lattice; the albedo is σs(x)/σt(x), each
+    /// interpolated on its own (pbrt-v4's `rgbgrid`).
+    SigmaSGrid(Box<VolumeDesc>),
 }
 
-/// A voxel grid read from a file, placed in the world: a `.vol` grid fills the unit cube
-/// [0,1]³ of its own space (Mitsuba's `gridvolume`: the file's bounding box is ignored),
-/// mapped to the world by `to_world`; an OpenVDB grid sits in its own local space, where its
-/// transform puts it, and `to_world` maps that space to the world.
+/// A voxel grid read from a file or given inline, placed in the world: a `.vol` grid and an
+/// inline one fill the unit cube [0,1]³ of their own space (Mitsuba's `gridvolume`: the
+/// file's bounding box is ignored), mapped to the world by `to_world`; an OpenVDB grid sits
+/// in its own local space, where its transform puts it, and `to_world` maps that space to the
+/// world. `path` names the file (for an inline grid, the scene file that holds it).
 #[derive(Clone, Debug)]
 pub struct VolumeDesc {
     pub path: PathBuf,
@@ -491,7 +496,7 @@ pub struct VolumeDesc {
     pub loc: Loc,
 }
 
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum VolumeFormat {
     /// Mitsuba's binary `.vol` (version 3, float32).
     MitsubaVol,
@@ -500,6 +505,15 @@ pub enum VolumeFormat {
     /// semantics, voxels land where OpenVDB puts them); otherwise the grid's active box is
     /// the `[0,1]³` that `to_world` places (Nori's user-given bounding box).
     Vdb { grid_name: String, own_map: bool },
+    /// Values given in the scene (pbrt-v4's `uniformgrid`/`rgbgrid`): `channels` (1 or 3)
+    /// per voxel, `((z·ny + y)·nx + x)·channels + c`, finite and ≥ 0. Looked up as pbrt-v4's
+    /// `SampledGrid`: trilinear between voxel centres at (i + ½)/n, voxels beyond the grid
+    /// read 0 (so the value falls off over the outer half voxel).
+    Inline {
+        res: [usize; 3],
+        channels: usize,
+        data: Arc<[f32]>,
+    },
 }
 
 /// How a medium scatters: the phase function.

@@ -877,3 +877,134 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
         (SpotFalloff::SmoothStep, 30.0, 20.0)
     );
 }
+
+/// The inline grid of a volume description: (res, channels, data, to_world).
+fn inline(v: &VolumeDesc) -> ([usize; 3], usize, Vec<f32>, Mat4) {
+    match &v.format {
+        VolumeFormat::Inline {
+            res,
+            channels,
+            data,
+        } => (*res, *channels, data.to_vec(), v.to_world),
+        f => panic!("an inline grid expected, found {f:?}"),
+    }
+}
+
+#[test]
+fn grid_media_become_inline_grids_over_their_box() {
+    let s = scene(&format!(
+        "{CAMERA}Translate 1 0 0\n\
+         MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"integer ny\" 1 \"integer nz\" 3\n\
+         \"float density\" [0 1 2 3 4 5] \"point3 p0\" [0 -1 0] \"point3 p1\" [2 1 6]\n\
+         \"rgb sigma_a\" [1 2 3] \"rgb sigma_s\" [3 2 1] \"float scale\" 0.5 \"float g\" -0.3 \"rgb Le\" [1 0.5 0.25]\n\
+         MakeNamedMedium \"lit\" \"string type\" \"uniformgrid\" \"float density\" [2] \"rgb Le\" [1 1 1] \"float Lescale\" [3]\n\
+         MakeNamedMedium \"rgb\" \"string type\" \"rgbgrid\" \"integer nx\" 2 \"point3 p1\" [1 1 2]\n\
+         \"rgb sigma_a\" [1 1 1 0 1 2] \"rgb sigma_s\" [1 1 1 2 1 0] \"rgb Le\" [0 0 0 1 2 3] \"float Lescale\" 2 \"float scale\" 4\n"
+    ));
+    // uniformgrid: σt = (σa + σs)·scale·density, a constant albedo, the box p0–p1 placed by
+    // the CTM.
+    let Medium::Heterogeneous {
+        sigma_t,
+        albedo,
+        scale,
+    } = &s.media[0].medium
+    else {
+        panic!("{:?}", s.media[0].medium)
+    };
+    let (res, ch, data, to_world) = inline(sigma_t);
+    assert_eq!(
+        (res, ch, data),
+        ([2, 1, 3], 1, vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0])
+    );
+    assert!(
+        to_world
+            .transform_point3(Vec3::ZERO)
+            .abs_diff_eq(Vec3::new(1.0, -1.0, 0.0), 1e-6)
+    );
+    assert!(
+        to_world
+            .transform_point3(Vec3::ONE)
+            .abs_diff_eq(Vec3::new(3.0, 1.0, 6.0), 1e-6)
+    );
+    assert_eq!(*scale, 2.0);
+    assert!(
+        matches!(albedo, VolumeParam::Const(a) if a.abs_diff_eq(Vec3::new(0.75, 0.5, 0.25), 1e-6))
+    );
+    assert_eq!(s.media[0].phase, PhaseDesc::HenyeyGreenstein { g: -0.3 });
+    // Le without "Lescale": pbrt-v4's one-voxel scale grid, a tent over the box.
+    let Some(MediumEmission::Radiance(VolumeParam::Grid(le))) = &s.media[0].emission else {
+        panic!()
+    };
+    let (res, ch, data, _) = inline(le);
+    assert_eq!((res, ch, data), ([1, 1, 1], 3, vec![1.0, 0.5, 0.25]));
+    // With one: Le times each voxel's scale, on the density's lattice.
+    let Some(MediumEmission::Radiance(VolumeParam::Grid(le))) = &s.media[1].emission else {
+        panic!()
+    };
+    assert_eq!(inline(le).2, vec![3.0, 3.0, 3.0]);
+    assert_eq!(s.media[1].phase, PhaseDesc::Isotropic);
+    // rgbgrid: σt from σa + σs per voxel, the albedo σs/σt interpolated apart, Le per voxel.
+    let Medium::Heterogeneous {
+        sigma_t,
+        albedo,
+        scale,
+    } = &s.media[2].medium
+    else {
+        panic!()
+    };
+    assert_eq!(inline(sigma_t).2, vec![2.0, 2.0]);
+    assert_eq!(*scale, 4.0);
+    let VolumeParam::SigmaSGrid(ss) = albedo else {
+        panic!("{albedo:?}")
+    };
+    assert_eq!(inline(ss).2, vec![1.0, 1.0, 1.0, 2.0, 1.0, 0.0]);
+    let Some(MediumEmission::Radiance(VolumeParam::Grid(le))) = &s.media[2].emission else {
+        panic!()
+    };
+    assert_eq!(inline(le).2, vec![0.0, 0.0, 0.0, 2.0, 4.0, 6.0]);
+    assert!(
+        inline(le)
+            .3
+            .transform_point3(Vec3::ONE)
+            .abs_diff_eq(Vec3::new(2.0, 1.0, 2.0), 1e-6)
+    );
+
+    // What our grid media cannot express is refused, saying why.
+    for (params, want) in [
+        ("\"float density\" [1 2]", "expected 1"),
+        ("\"integer nx\" 2 \"float density\" [1 -2]", "≥ 0"),
+        ("\"float density\" [1] \"rgb sigma_a\" [1 0 0]", "not grey"),
+        (
+            "\"float density\" [1] \"float temperature\" [1000]",
+            "temperature",
+        ),
+        ("", "no \"density\""),
+        (
+            "\"float density\" [1] \"point3 p0\" [0 0 1] \"point3 p1\" [1 1 1]",
+            "empty",
+        ),
+    ] {
+        let e = error(&format!(
+            "{CAMERA}MakeNamedMedium \"m\" \"string type\" \"uniformgrid\" {params}\n"
+        ))
+        .to_string();
+        assert!(e.contains(want), "{params}: {e}");
+    }
+    for (params, want) in [
+        ("\"rgb sigma_a\" [1 1 1]", "both"),
+        (
+            "\"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [1 2 1]",
+            "not grey",
+        ),
+    ] {
+        let e = error(&format!(
+            "{CAMERA}MakeNamedMedium \"m\" \"string type\" \"rgbgrid\" {params}\n"
+        ))
+        .to_string();
+        assert!(e.contains(want), "{params}: {e}");
+    }
+    let e = error(&format!(
+        "{CAMERA}MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"a.nvdb\"\n"
+    ));
+    assert!(e.to_string().contains("not supported"), "{e}");
+}

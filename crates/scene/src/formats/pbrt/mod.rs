@@ -22,8 +22,20 @@
 //! is remapped by √r (pbrt-v4's RoughnessToAlpha) unless `remaproughness` is false; image
 //! textures are looked up at v' = 1 − v; `MediumInterface "inside" "outside"`.
 //!
+//! Grid media: `uniformgrid` and `rgbgrid` become heterogeneous media on inline grids
+//! (`VolumeFormat::Inline`) over the box `p0`–`p1` of the medium's space, looked up exactly
+//! as pbrt-v4's `SampledGrid` (voxel centres at (i + ½)/n, trilinear, 0 beyond the voxels, so
+//! values fall off over the outer half voxel). `uniformgrid`: σt = (σa + σs)·`scale`·density
+//! with the constant albedo σs/(σa + σs); `Le` times the `Lescale` grid, or without one
+//! pbrt-v4's one-voxel scale grid (a tent over the box, 1 at its centre). `rgbgrid`: σt from
+//! σa + σs per voxel, the albedo σs(x)/σt(x) with each interpolated on its own
+//! (`VolumeParam::SigmaSGrid`), `Le` per voxel times `Lescale`. Our grid media have one
+//! extinction for all wavelengths: a chromatic σa + σs is refused, as are `temperature`
+//! grids (pbrt-v4 multiplies its peak-normalised black body by the `Lescale` grid) and an
+//! `rgbgrid` missing `sigma_a` or `sigma_s`.
+//!
 //! Refused with an error: partial spheres, `curve`, `hair`/`measured`/`subsurface`
-//! materials, grid media, `goniometric`/`projection` lights, `realistic`/`spherical`
+//! materials, `nanovdb` and `cloud` media, `goniometric`/`projection` lights, `realistic`/`spherical`
 //! cameras, the `directionmix`, `dots` and `ptex` textures, unknown names of any kind.
 //! Approximated with a warning: `displacement` (our bump map's slope is per texel), motion
 //! other than translation, film sensor/white balance/ISO. Mapped without a warning, as the
