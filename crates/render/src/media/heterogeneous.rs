@@ -340,3 +340,42 @@ fn power_series(
     }
     (-tau_c).exp() * sum
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// pbrt-v4's `rgbgrid` interpolates σa and σs apart: with σt = σa + σs per voxel and the
+    /// albedo σs(x)/σt(x), σa(x) = scale·σa-grid(x) exactly, also where σt varies.
+    #[test]
+    fn a_ratio_albedo_gives_the_interpolated_absorption() {
+        let grid = |data: Vec<f32>, channels| VoxelGrid {
+            res: [3, 2, 1],
+            channels,
+            data,
+            trilinear: true,
+            zero_outside: true,
+        };
+        let sa: Vec<f32> = (0..6).flat_map(|i| [0.5 + i as f32, 1.0, 0.0]).collect();
+        let ss: Vec<f32> = (0..6)
+            .flat_map(|i| [1.0, 0.5 + i as f32, 1.5 + i as f32])
+            .collect();
+        let density: Vec<f32> = (0..6).map(|i| 1.5 + i as f32).collect();
+        let (sa, ss) = (grid(sa, 3), grid(ss, 3));
+        let m = Heterogeneous::new(grid(density, 1), Albedo::Ratio(ss), 2.0, Mat4::IDENTITY);
+        for k in 0..200 {
+            let p = Vec3::new(
+                (k as f32 * 0.618).fract(),
+                (k as f32 * 0.314).fract(),
+                (k as f32 * 0.271).fract(),
+            );
+            let want = sa.rgb(p) * 2.0;
+            assert!(
+                m.sigma_a(p)
+                    .abs_diff_eq(want, 1e-4 * want.max_element().max(1.0)),
+                "{p}: {} vs {want}",
+                m.sigma_a(p)
+            );
+        }
+    }
+}
