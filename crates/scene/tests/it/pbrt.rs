@@ -140,6 +140,10 @@ fn the_camera_frame_is_pbrts_left_handed_one() {
     assert!(s.sensors[0].camera.to_world.abs_diff_eq(flipped, 1e-5));
 }
 
+/// What a full pbrt sphere's `to_world` starts with: a mirror in z that makes our sphere's
+/// v (θ/π from +z) pbrt-v4's (1 − θ/π).
+const SPHERE_UV: Mat4 = Mat4::from_diagonal(glam::Vec4::new(1.0, 1.0, -1.0, 1.0));
+
 #[test]
 fn transforms_compose_as_pbrt_and_matrices_are_column_major() {
     let s = scene(&format!(
@@ -150,7 +154,8 @@ fn transforms_compose_as_pbrt_and_matrices_are_column_major() {
     let m = s.shapes[0].to_world;
     let expect = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0))
         * Mat4::from_rotation_z(90f32.to_radians())
-        * Mat4::from_scale(Vec3::splat(2.0));
+        * Mat4::from_scale(Vec3::splat(2.0))
+        * SPHERE_UV;
     assert!(m.abs_diff_eq(expect, 1e-6));
     assert_eq!(
         s.shapes[1].to_world.w_axis.truncate(),
@@ -349,7 +354,7 @@ fn include_and_import_resolve_relative_to_the_including_file() {
     };
     assert_eq!(s.shapes.len(), 2);
     // Import does not leak its graphics state.
-    assert_eq!(s.shapes[1].to_world, Mat4::IDENTITY);
+    assert_eq!(s.shapes[1].to_world, SPHERE_UV);
 }
 
 /// `file:line:col` of an error, checked against the expected line and column.
@@ -1007,4 +1012,42 @@ fn grid_media_become_inline_grids_over_their_box() {
         "{CAMERA}MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"a.nvdb\"\n"
     ));
     assert!(e.to_string().contains("not supported"), "{e}");
+}
+
+#[test]
+fn partial_spheres_are_tessellated_and_full_ones_take_pbrts_uv() {
+    let s = scene(&format!(
+        "{CAMERA}Shape \"sphere\" \"float radius\" 2 \"float zmin\" -1 \"float zmax\" 3 \"float phimax\" 90\n\
+         Shape \"sphere\" \"float radius\" 2\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nShape \"sphere\"\nAttributeEnd\n"
+    ));
+    let Shape::Mesh(m) = &s.shapes[0].shape else {
+        panic!("{:?}", s.shapes[0].shape)
+    };
+    // zmax is clamped to the radius; the quarter from z = −1 to the top pole.
+    let area: f32 = m
+        .indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    let want = std::f32::consts::FRAC_PI_2 * 2.0 * 3.0;
+    assert!((area / want - 1.0).abs() < 2e-4, "{area} vs {want}");
+    assert!(
+        m.positions
+            .iter()
+            .all(|p| p.z >= -1.0 - 1e-5 && p.x >= -1e-5 && p.y >= -1e-5)
+    );
+    // u = φ/φmax, v from θmin (at zmin) to θmax.
+    for (p, uv) in m.positions.iter().zip(&m.uvs) {
+        let theta = (p.z / 2.0).clamp(-1.0, 1.0).acos();
+        let t0 = (-0.5f32).acos();
+        assert!((uv.y - (theta - t0) / (0.0 - t0)).abs() < 1e-3, "{p}: {uv}");
+    }
+    assert!(matches!(s.shapes[1].shape, Shape::Sphere { radius, .. } if radius == 2.0));
+    assert_eq!(s.shapes[1].to_world, SPHERE_UV);
+    // A sphere light keeps our frame (sampled by the cone it subtends).
+    assert_eq!(s.shapes[2].to_world, Mat4::IDENTITY);
 }

@@ -34,7 +34,15 @@
 //! grids (pbrt-v4 multiplies its peak-normalised black body by the `Lescale` grid) and an
 //! `rgbgrid` missing `sigma_a` or `sigma_s`.
 //!
-//! Refused with an error: partial spheres, `curve`, `hair`/`measured`/`subsurface`
+//! Shapes: full spheres are ours, mirrored in z so that their uv is pbrt-v4's (u = φ/2π,
+//! v = 1 − θ/π; not on sphere lights, which keep v = θ/π and their cone sampling); partial
+//! spheres (`zmin`, `zmax`, `phimax`), cylinders and partial disks are triangulated at load
+//! (2π/256 steps in φ and θ; area short by < 2·10⁻⁴ relative; pbrt-v4's uv at the vertices)
+//! with pbrt-v4's analytic area for `power`. Full disks are ours, whose uv is Mitsuba's
+//! (u = r, v = φ/2π where pbrt-v4 has u = φ/2π, v = 1 − r): a texture on a full disk is laid
+//! out differently.
+//!
+//! Refused with an error: `curve`, `hair`/`measured`/`subsurface`
 //! materials, `nanovdb` and `cloud` media, `goniometric`/`projection` lights, `realistic`/`spherical`
 //! cameras, the `directionmix`, `dots` and `ptex` textures, unknown names of any kind.
 //! Approximated with a warning: `displacement` (our bump map's slope is per texel), motion
