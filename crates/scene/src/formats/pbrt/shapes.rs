@@ -1,7 +1,7 @@
 //! pbrt-v4 shapes → the scene model: triangle meshes (inline or PLY), spheres and disks as
-//! themselves, and the shapes our renderer lacks (cylinders, partial spheres and disks, bilinear
-//! patches, Loop subdivision surfaces) as triangles made at load time. Alpha, area lights, media and
-//! `ReverseOrientation` apply to every kind.
+//! themselves, and the shapes our renderer lacks (cylinders, partial spheres and disks,
+//! bilinear patches, Loop subdivision surfaces) as triangles made at load time. Alpha, area
+//! lights, media and `ReverseOrientation` apply to every kind.
 
 use std::f32::consts::PI;
 use std::sync::Arc;
