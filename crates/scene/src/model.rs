@@ -903,6 +903,18 @@ pub enum Emitter {
     /// hit of the Whitted integrator (CENG795 `AmbientLight`). Not a physical emitter: the
     /// path tracers ignore it (with a warning at build time).
     Ambient { radiance: Rgb },
+    /// A point light whose intensity an image modulates by direction (pbrt-v4's
+    /// `goniometric` and `projection` lights): at the origin of `to_world`, directions taken
+    /// in its frame (a rotation, up to a uniform scale), the image's linear RGB times
+    /// `intensity`; with `power`, rescaled to emit that (pbrt-v4's rule per profile).
+    ImagePoint {
+        to_world: Mat4,
+        /// Resolved by the loader.
+        path: PathBuf,
+        intensity: Rgb,
+        profile: ImageProfile,
+        power: Option<f32>,
+    },
     /// Image-based environment light.
     EnvMap {
         /// Resolved by the loader: absolute, or relative to the working directory.
@@ -911,6 +923,17 @@ pub enum Emitter {
         to_world: Mat4,
         mapping: EnvMapping,
     },
+}
+
+/// How an [`Emitter::ImagePoint`] maps directions to its image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ImageProfile {
+    /// pbrt-v4's equal-area octahedral square over the sphere (+z of the square's map is the
+    /// frame's +z), nearest pixel, the average of R, G and B.
+    Goniometric,
+    /// A pinhole projection along the frame's +z, `fov` (degrees) on the image's shorter
+    /// axis, the image's first row towards the frame's −y; nearest pixel; dark outside.
+    Projection { fov: f32 },
 }
 
 impl Emitter {
@@ -922,6 +945,11 @@ impl Emitter {
             Emitter::Constant { .. } => "constant",
             Emitter::EnvMap { .. } => "envmap",
             Emitter::Ambient { .. } => "ambient",
+            Emitter::ImagePoint {
+                profile: ImageProfile::Goniometric,
+                ..
+            } => "goniometric",
+            Emitter::ImagePoint { .. } => "projection",
         }
     }
 }

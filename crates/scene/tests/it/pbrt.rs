@@ -1051,3 +1051,58 @@ fn partial_spheres_are_tessellated_and_full_ones_take_pbrts_uv() {
     // A sphere light keeps our frame (sampled by the cone it subtends).
     assert_eq!(s.shapes[2].to_world, Mat4::IDENTITY);
 }
+
+#[test]
+fn goniometric_and_projection_lights_carry_pbrts_frames() {
+    let path = write_scene(&[
+        (
+            "scene.pbrt",
+            format!(
+                "{CAMERA}AttributeBegin\nTranslate 1 2 3\nLightSource \"goniometric\" \"string filename\" \"g.pfm\" \"rgb I\" [1 2 3] \"float scale\" 2\nAttributeEnd\n\
+                 LightSource \"projection\" \"string filename\" \"g.pfm\" \"float fov\" 30 \"float power\" 5\n"
+            )
+            .as_bytes(),
+        ),
+        ("g.pfm", b"PF\n1 1\n-1\n\0\0\x80\x3f\0\0\x80\x3f\0\0\x80\x3f"),
+    ]);
+    let Document::Scene(s) = load(&path, &LoadOptions::default()).unwrap() else {
+        panic!()
+    };
+    let Emitter::ImagePoint {
+        to_world,
+        intensity,
+        profile,
+        power,
+        ..
+    } = &s.emitters[0].emitter
+    else {
+        panic!("{:?}", s.emitters[0].emitter)
+    };
+    // The light's y and z swapped, then placed by the CTM.
+    assert_eq!(to_world.transform_vector3(Vec3::Z), Vec3::Y);
+    assert_eq!(to_world.transform_vector3(Vec3::Y), Vec3::Z);
+    assert_eq!(to_world.w_axis.truncate(), Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(*intensity, Vec3::new(2.0, 4.0, 6.0));
+    assert_eq!((*profile, *power), (ImageProfile::Goniometric, None));
+    let Emitter::ImagePoint {
+        to_world,
+        intensity,
+        profile,
+        power,
+        ..
+    } = &s.emitters[1].emitter
+    else {
+        panic!()
+    };
+    // The y flip.
+    assert_eq!(to_world.transform_vector3(Vec3::Y), -Vec3::Y);
+    assert_eq!(*intensity, Vec3::ONE);
+    assert_eq!(
+        (*profile, *power),
+        (ImageProfile::Projection { fov: 30.0 }, Some(5.0))
+    );
+    let e = error(&format!(
+        "{CAMERA}LightSource \"projection\" \"string filename\" \"missing.pfm\"\n"
+    ));
+    assert!(e.to_string().contains("not found"), "{e}");
+}

@@ -1535,7 +1535,44 @@ impl Loader {
                 }
             }
             "goniometric" | "projection" => {
-                return Err(err(loc, format!("light \"{ty}\" is not supported yet")));
+                let Some((f, fp)) = p.string_opt("filename")? else {
+                    return Err(err(loc, format!("{ty}: needs a \"string filename\"")));
+                };
+                let path = self.resolve(f);
+                if !path.is_file() {
+                    return Err(fp.err(format!("image '{}' not found", path.display())));
+                }
+                let power = p.float_opt("power")?.filter(|&v| v > 0.0);
+                if ty == "goniometric" {
+                    // pbrt-v4 looks the image up with the light's y and z swapped: the
+                    // equal-area map's pole is the light's +y.
+                    let swap =
+                        Mat4::from_cols(glam::Vec4::X, glam::Vec4::Z, glam::Vec4::Y, glam::Vec4::W);
+                    Emitter::ImagePoint {
+                        to_world: ctm * swap,
+                        path,
+                        intensity: self.light_value(p, "I", scale)?.rgb(),
+                        profile: ImageProfile::Goniometric,
+                        power,
+                    }
+                } else {
+                    let fov = p.float("fov", 90.0)?;
+                    if !(fov > 0.0 && fov < 180.0) {
+                        return Err(err(
+                            loc,
+                            format!("projection: fov {fov} is outside (0, 180)"),
+                        ));
+                    }
+                    // pbrt-v4 flips the light's y so that the image's first row is lit
+                    // towards the light's +y.
+                    Emitter::ImagePoint {
+                        to_world: ctm * Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0)),
+                        path,
+                        intensity: Rgb::splat(scale),
+                        profile: ImageProfile::Projection { fov },
+                        power,
+                    }
+                }
             }
             _ => {
                 return Err(err(

@@ -42,8 +42,15 @@
 //! (u = r, v = φ/2π where pbrt-v4 has u = φ/2π, v = 1 − r): a texture on a full disk is laid
 //! out differently.
 //!
+//! Lights `goniometric` and `projection` are point lights an image modulates
+//! (`Emitter::ImagePoint`), in pbrt-v4's light frame (the CTM after its y–z swap, resp. its
+//! y flip): the goniometric image an equal-area square over the sphere, averaged to grey,
+//! times `I`·`scale`; the projection image through a pinhole of `fov` on its shorter axis,
+//! dark outside it, times `scale`; nearest pixel for both; `power` as pbrt-v4 normalises it.
+//! Their transform must be a rotation and uniform scale, and `I` is taken as RGB.
+//!
 //! Refused with an error: `curve`, `hair`/`measured`/`subsurface`
-//! materials, `nanovdb` and `cloud` media, `goniometric`/`projection` lights, `realistic`/`spherical`
+//! materials, `nanovdb` and `cloud` media, `realistic`/`spherical`
 //! cameras, the `directionmix`, `dots` and `ptex` textures, unknown names of any kind.
 //! Approximated with a warning: `displacement` (our bump map's slope is per texel), motion
 //! other than translation, film sensor/white balance/ISO. Mapped without a warning, as the
