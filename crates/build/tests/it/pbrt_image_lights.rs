@@ -14,7 +14,7 @@ use render::sampling::warp::equal_area_sphere_to_square;
 
 const RES: usize = 32;
 
-fn render(name: &str, light: &str, image: &Image) -> Image {
+fn load(name: &str, light: &str, image: &Image) -> scene::SceneDesc {
     let dir =
         std::env::temp_dir().join(format!("penumbra-pbrt-light-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -35,6 +35,11 @@ fn render(name: &str, light: &str, image: &Image) -> Image {
         scene::Document::Test(_) => panic!(),
     };
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    desc
+}
+
+fn render(name: &str, light: &str, image: &Image) -> Image {
+    let desc = load(name, light, image);
     let out = render_desc(&desc, &BuildOptions::default()).unwrap();
     out.film.develop()
 }
@@ -140,4 +145,68 @@ fn goniometric_light_is_pbrts() {
     });
     println!("{n} pixels, {seen} texels");
     assert!(n > 300 && seen >= 4, "{n} pixels, {seen} texels");
+}
+
+/// Photons: the mean weight of `sample_le` over 2¹⁸ samples (fixed seed) is ∫ I dω, taken
+/// here by a 1024² midpoint rule on the equal-area square (every cell the same solid angle);
+/// z-tested per channel, α = 0.001 Šidák-corrected over 2 lights × 3 channels (|z| < 3.76).
+/// `pdf_le` gives back each sample's densities.
+#[test]
+fn photons_carry_the_integral_of_the_intensity() {
+    use render::lights::Light;
+    use render::spectral::lanes::RgbMode;
+    use render::stats::Pcg32;
+    let fov = 2.0 * 0.5f32.atan().to_degrees();
+    for (k, light) in [
+        format!("Rotate 30 1 1 0\nLightSource \"projection\" \"string filename\" \"light.pfm\" \"float fov\" {fov}"),
+        "Rotate 30 1 1 0\nLightSource \"goniometric\" \"string filename\" \"light.pfm\" \"rgb I\" [1 2 3]".to_string(),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let desc = load(&format!("photons{k}"), light, &texels(8, 8));
+        let scene = build::build(&desc, &BuildOptions::default()).unwrap().scene;
+        let (i, Light::ImagePoint(l)) = scene
+            .lights
+            .iter()
+            .enumerate()
+            .find(|(_, l)| matches!(l, Light::ImagePoint(_)))
+            .unwrap()
+        else {
+            unreachable!()
+        };
+        let n = 1024;
+        let mut want = glam::DVec3::ZERO;
+        for c in 0..n * n {
+            let uv = render::math::Vec2::new(
+                ((c % n) as f32 + 0.5) / n as f32,
+                ((c / n) as f32 + 0.5) / n as f32,
+            );
+            let w = render::sampling::warp::equal_area_square_to_sphere(uv);
+            want += Vec3::from(l.intensity(w)).as_dvec3();
+        }
+        want *= 4.0 * std::f64::consts::PI / (n * n) as f64;
+        let mut rng = Pcg32::new(7 + k as u64, 3);
+        let count = 1 << 18;
+        let (mut sum, mut sum2) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+        for _ in 0..count {
+            let (u_pos, u_dir) = (rng.next_vec2(), rng.next_vec2());
+            let Some(s) = scene.lights[i].sample_le(&scene, u_pos, u_dir, &RgbMode) else {
+                continue;
+            };
+            let w = Vec3::from(s.weight).as_dvec3();
+            sum += w;
+            sum2 += w * w;
+            let (pp, pd) = scene.lights[i].pdf_le(&scene, s.p, s.n, s.ray.d);
+            assert!((pp - s.pdf_pos).abs() < 1e-4 && (pd - s.pdf_dir).abs() < 1e-4 * s.pdf_dir);
+        }
+        let c = count as f64;
+        let mean = sum / c;
+        let var = (sum2 / c - mean * mean) * (c / (c - 1.0));
+        for ch in 0..3 {
+            let z = (mean[ch] - want[ch]) / (var[ch] / c).sqrt();
+            println!("light {k} channel {ch}: {:.4} vs {:.4} (z = {z:.2})", mean[ch], want[ch]);
+            assert!(z.abs() < 3.76, "light {k} channel {ch}: z = {z}");
+        }
+    }
 }
