@@ -173,6 +173,17 @@ fn load_texture_kind(
             textures: Box::new([load_texture_kind(a, desc)?, load_texture_kind(b, desc)?]),
             to_texture: *to_texture,
         },
+        scene::Texture::Dots {
+            inside,
+            outside,
+            to_uv,
+        } => Texture::Dots {
+            textures: Box::new([
+                load_texture_kind(inside, desc)?,
+                load_texture_kind(outside, desc)?,
+            ]),
+            to_uv: *to_uv,
+        },
         scene::Texture::Noise { kind, to_texture } => Texture::Noise {
             kind: *kind,
             to_texture: *to_texture,

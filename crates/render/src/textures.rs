@@ -186,6 +186,11 @@ pub enum Texture {
         textures: Box<[Texture; 2]>,
         to_texture: Mat4,
     },
+    /// `[inside, outside]` pbrt-v4's polka dots at `to_uv`·uv ([`dots_inside`]).
+    Dots {
+        textures: Box<[Texture; 2]>,
+        to_uv: Mat3,
+    },
     Noise {
         kind: NoiseKind,
         to_texture: Mat4,
@@ -534,6 +539,10 @@ impl Texture {
                 let odd = (c.x as i64 + c.y as i64 + c.z as i64).rem_euclid(2) == 1;
                 textures[usize::from(odd)].eval(at)
             }
+            Texture::Dots { textures, to_uv } => {
+                let inside = dots_inside(to_uv.transform_point2(at.uv));
+                textures[usize::from(!inside)].eval(at)
+            }
             Texture::Noise { kind, to_texture } => {
                 noise::texture(*kind, to_texture.transform_point3a(at.p))
             }
@@ -580,7 +589,9 @@ impl Texture {
             Texture::Affine { texture, .. } => texture.uses_footprint(),
             Texture::Product(t) => t.iter().any(Texture::uses_footprint),
             Texture::Mix(t) => t.iter().any(Texture::uses_footprint),
-            Texture::Checker3D { textures, .. } => textures.iter().any(Texture::uses_footprint),
+            Texture::Checker3D { textures, .. } | Texture::Dots { textures, .. } => {
+                textures.iter().any(Texture::uses_footprint)
+            }
             _ => false,
         }
     }
@@ -646,10 +657,33 @@ impl Texture {
             }
             Texture::Bilerp { corners, .. } => corners.iter().copied().sum::<Vec3>() * 0.25,
             Texture::Checker3D { textures, .. } => 0.5 * (textures[0].mean() + textures[1].mean()),
+            // Dots cover about a quarter of the plane (π·0.35² in the half of cells with one).
+            Texture::Dots { textures, .. } => {
+                let f = 0.5 * std::f32::consts::PI * 0.35 * 0.35;
+                textures[0].mean() * f + textures[1].mean() * (1.0 - f)
+            }
             Texture::Noise { kind, .. } => noise::mean(*kind),
             Texture::Spectrum { rgb, .. } => *rgb,
         }
     }
+}
+
+/// Whether (s, t) lies in one of pbrt-v4's polka dots: the unit cell around the nearest
+/// integer point holds a dot when improved noise at its centre is positive; the dot has
+/// radius 0.35 and its centre is moved by up to 0.15 along s and t by noise elsewhere.
+pub fn dots_inside(st: Vec2) -> bool {
+    let (sc, tc) = ((st.x + 0.5).floor(), (st.y + 0.5).floor());
+    let n = |x: f32, y: f32| noise::perlin(Vec3::new(x, y, 0.5));
+    if n(sc + 0.5, tc + 0.5) <= 0.0 {
+        return false;
+    }
+    const RADIUS: f32 = 0.35;
+    let shift = 0.5 - RADIUS;
+    let centre = Vec2::new(
+        sc + shift * n(sc + 1.5, tc + 2.8),
+        tc + shift * n(sc + 4.5, tc + 9.8),
+    );
+    (st - centre).length_squared() < RADIUS * RADIUS
 }
 
 /// pbrt-v4's noise textures: Perlin's improved noise (2002), its fractional Brownian motion
@@ -846,6 +880,34 @@ mod noise {
 
 #[cfg(test)]
 mod tests {
+    /// Each unit cell around an integer point holds a whole dot of area π·0.35² or none
+    /// (midpoint rule on 200² points per cell), and about half the cells hold one.
+    #[test]
+    fn dots_are_whole_disks_in_about_half_the_cells() {
+        let n = 200;
+        let mut with = 0;
+        for cell in 0..64 {
+            let (cs, ct) = ((cell % 8) as f32 - 3.0, (cell / 8) as f32 + 5.0);
+            let hits = (0..n * n)
+                .filter(|k| {
+                    let st = super::Vec2::new(
+                        cs - 0.5 + ((k % n) as f32 + 0.5) / n as f32,
+                        ct - 0.5 + ((k / n) as f32 + 0.5) / n as f32,
+                    );
+                    super::dots_inside(st)
+                })
+                .count();
+            let area = hits as f32 / (n * n) as f32;
+            let disk = std::f32::consts::PI * 0.35 * 0.35;
+            assert!(
+                area == 0.0 || (area - disk).abs() < 2e-3,
+                "cell {cell}: {area}"
+            );
+            with += usize::from(area > 0.0);
+        }
+        assert!((16..=48).contains(&with), "{with} of 64 cells have a dot");
+    }
+
     use super::*;
 
     /// A checkerboard of single texels, 0 and 1.

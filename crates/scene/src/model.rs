@@ -855,6 +855,14 @@ pub enum Texture {
         b: Box<Texture>,
         to_texture: Mat4,
     },
+    /// pbrt-v4's `dots`: in each unit cell of (s, t) = `to_uv`·uv (cells centred on the
+    /// integers) that improved noise selects, a dot of radius 0.35 jittered by noise, `inside`
+    /// there and `outside` elsewhere.
+    Dots {
+        inside: Box<Texture>,
+        outside: Box<Texture>,
+        to_uv: Mat3,
+    },
     /// pbrt-v4's noise textures (Perlin's improved noise) at the world point mapped by
     /// `to_texture`; grey but for `Marble`.
     Noise {

@@ -1106,3 +1106,27 @@ fn goniometric_and_projection_lights_carry_pbrts_frames() {
     ));
     assert!(e.to_string().contains("not found"), "{e}");
 }
+
+#[test]
+fn dots_textures_map_with_their_inside_and_outside() {
+    let s = scene(&format!(
+        "{CAMERA}Texture \"d\" \"spectrum\" \"dots\" \"rgb inside\" [1 0 0] \"float uscale\" 4\n\
+         Material \"diffuse\" \"texture reflectance\" \"d\"\nShape \"sphere\"\n"
+    ));
+    let t = s
+        .textures
+        .iter()
+        .find_map(|t| match &t.texture {
+            Texture::Dots {
+                inside,
+                outside,
+                to_uv,
+            } => Some((inside.clone(), outside.clone(), *to_uv)),
+            _ => None,
+        })
+        .expect("a dots texture");
+    assert!(matches!(*t.0, Texture::Constant(c) if c == Vec3::new(1.0, 0.0, 0.0)));
+    assert!(matches!(*t.1, Texture::Constant(c) if c == Vec3::ZERO));
+    assert_eq!(t.2.x_axis.x, 4.0);
+    assert!(warnings(&s).is_empty(), "{:?}", warnings(&s));
+}

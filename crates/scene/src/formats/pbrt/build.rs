@@ -452,7 +452,22 @@ impl Loader {
                 };
                 self.add_tex(noise, &name, loc)
             }
-            "directionmix" | "dots" | "ptex" => {
+            "dots" => {
+                let to_uv = self.uv_mapping(&p, &name, loc)?;
+                let inside = self
+                    .tex_param(&p, "inside", spectrum, usage)?
+                    .unwrap_or(TexVal::Const(Rgb::ONE));
+                let outside = self
+                    .tex_param(&p, "outside", spectrum, usage)?
+                    .unwrap_or(TexVal::Const(Rgb::ZERO));
+                let dots = Texture::Dots {
+                    inside: Box::new(self.inline(&inside)),
+                    outside: Box::new(self.inline(&outside)),
+                    to_uv,
+                };
+                self.add_tex(dots, &name, loc)
+            }
+            "directionmix" | "ptex" => {
                 self.warn(
                     loc,
                     format!(

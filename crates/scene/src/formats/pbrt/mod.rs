@@ -49,11 +49,13 @@
 //! dark outside it, times `scale`; nearest pixel for both; `power` as pbrt-v4 normalises it.
 //! Their transform must be a rotation and uniform scale, and `I` is taken as RGB.
 //!
+//! The `dots` texture is pbrt-v4's (improved noise picks the cells and jitters the dots).
+//!
 //! Refused with an error: `curve`, `hair`/`measured`/`subsurface`
 //! materials, `nanovdb` and `cloud` media, `realistic`/`spherical`
-//! cameras, the `directionmix`, `dots` and `ptex` textures, unknown names of any kind.
-//! Approximated with a warning: `displacement` (our bump map's slope is per texel), motion
-//! other than translation, film sensor/white balance/ISO. Mapped without a warning, as the
+//! cameras, unknown names of any kind.
+//! Approximated with a warning: the `directionmix` and `ptex` textures (a constant 0.5),
+//! `displacement` (our bump map's slope is per texel), motion other than translation, film sensor/white balance/ISO. Mapped without a warning, as the
 //! nearest we have: samplers `zsobol`/`paddedsobol`/`pmj02bn` → Sobol; read and without
 //! effect, as in pbrt-v4 for what we support: `maxanisotropy` (ours is pbrt-v4's default, 8),
 //! film `diagonal` (realistic camera only), `savefp16`. Image filters `trilinear` and `ewa`
