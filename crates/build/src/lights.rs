@@ -5,7 +5,8 @@ use std::sync::Arc;
 
 use render::image_io::{self, Decode};
 use render::lights::{
-    AreaLight, ConstantLight, DirectionalLight, EnvMap, Light, PointLight, SpotLight,
+    AreaLight, ConstantLight, DirectionalLight, EnvMap, ImagePointLight, ImageProfile, Light,
+    PointLight, SpotLight,
 };
 use render::shapes::ShapeInfo;
 use render::shapes::{MeshSampling, ShapeGeom};
@@ -148,6 +149,15 @@ pub(crate) fn lights(
                 radiance: radiance.rgb().into(),
                 spectrum: spectrum(radiance),
             }),
+            scene::Emitter::ImagePoint {
+                to_world,
+                path,
+                intensity,
+                profile,
+                power,
+            } => Light::ImagePoint(Arc::new(image_point(
+                to_world, path, *intensity, *profile, *power, &e.loc,
+            )?)),
             scene::Emitter::EnvMap {
                 path,
                 scale,
@@ -168,4 +178,85 @@ pub(crate) fn lights(
         shape_lights: shape_light,
         media,
     })
+}
+
+/// An image-modulated point light: the frame's rotation (a uniform scale divided out), the
+/// image in linear RGB, and pbrt-v4's `power` normalisation — the goniometric light's by the
+/// mean of its grey image over the sphere, the projection light's by the luminance it emits.
+fn image_point(
+    to_world: &render::math::Mat4,
+    path: &std::path::Path,
+    intensity: scene::Rgb,
+    profile: scene::ImageProfile,
+    power: Option<f32>,
+    loc: &scene::Loc,
+) -> Result<ImagePointLight, BuildError> {
+    let fail = |message: String| BuildError {
+        loc: loc.clone(),
+        message,
+    };
+    let lin = render::math::Mat3::from_mat4(*to_world);
+    let s = lin.x_axis.length();
+    let rot = lin * (1.0 / s);
+    let orthogonal = (rot.transpose() * rot).abs_diff_eq(render::math::Mat3::IDENTITY, 1e-4);
+    if !(s > 0.0 && s.is_finite() && orthogonal) {
+        return Err(fail(
+            "a goniometric or projection light's transform must be a rotation and uniform scale"
+                .into(),
+        ));
+    }
+    let image = image_io::read_image_with(path, Decode::Srgb)
+        .map_err(|err| fail(format!("cannot read the light's image: {err}")))?;
+    if image.pixels.iter().any(|p| !p.is_finite()) {
+        return Err(fail(format!(
+            "{}: pixels that are not finite cannot be a light",
+            path.display()
+        )));
+    }
+    let profile = match profile {
+        scene::ImageProfile::Goniometric => {
+            if image.width != image.height {
+                return Err(fail(format!(
+                    "{}: a goniometric light takes a square (equal-area) image, not {}×{}",
+                    path.display(),
+                    image.width,
+                    image.height
+                )));
+            }
+            ImageProfile::Goniometric
+        }
+        scene::ImageProfile::Projection { fov } => {
+            let aspect = image.width as f32 / image.height as f32;
+            ImageProfile::Projection {
+                tan_half: (fov.to_radians() / 2.0).tan(),
+                half: if aspect > 1.0 {
+                    render::math::Vec2::new(aspect, 1.0)
+                } else {
+                    render::math::Vec2::new(1.0, 1.0 / aspect)
+                },
+            }
+        }
+    };
+    let position = to_world.w_axis.truncate().into();
+    let mut light = ImagePointLight::new(position, rot, image, intensity.into(), profile);
+    if let Some(phi) = power.filter(|&p| p > 0.0) {
+        // pbrt-v4 normalises the image alone (the goniometric light's grey, the projection
+        // light's luminance), the colour of `intensity` staying as it is.
+        let unit = ImagePointLight::new(
+            position,
+            rot,
+            light.image.clone(),
+            render::math::Vec3::ONE,
+            profile,
+        )
+        .power_rgb();
+        let k = match profile {
+            ImageProfile::Goniometric => unit.x,
+            ImageProfile::Projection { .. } => render::math::luminance(unit),
+        };
+        if k > 0.0 {
+            light.scale *= phi / k;
+        }
+    }
+    Ok(light)
 }

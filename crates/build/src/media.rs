@@ -82,6 +82,23 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
                     }
                     Albedo::Grid(albedo)
                 }
+                VolumeParam::SigmaSGrid(g) => {
+                    // Interpolated at the same grid-space point as σt, then divided by it.
+                    let (sigma_s, s_to_world) = grid(g)?;
+                    if sigma_s.res != density.res
+                        || sigma_s.zero_outside != density.zero_outside
+                        || !s_to_world.abs_diff_eq(to_world, 1e-5 * max_abs(&to_world))
+                    {
+                        return Err(BuildError {
+                            loc: g.loc.clone(),
+                            message: format!(
+                                "{}: a sigma_s grid must have the lattice and box of the sigma_t grid",
+                                g.path.display()
+                            ),
+                        });
+                    }
+                    Albedo::Ratio(sigma_s)
+                }
             };
             MediumKind::Heterogeneous(Box::new(Heterogeneous::new(
                 density, albedo, *scale, to_world,
@@ -96,6 +113,12 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
         None => None,
         Some(MediumEmission::Radiance(VolumeParam::Const(le))) => {
             Some(Emission::Const((*le).into()))
+        }
+        Some(MediumEmission::Radiance(VolumeParam::SigmaSGrid(g))) => {
+            return Err(BuildError {
+                loc: g.loc.clone(),
+                message: "a sigma_s grid is not a radiance".into(),
+            });
         }
         Some(MediumEmission::Radiance(VolumeParam::Grid(g))) => {
             let (grid, to_world) = grid(g)?;
@@ -170,7 +193,8 @@ fn max_abs(m: &Mat4) -> f32 {
 }
 
 /// A grid and the map from its `[0,1]³` to the world: the scene's `to_world` for a `.vol`
-/// (the grid fills the unit cube of its space); for a `.vdb`, the scene's `to_world` after
+/// or an inline grid (the grid fills the unit cube of its space; an inline grid reads 0
+/// beyond its voxels, as pbrt-v4's `SampledGrid` does); for a `.vdb`, the scene's `to_world` after
 /// the map from the densified grid's `[0,1]³` to the VDB grid's own local space, or (Nori's
 /// bounding box, `own_map` false) directly.
 fn grid(v: &VolumeDesc) -> Result<(VoxelGrid, Mat4), BuildError> {
@@ -191,6 +215,32 @@ fn grid(v: &VolumeDesc) -> Result<(VoxelGrid, Mat4), BuildError> {
             } else {
                 (grid, v.to_world)
             }
+        }
+        VolumeFormat::Inline {
+            res,
+            channels,
+            data,
+        } => {
+            let count = res.iter().try_fold(*channels, |a, &r| a.checked_mul(r));
+            if !matches!(channels, 1 | 3) || count != Some(data.len()) || data.is_empty() {
+                return Err(fail(format!(
+                    "an inline grid of {res:?} voxels × {channels} channels cannot hold {} values",
+                    data.len()
+                )));
+            }
+            if let Some(bad) = data.iter().find(|x| !x.is_finite() || **x < 0.0) {
+                return Err(fail(format!(
+                    "inline grid value {bad}: values must be finite and ≥ 0"
+                )));
+            }
+            let grid = VoxelGrid {
+                res: *res,
+                channels: *channels,
+                data: data.to_vec(),
+                trilinear: true,
+                zero_outside: true,
+            };
+            (grid, v.to_world)
         }
     };
     let det = to_world.determinant();

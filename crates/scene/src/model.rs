@@ -475,12 +475,17 @@ pub enum MediumEmission {
 pub enum VolumeParam {
     Const(Rgb),
     Grid(Box<VolumeDesc>),
+    /// Only as a heterogeneous medium's albedo: σs from its own grid, in the units of the
+    /// `sigma_t` grid (before `scale`) and on its lattice; the albedo is σs(x)/σt(x), each
+    /// interpolated on its own (pbrt-v4's `rgbgrid`).
+    SigmaSGrid(Box<VolumeDesc>),
 }
 
-/// A voxel grid read from a file, placed in the world: a `.vol` grid fills the unit cube
-/// [0,1]³ of its own space (Mitsuba's `gridvolume`: the file's bounding box is ignored),
-/// mapped to the world by `to_world`; an OpenVDB grid sits in its own local space, where its
-/// transform puts it, and `to_world` maps that space to the world.
+/// A voxel grid read from a file or given inline, placed in the world: a `.vol` grid and an
+/// inline one fill the unit cube [0,1]³ of their own space (Mitsuba's `gridvolume`: the
+/// file's bounding box is ignored), mapped to the world by `to_world`; an OpenVDB grid sits
+/// in its own local space, where its transform puts it, and `to_world` maps that space to the
+/// world. `path` names the file (for an inline grid, the scene file that holds it).
 #[derive(Clone, Debug)]
 pub struct VolumeDesc {
     pub path: PathBuf,
@@ -491,7 +496,7 @@ pub struct VolumeDesc {
     pub loc: Loc,
 }
 
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum VolumeFormat {
     /// Mitsuba's binary `.vol` (version 3, float32).
     MitsubaVol,
@@ -500,6 +505,15 @@ pub enum VolumeFormat {
     /// semantics, voxels land where OpenVDB puts them); otherwise the grid's active box is
     /// the `[0,1]³` that `to_world` places (Nori's user-given bounding box).
     Vdb { grid_name: String, own_map: bool },
+    /// Values given in the scene (pbrt-v4's `uniformgrid`/`rgbgrid`): `channels` (1 or 3)
+    /// per voxel, `((z·ny + y)·nx + x)·channels + c`, finite and ≥ 0. Looked up as pbrt-v4's
+    /// `SampledGrid`: trilinear between voxel centres at (i + ½)/n, voxels beyond the grid
+    /// read 0 (so the value falls off over the outer half voxel).
+    Inline {
+        res: [usize; 3],
+        channels: usize,
+        data: Arc<[f32]>,
+    },
 }
 
 /// How a medium scatters: the phase function.
@@ -845,8 +859,9 @@ pub enum Texture {
         b: Box<Texture>,
         to_texture: Mat4,
     },
-    /// pbrt-v4's `dots`: in each unit cell of `to_uv`·uv that noise selects, a disk of
-    /// radius 0.35 at a noise-jittered centre shows `inside`; everything else `outside`.
+    /// pbrt-v4's `dots`: in each unit cell of (s, t) = `to_uv`·uv (cells centred on the
+    /// integers) that improved noise selects, a dot of radius 0.35 jittered by noise, `inside`
+    /// there and `outside` elsewhere.
     Dots {
         inside: Box<Texture>,
         outside: Box<Texture>,
@@ -900,6 +915,18 @@ pub enum Emitter {
     /// hit of the Whitted integrator (CENG795 `AmbientLight`). Not a physical emitter: the
     /// path tracers ignore it (with a warning at build time).
     Ambient { radiance: Rgb },
+    /// A point light whose intensity an image modulates by direction (pbrt-v4's
+    /// `goniometric` and `projection` lights): at the origin of `to_world`, directions taken
+    /// in its frame (a rotation, up to a uniform scale), the image's linear RGB times
+    /// `intensity`; with `power`, rescaled to emit that (pbrt-v4's rule per profile).
+    ImagePoint {
+        to_world: Mat4,
+        /// Resolved by the loader.
+        path: PathBuf,
+        intensity: Rgb,
+        profile: ImageProfile,
+        power: Option<f32>,
+    },
     /// Image-based environment light.
     EnvMap {
         /// Resolved by the loader: absolute, or relative to the working directory.
@@ -908,6 +935,17 @@ pub enum Emitter {
         to_world: Mat4,
         mapping: EnvMapping,
     },
+}
+
+/// How an [`Emitter::ImagePoint`] maps directions to its image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ImageProfile {
+    /// pbrt-v4's equal-area octahedral square over the sphere (+z of the square's map is the
+    /// frame's +z), nearest pixel, the average of R, G and B.
+    Goniometric,
+    /// A pinhole projection along the frame's +z, `fov` (degrees) on the image's shorter
+    /// axis, the image's first row towards the frame's −y; nearest pixel; dark outside.
+    Projection { fov: f32 },
 }
 
 impl Emitter {
@@ -919,6 +957,11 @@ impl Emitter {
             Emitter::Constant { .. } => "constant",
             Emitter::EnvMap { .. } => "envmap",
             Emitter::Ambient { .. } => "ambient",
+            Emitter::ImagePoint {
+                profile: ImageProfile::Goniometric,
+                ..
+            } => "goniometric",
+            Emitter::ImagePoint { .. } => "projection",
         }
     }
 }

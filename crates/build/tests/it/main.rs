@@ -23,6 +23,8 @@ mod nori_vdb_box;
 mod normal_map;
 mod null_path;
 mod path_variants;
+mod pbrt_grid_media;
+mod pbrt_image_lights;
 mod pbrt_references;
 mod photon_density;
 mod photon_emission;

@@ -7,9 +7,9 @@
 //! `envmap-materials` (Mitsuba's `plastic`/`roughplastic`; the latter also a lat-long
 //! environment map, where pbrt-v4 takes only equal-area squares), `lights` and `media-fog`
 //! (Mitsuba's spot falloff is linear in the angle, pbrt-v4's a smoothstep in the cosine),
-//! `media-heterogeneous` (a `.vol` grid; pbrt-v4 would need it inline as a `uniformgrid`,
-//! which the loader does not read yet) and `spectral-materials` (its textures and emitter
-//! spectra in Mitsuba's units).
+//! `media-heterogeneous` (its `.vol` grid is not 0 on the border voxels, where Mitsuba's
+//! lookup clamps and pbrt-v4's `uniformgrid` falls to 0 over the outer half voxel) and
+//! `spectral-materials` (its textures and emitter spectra in Mitsuba's units).
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};

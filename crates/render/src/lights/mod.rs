@@ -11,6 +11,7 @@ pub mod bvh;
 mod constant;
 mod directional;
 mod envmap;
+mod image_point;
 mod point;
 pub mod select;
 mod spot;
@@ -22,6 +23,7 @@ pub use bvh::LightBounds;
 pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
 pub use envmap::EnvMap;
+pub use image_point::{ImagePointLight, Profile as ImageProfile};
 pub use point::PointLight;
 pub use spot::SpotLight;
 
@@ -212,6 +214,7 @@ pub enum Light {
     Directional(DirectionalLight),
     Constant(ConstantLight),
     EnvMap(Arc<EnvMap>),
+    ImagePoint(Arc<ImagePointLight>),
 }
 
 macro_rules! dispatch {
@@ -223,6 +226,7 @@ macro_rules! dispatch {
             Light::Directional($l) => $e,
             Light::Constant($l) => $e,
             Light::EnvMap($l) => $e,
+            Light::ImagePoint($l) => $e,
         }
     };
 }

@@ -1,6 +1,7 @@
 //! Voxel grids: the data of heterogeneous media, looked up in the grid's own space [0,1]³
 //! (Mitsuba 3's `gridvolume`: voxel centres at (i + ½)/res, trilinear between them or the
-//! nearest voxel, clamped at the border), and the reader of Mitsuba's binary `.vol` files.
+//! nearest voxel, clamped at the border — or, for pbrt-v4's `SampledGrid`, zero beyond the
+//! grid's voxels), and the reader of Mitsuba's binary `.vol` files.
 
 use std::path::Path;
 
@@ -24,6 +25,9 @@ pub struct VoxelGrid {
     /// `((z·res_y + y)·res_x + x)·channels + c`.
     pub data: Vec<f32>,
     pub trilinear: bool,
+    /// Voxels beyond the grid read 0 in trilinear lookups (pbrt-v4's `SampledGrid`: the
+    /// value falls towards 0 over the outer half voxel) instead of the border voxel's value.
+    pub zero_outside: bool,
 }
 
 /// A grid file that cannot be read: the file, where in it (byte offset), and what is wrong.
@@ -47,7 +51,7 @@ impl VoxelGrid {
     }
 
     /// The first channel's value at the grid-space point `p`; points outside [0,1]³ read the
-    /// border voxels.
+    /// border voxels (or 0, [`VoxelGrid::zero_outside`]).
     #[inline]
     pub fn scalar(&self, p: Vec3) -> f32 {
         self.lookup(p, |g, i| g.data[i])
@@ -79,6 +83,36 @@ impl VoxelGrid {
         let w = q - f;
         let i0 = [0, 1, 2].map(|k| (f[k].max(0.0) as usize).min(max[k]));
         let i1 = [0, 1, 2].map(|k| ((f[k] + 1.0).max(0.0) as usize).min(max[k]));
+        // Per axis, whether the lower and upper neighbours exist (both do when clamping):
+        // a missing one contributes 0, as a voxel of value 0 would.
+        let has = |k: usize, c: f32| !self.zero_outside || (c >= 0.0 && c <= max[k] as f32);
+        let m0 = [0, 1, 2].map(|k| has(k, f[k]));
+        let m1 = [0, 1, 2].map(|k| has(k, f[k] + 1.0));
+        if !(m0.iter().chain(&m1).all(|&b| b)) {
+            let w0 = Vec3::ONE - w;
+            let mut acc: Option<T> = None;
+            for (z, wz) in [
+                (i0[2], m0[2] as u8 as f32 * w0.z),
+                (i1[2], m1[2] as u8 as f32 * w.z),
+            ] {
+                for (y, wy) in [
+                    (i0[1], m0[1] as u8 as f32 * w0.y),
+                    (i1[1], m1[1] as u8 as f32 * w.y),
+                ] {
+                    for (x, wx) in [
+                        (i0[0], m0[0] as u8 as f32 * w0.x),
+                        (i1[0], m1[0] as u8 as f32 * w.x),
+                    ] {
+                        let t = at(self, self.voxel(x, y, z)) * (wx * wy * wz);
+                        acc = Some(match acc {
+                            Some(a) => a + t,
+                            None => t,
+                        });
+                    }
+                }
+            }
+            return acc.expect("eight terms");
+        }
         let v = |x: usize, y: usize, z: usize| at(self, self.voxel(x, y, z));
         let lerp = |a: T, b: T, t: f32| a * (1.0 - t) + b * t;
         let c00 = lerp(v(i0[0], i0[1], i0[2]), v(i1[0], i0[1], i0[2]), w.x);
@@ -176,6 +210,7 @@ impl VoxelGrid {
             channels: channels as usize,
             data,
             trilinear,
+            zero_outside: false,
         })
     }
 }
@@ -221,6 +256,79 @@ mod tests {
         assert_eq!(n.scalar(Vec3::new(0.49, 0.5, 0.5)), 1.0);
         assert_eq!(n.scalar(Vec3::new(0.51, 0.5, 0.5)), 3.0);
         assert_eq!(g.max_value(), 3.0);
+    }
+
+    /// pbrt-v4's `SampledGrid` lookup written out directly: samples at (i + ½)/n, trilinear
+    /// between them, every sample outside the grid 0.
+    fn pbrt_lookup(res: [usize; 3], data: &[f32], p: Vec3) -> f32 {
+        let at = |x: i64, y: i64, z: i64| {
+            let inside = |c: i64, n: usize| c >= 0 && c < n as i64;
+            if inside(x, res[0]) && inside(y, res[1]) && inside(z, res[2]) {
+                data[(z as usize * res[1] + y as usize) * res[0] + x as usize]
+            } else {
+                0.0
+            }
+        };
+        let s = [0, 1, 2].map(|k| p[k] * res[k] as f32 - 0.5);
+        let i = s.map(|c| c.floor() as i64);
+        let d = [0, 1, 2].map(|k| s[k] - i[k] as f32);
+        let lerp = |t: f32, a: f32, b: f32| (1.0 - t) * a + t * b;
+        let d00 = lerp(d[0], at(i[0], i[1], i[2]), at(i[0] + 1, i[1], i[2]));
+        let d10 = lerp(d[0], at(i[0], i[1] + 1, i[2]), at(i[0] + 1, i[1] + 1, i[2]));
+        let d01 = lerp(d[0], at(i[0], i[1], i[2] + 1), at(i[0] + 1, i[1], i[2] + 1));
+        let d11 = lerp(
+            d[0],
+            at(i[0], i[1] + 1, i[2] + 1),
+            at(i[0] + 1, i[1] + 1, i[2] + 1),
+        );
+        lerp(d[2], lerp(d[1], d00, d10), lerp(d[1], d01, d11))
+    }
+
+    #[test]
+    fn zero_outside_is_pbrts_sampled_grid() {
+        let mut x = 0x9e37_79b9u32;
+        let mut rnd = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for res in [[1, 1, 1], [2, 1, 3], [5, 4, 3]] {
+            let data: Vec<f32> = (0..res.iter().product()).map(|_| 0.1 + rnd()).collect();
+            let g = VoxelGrid {
+                res,
+                channels: 1,
+                data: data.clone(),
+                trilinear: true,
+                zero_outside: true,
+            };
+            // Inside the box, on its faces and corners, and at voxel centres.
+            let mut points: Vec<Vec3> = (0..4000).map(|_| Vec3::new(rnd(), rnd(), rnd())).collect();
+            points.extend([Vec3::ZERO, Vec3::ONE, Vec3::new(0.0, 1.0, 0.5)]);
+            points.push(Vec3::new(
+                0.5 / res[0] as f32,
+                0.5 / res[1] as f32,
+                0.5 / res[2] as f32,
+            ));
+            for p in points {
+                let (ours, pbrt) = (g.scalar(p), pbrt_lookup(res, &data, p));
+                assert!(
+                    (ours - pbrt).abs() <= 1e-5 * pbrt.abs().max(1.0),
+                    "{res:?} at {p}: {ours} vs {pbrt}"
+                );
+            }
+        }
+        // A single voxel is a tent: full at the centre, half on a face, an eighth at a corner.
+        let one = VoxelGrid {
+            res: [1, 1, 1],
+            channels: 1,
+            data: vec![2.0],
+            trilinear: true,
+            zero_outside: true,
+        };
+        assert_eq!(one.scalar(Vec3::splat(0.5)), 2.0);
+        assert!((one.scalar(Vec3::new(0.0, 0.5, 0.5)) - 1.0).abs() < 1e-6);
+        assert!((one.scalar(Vec3::ZERO) - 0.25).abs() < 1e-6);
     }
 
     #[test]

@@ -26,16 +26,18 @@ impl MajorantGrid {
             let lo = ((k as f32 / RES as f32) * n - 0.5).floor() as i64 - 1;
             let hi = (((k + 1) as f32 / RES as f32) * n - 0.5).floor() as i64 + 2;
             let max = grid.res[axis] as i64 - 1;
-            (lo.clamp(0, max) as usize, hi.clamp(0, max) as usize)
+            // A cell reaching past the voxels of a zero-outside grid can see 0 there.
+            let beyond = grid.zero_outside && (lo < 0 || hi > max);
+            (lo.clamp(0, max) as usize, hi.clamp(0, max) as usize, beyond)
         };
         let mut min = vec![f32::INFINITY; RES * RES * RES];
         let mut max = vec![0.0f32; RES * RES * RES];
         for cz in 0..RES {
-            let (z0, z1) = range(2, cz);
+            let (z0, z1, bz) = range(2, cz);
             for cy in 0..RES {
-                let (y0, y1) = range(1, cy);
+                let (y0, y1, by) = range(1, cy);
                 for cx in 0..RES {
-                    let (x0, x1) = range(0, cx);
+                    let (x0, x1, bx) = range(0, cx);
                     let c = cx + RES * (cy + RES * cz);
                     for z in z0..=z1 {
                         for y in y0..=y1 {
@@ -46,6 +48,9 @@ impl MajorantGrid {
                                 max[c] = max[c].max(v);
                             }
                         }
+                    }
+                    if bx || by || bz {
+                        min[c] = 0.0;
                     }
                     min[c] *= scale;
                     max[c] *= scale;
@@ -117,7 +122,8 @@ impl MajorantGrid {
 mod tests {
     use super::*;
 
-    /// The cells' bounds hold the trilinear density at many random points, and the walk
+    /// The cells' bounds hold the trilinear density at many random points (clamped or zero
+    /// beyond the voxels), and the walk
     /// covers the segment exactly, cell after cell.
     #[test]
     fn bounds_hold_and_the_walk_covers_the_segment() {
@@ -132,34 +138,37 @@ mod tests {
         let data: Vec<f32> = (0..n * n * n)
             .map(|i| if i % 7 == 0 { 0.0 } else { rnd() * 3.0 })
             .collect();
-        let grid = VoxelGrid {
-            res: [n, n, n],
-            channels: 1,
-            data,
-            trilinear: true,
-        };
-        let m = MajorantGrid::new(&grid, 2.0);
-        for _ in 0..200 {
-            let o = Vec3::new(rnd(), rnd(), rnd());
-            let d = (Vec3::new(rnd(), rnd(), rnd()) - Vec3::splat(0.5)).normalize();
-            let inv = d.recip();
-            let (a, b) = ((Vec3::ZERO - o) * inv, (Vec3::ONE - o) * inv);
-            let t1 = a.max(b).min_element();
-            let mut t_prev = 0.0;
-            m.walk(o, d, 0.0, t1, |ta, tb, lo, hi| {
-                assert!((ta - t_prev).abs() < 1e-5, "gap at {ta} after {t_prev}");
-                t_prev = tb;
-                for k in 0..8 {
-                    let t = ta + (tb - ta) * (k as f32 + 0.5) / 8.0;
-                    let s = 2.0 * grid.scalar(o + d * t);
-                    assert!(s <= hi * (1.0 + 1e-6) + 1e-6 && s >= lo * (1.0 - 1e-6) - 1e-6);
-                }
-                true
-            });
-            assert!(
-                (t_prev - t1).abs() < 1e-4,
-                "walk ended at {t_prev}, segment at {t1}"
-            );
+        for zero_outside in [false, true] {
+            let grid = VoxelGrid {
+                res: [n, n, n],
+                channels: 1,
+                data: data.clone(),
+                trilinear: true,
+                zero_outside,
+            };
+            let m = MajorantGrid::new(&grid, 2.0);
+            for _ in 0..200 {
+                let o = Vec3::new(rnd(), rnd(), rnd());
+                let d = (Vec3::new(rnd(), rnd(), rnd()) - Vec3::splat(0.5)).normalize();
+                let inv = d.recip();
+                let (a, b) = ((Vec3::ZERO - o) * inv, (Vec3::ONE - o) * inv);
+                let t1 = a.max(b).min_element();
+                let mut t_prev = 0.0;
+                m.walk(o, d, 0.0, t1, |ta, tb, lo, hi| {
+                    assert!((ta - t_prev).abs() < 1e-5, "gap at {ta} after {t_prev}");
+                    t_prev = tb;
+                    for k in 0..8 {
+                        let t = ta + (tb - ta) * (k as f32 + 0.5) / 8.0;
+                        let s = 2.0 * grid.scalar(o + d * t);
+                        assert!(s <= hi * (1.0 + 1e-6) + 1e-6 && s >= lo * (1.0 - 1e-6) - 1e-6);
+                    }
+                    true
+                });
+                assert!(
+                    (t_prev - t1).abs() < 1e-4,
+                    "walk ended at {t_prev}, segment at {t1}"
+                );
+            }
         }
     }
 }

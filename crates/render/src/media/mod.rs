@@ -393,6 +393,7 @@ mod tests {
             channels: 1,
             data: vec![t],
             trilinear: false,
+            zero_outside: false,
         };
         let table = vec![Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.4, 0.5, 0.6)];
         let e = Emission::Grid {

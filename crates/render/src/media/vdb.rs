@@ -193,6 +193,7 @@ impl VoxelGrid {
             channels: 1,
             data,
             trilinear,
+            zero_outside: false,
         };
         Ok((grid, m))
     }

@@ -142,6 +142,7 @@ fn emission_grid_points_match_their_density() {
         channels: 1,
         data: data.clone(),
         trilinear: true,
+        zero_outside: false,
     };
     let to_world = Mat4::from_translation(Vec3::new(1.0, -2.0, 0.5).into())
         * Mat4::from_rotation_y(0.7)

@@ -140,6 +140,10 @@ fn the_camera_frame_is_pbrts_left_handed_one() {
     assert!(s.sensors[0].camera.to_world.abs_diff_eq(flipped, 1e-5));
 }
 
+/// What a full pbrt sphere's `to_world` starts with: a mirror in z that makes our sphere's
+/// v (θ/π from +z) pbrt-v4's (1 − θ/π).
+const SPHERE_UV: Mat4 = Mat4::from_diagonal(glam::Vec4::new(1.0, 1.0, -1.0, 1.0));
+
 #[test]
 fn transforms_compose_as_pbrt_and_matrices_are_column_major() {
     let s = scene(&format!(
@@ -150,7 +154,8 @@ fn transforms_compose_as_pbrt_and_matrices_are_column_major() {
     let m = s.shapes[0].to_world;
     let expect = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0))
         * Mat4::from_rotation_z(90f32.to_radians())
-        * Mat4::from_scale(Vec3::splat(2.0));
+        * Mat4::from_scale(Vec3::splat(2.0))
+        * SPHERE_UV;
     assert!(m.abs_diff_eq(expect, 1e-6));
     assert_eq!(
         s.shapes[1].to_world.w_axis.truncate(),
@@ -349,7 +354,7 @@ fn include_and_import_resolve_relative_to_the_including_file() {
     };
     assert_eq!(s.shapes.len(), 2);
     // Import does not leak its graphics state.
-    assert_eq!(s.shapes[1].to_world, Mat4::IDENTITY);
+    assert_eq!(s.shapes[1].to_world, SPHERE_UV);
 }
 
 /// `file:line:col` of an error, checked against the expected line and column.
@@ -902,4 +907,228 @@ fn procedural_textures_filters_spots_and_coated_roughness() {
         (*falloff, *cutoff_angle, *beam_width),
         (SpotFalloff::SmoothStep, 30.0, 20.0)
     );
+}
+
+/// The inline grid of a volume description: (res, channels, data, to_world).
+fn inline(v: &VolumeDesc) -> ([usize; 3], usize, Vec<f32>, Mat4) {
+    match &v.format {
+        VolumeFormat::Inline {
+            res,
+            channels,
+            data,
+        } => (*res, *channels, data.to_vec(), v.to_world),
+        f => panic!("an inline grid expected, found {f:?}"),
+    }
+}
+
+#[test]
+fn grid_media_become_inline_grids_over_their_box() {
+    let s = scene(&format!(
+        "{CAMERA}Translate 1 0 0\n\
+         MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"integer ny\" 1 \"integer nz\" 3\n\
+         \"float density\" [0 1 2 3 4 5] \"point3 p0\" [0 -1 0] \"point3 p1\" [2 1 6]\n\
+         \"rgb sigma_a\" [1 2 3] \"rgb sigma_s\" [3 2 1] \"float scale\" 0.5 \"float g\" -0.3 \"rgb Le\" [1 0.5 0.25]\n\
+         MakeNamedMedium \"lit\" \"string type\" \"uniformgrid\" \"float density\" [2] \"rgb Le\" [1 1 1] \"float Lescale\" [3]\n\
+         MakeNamedMedium \"rgb\" \"string type\" \"rgbgrid\" \"integer nx\" 2 \"point3 p1\" [1 1 2]\n\
+         \"rgb sigma_a\" [1 1 1 0 1 2] \"rgb sigma_s\" [1 1 1 2 1 0] \"rgb Le\" [0 0 0 1 2 3] \"float Lescale\" 2 \"float scale\" 4\n"
+    ));
+    // uniformgrid: σt = (σa + σs)·scale·density, a constant albedo, the box p0–p1 placed by
+    // the CTM.
+    let Medium::Heterogeneous {
+        sigma_t,
+        albedo,
+        scale,
+    } = &s.media[0].medium
+    else {
+        panic!("{:?}", s.media[0].medium)
+    };
+    let (res, ch, data, to_world) = inline(sigma_t);
+    assert_eq!(
+        (res, ch, data),
+        ([2, 1, 3], 1, vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0])
+    );
+    assert!(
+        to_world
+            .transform_point3(Vec3::ZERO)
+            .abs_diff_eq(Vec3::new(1.0, -1.0, 0.0), 1e-6)
+    );
+    assert!(
+        to_world
+            .transform_point3(Vec3::ONE)
+            .abs_diff_eq(Vec3::new(3.0, 1.0, 6.0), 1e-6)
+    );
+    assert_eq!(*scale, 2.0);
+    assert!(
+        matches!(albedo, VolumeParam::Const(a) if a.abs_diff_eq(Vec3::new(0.75, 0.5, 0.25), 1e-6))
+    );
+    assert_eq!(s.media[0].phase, PhaseDesc::HenyeyGreenstein { g: -0.3 });
+    // Le without "Lescale": pbrt-v4's one-voxel scale grid, a tent over the box.
+    let Some(MediumEmission::Radiance(VolumeParam::Grid(le))) = &s.media[0].emission else {
+        panic!()
+    };
+    let (res, ch, data, _) = inline(le);
+    assert_eq!((res, ch, data), ([1, 1, 1], 3, vec![1.0, 0.5, 0.25]));
+    // With one: Le times each voxel's scale, on the density's lattice.
+    let Some(MediumEmission::Radiance(VolumeParam::Grid(le))) = &s.media[1].emission else {
+        panic!()
+    };
+    assert_eq!(inline(le).2, vec![3.0, 3.0, 3.0]);
+    assert_eq!(s.media[1].phase, PhaseDesc::Isotropic);
+    // rgbgrid: σt from σa + σs per voxel, the albedo σs/σt interpolated apart, Le per voxel.
+    let Medium::Heterogeneous {
+        sigma_t,
+        albedo,
+        scale,
+    } = &s.media[2].medium
+    else {
+        panic!()
+    };
+    assert_eq!(inline(sigma_t).2, vec![2.0, 2.0]);
+    assert_eq!(*scale, 4.0);
+    let VolumeParam::SigmaSGrid(ss) = albedo else {
+        panic!("{albedo:?}")
+    };
+    assert_eq!(inline(ss).2, vec![1.0, 1.0, 1.0, 2.0, 1.0, 0.0]);
+    let Some(MediumEmission::Radiance(VolumeParam::Grid(le))) = &s.media[2].emission else {
+        panic!()
+    };
+    assert_eq!(inline(le).2, vec![0.0, 0.0, 0.0, 2.0, 4.0, 6.0]);
+    assert!(
+        inline(le)
+            .3
+            .transform_point3(Vec3::ONE)
+            .abs_diff_eq(Vec3::new(2.0, 1.0, 2.0), 1e-6)
+    );
+
+    // What our grid media cannot express is refused, saying why.
+    for (params, want) in [
+        ("\"float density\" [1 2]", "expected 1"),
+        ("\"integer nx\" 2 \"float density\" [1 -2]", "≥ 0"),
+        ("\"float density\" [1] \"rgb sigma_a\" [1 0 0]", "not grey"),
+        (
+            "\"float density\" [1] \"float temperature\" [1000]",
+            "temperature",
+        ),
+        ("", "no \"density\""),
+        (
+            "\"float density\" [1] \"point3 p0\" [0 0 1] \"point3 p1\" [1 1 1]",
+            "empty",
+        ),
+    ] {
+        let e = error(&format!(
+            "{CAMERA}MakeNamedMedium \"m\" \"string type\" \"uniformgrid\" {params}\n"
+        ))
+        .to_string();
+        assert!(e.contains(want), "{params}: {e}");
+    }
+    for (params, want) in [
+        ("\"rgb sigma_a\" [1 1 1]", "both"),
+        (
+            "\"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [1 2 1]",
+            "not grey",
+        ),
+    ] {
+        let e = error(&format!(
+            "{CAMERA}MakeNamedMedium \"m\" \"string type\" \"rgbgrid\" {params}\n"
+        ))
+        .to_string();
+        assert!(e.contains(want), "{params}: {e}");
+    }
+    let e = error(&format!(
+        "{CAMERA}MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"a.nvdb\"\n"
+    ));
+    assert!(e.to_string().contains("not supported"), "{e}");
+}
+
+#[test]
+fn partial_spheres_are_tessellated_and_full_ones_take_pbrts_uv() {
+    let s = scene(&format!(
+        "{CAMERA}Shape \"sphere\" \"float radius\" 2 \"float zmin\" -1 \"float zmax\" 3 \"float phimax\" 90\n\
+         Shape \"sphere\" \"float radius\" 2\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nShape \"sphere\"\nAttributeEnd\n"
+    ));
+    let Shape::Mesh(m) = &s.shapes[0].shape else {
+        panic!("{:?}", s.shapes[0].shape)
+    };
+    // zmax is clamped to the radius; the quarter from z = −1 to the top pole.
+    let area: f32 = m
+        .indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    let want = std::f32::consts::FRAC_PI_2 * 2.0 * 3.0;
+    assert!((area / want - 1.0).abs() < 2e-4, "{area} vs {want}");
+    assert!(
+        m.positions
+            .iter()
+            .all(|p| p.z >= -1.0 - 1e-5 && p.x >= -1e-5 && p.y >= -1e-5)
+    );
+    // u = φ/φmax, v from θmin (at zmin) to θmax.
+    for (p, uv) in m.positions.iter().zip(&m.uvs) {
+        let theta = (p.z / 2.0).clamp(-1.0, 1.0).acos();
+        let t0 = (-0.5f32).acos();
+        assert!((uv.y - (theta - t0) / (0.0 - t0)).abs() < 1e-3, "{p}: {uv}");
+    }
+    assert!(matches!(s.shapes[1].shape, Shape::Sphere { radius, .. } if radius == 2.0));
+    assert_eq!(s.shapes[1].to_world, SPHERE_UV);
+    // A sphere light keeps our frame (sampled by the cone it subtends).
+    assert_eq!(s.shapes[2].to_world, Mat4::IDENTITY);
+}
+
+#[test]
+fn goniometric_and_projection_lights_carry_pbrts_frames() {
+    let path = write_scene(&[
+        (
+            "scene.pbrt",
+            format!(
+                "{CAMERA}AttributeBegin\nTranslate 1 2 3\nLightSource \"goniometric\" \"string filename\" \"g.pfm\" \"rgb I\" [1 2 3] \"float scale\" 2\nAttributeEnd\n\
+                 LightSource \"projection\" \"string filename\" \"g.pfm\" \"float fov\" 30 \"float power\" 5\n"
+            )
+            .as_bytes(),
+        ),
+        ("g.pfm", b"PF\n1 1\n-1\n\0\0\x80\x3f\0\0\x80\x3f\0\0\x80\x3f"),
+    ]);
+    let Document::Scene(s) = load(&path, &LoadOptions::default()).unwrap() else {
+        panic!()
+    };
+    let Emitter::ImagePoint {
+        to_world,
+        intensity,
+        profile,
+        power,
+        ..
+    } = &s.emitters[0].emitter
+    else {
+        panic!("{:?}", s.emitters[0].emitter)
+    };
+    // The light's y and z swapped, then placed by the CTM.
+    assert_eq!(to_world.transform_vector3(Vec3::Z), Vec3::Y);
+    assert_eq!(to_world.transform_vector3(Vec3::Y), Vec3::Z);
+    assert_eq!(to_world.w_axis.truncate(), Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(*intensity, Vec3::new(2.0, 4.0, 6.0));
+    assert_eq!((*profile, *power), (ImageProfile::Goniometric, None));
+    let Emitter::ImagePoint {
+        to_world,
+        intensity,
+        profile,
+        power,
+        ..
+    } = &s.emitters[1].emitter
+    else {
+        panic!()
+    };
+    // The y flip.
+    assert_eq!(to_world.transform_vector3(Vec3::Y), -Vec3::Y);
+    assert_eq!(*intensity, Vec3::ONE);
+    assert_eq!(
+        (*profile, *power),
+        (ImageProfile::Projection { fov: 30.0 }, Some(5.0))
+    );
+    let e = error(&format!(
+        "{CAMERA}LightSource \"projection\" \"string filename\" \"missing.pfm\"\n"
+    ));
+    assert!(e.to_string().contains("not found"), "{e}");
 }

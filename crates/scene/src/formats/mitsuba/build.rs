@@ -667,7 +667,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     emission = Some(MediumEmission::Radiance(self.volume(ch)?));
                 }
                 ("volume", Some("temperature")) => match self.volume(ch)? {
-                    VolumeParam::Grid(grid) => {
+                    VolumeParam::Grid(grid) | VolumeParam::SigmaSGrid(grid) => {
                         let scale = pl.props.float("emission_scale", 1.0)?;
                         emission = Some(MediumEmission::Temperature { grid, scale });
                     }
@@ -706,7 +706,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 } else {
                     let t = match sigma_t_grid {
                         Some(VolumeParam::Const(v)) => v,
-                        Some(VolumeParam::Grid(_)) => {
+                        Some(VolumeParam::Grid(_) | VolumeParam::SigmaSGrid(_)) => {
                             return Err(err(
                                 pl.loc(),
                                 "a homogeneous medium takes constant coefficients; use type \"heterogeneous\" for a grid",
@@ -716,7 +716,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     };
                     let albedo = match albedo_grid {
                         Some(VolumeParam::Const(v)) => v,
-                        Some(VolumeParam::Grid(_)) => {
+                        Some(VolumeParam::Grid(_) | VolumeParam::SigmaSGrid(_)) => {
                             return Err(err(
                                 pl.loc(),
                                 "a homogeneous medium takes a constant albedo",

@@ -169,7 +169,11 @@ impl Loader {
     pub(super) fn spectrum_value(&self, p: &Param, usage: Usage) -> Result<ColorValue> {
         match p.ty {
             Ty::Rgb => {
+                // Lists of several colours are read where they are meant (grid media).
                 let v = p.nums();
+                if v.len() != 3 {
+                    return Err(p.err(format!("expected 3 values, found {}", v.len())));
+                }
                 let c = Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32);
                 if usage != Usage::Illuminant && c.min_element() < 0.0 {
                     return Err(p.err("negative RGB component"));
@@ -1238,10 +1242,14 @@ impl Loader {
                     format!("MakeNamedMedium \"{name}\" needs a \"string type\" parameter"),
                 ));
             }
-            "uniformgrid" | "rgbgrid" | "nanovdb" | "cloud" => {
+            "uniformgrid" | "rgbgrid" => self.grid_medium(&name, &ty, &p, loc)?,
+            "nanovdb" | "cloud" => {
                 return Err(err(
                     loc,
-                    format!("medium '{name}': type \"{ty}\" is not supported yet (homogeneous is)"),
+                    format!(
+                        "medium '{name}': type \"{ty}\" is not supported yet (homogeneous, \
+                         uniformgrid and rgbgrid are)"
+                    ),
                 ));
             }
             _ => {
@@ -1258,6 +1266,156 @@ impl Loader {
         let id = self.scene.add_medium(medium);
         self.media.insert(name, id);
         Ok(())
+    }
+
+    /// pbrt-v4's `uniformgrid` and `rgbgrid`: inline grids over the box `p0`–`p1` of the
+    /// medium's space (the CTM at `MakeNamedMedium`), looked up as pbrt-v4's `SampledGrid`
+    /// (voxel centres at (i + ½)/n, 0 beyond the voxels) — our inline grids' convention.
+    fn grid_medium(&mut self, name: &str, ty: &str, p: &Params, loc: &Loc) -> Result<MediumDesc> {
+        let fail = |m: String| err(loc, format!("medium '{name}' ({ty}): {m}"));
+        let mut res = [1usize; 3];
+        for (r, key) in res.iter_mut().zip(["nx", "ny", "nz"]) {
+            *r = p.int_in(key, 1, 1, 1 << 20)? as usize;
+        }
+        let n = res
+            .iter()
+            .try_fold(1usize, |a, &r| a.checked_mul(r))
+            .filter(|&n| n <= 1 << 28)
+            .ok_or_else(|| fail(format!("{res:?} voxels are too many")))?;
+        // pbrt-v4 orders the corners itself (a Bounds3f of the two points).
+        let (a, b) = (
+            Vec3::from(p.vec3("p0", Ty::Point3, [0.0; 3])?),
+            Vec3::from(p.vec3("p1", Ty::Point3, [1.0; 3])?),
+        );
+        let (lo, hi) = (a.min(b), a.max(b));
+        if !(hi - lo).cmpgt(Vec3::ZERO).all() {
+            return Err(fail(format!("the box {lo} – {hi} is empty")));
+        }
+        let to_world = self.gs.ctm[0] * Mat4::from_translation(lo) * Mat4::from_scale(hi - lo);
+        let g = p.float("g", 0.0)?;
+        if !(g > -1.0 && g < 1.0) {
+            return Err(fail(format!("g = {g} is outside (−1, 1)")));
+        }
+        let scale = p.float("scale", 1.0)?;
+        let volume = |res: [usize; 3], channels: usize, data: Vec<f32>| {
+            Box::new(VolumeDesc {
+                path: (*loc.file).clone(),
+                format: VolumeFormat::Inline {
+                    res,
+                    channels,
+                    data: data.into(),
+                },
+                to_world,
+                trilinear: true,
+                loc: loc.clone(),
+            })
+        };
+        // A list of `count` values of `ty` (×3 for RGB), each finite and ≥ 0.
+        let list = |key: &str, t: Ty, count: usize| -> Result<Option<Vec<f32>>> {
+            let Some(q) = p.nums(key, t)? else {
+                return Ok(None);
+            };
+            let per = if t == Ty::Rgb { 3 } else { 1 };
+            if q.nums().len() != count * per {
+                return Err(q.err(format!(
+                    "{} values for {res:?} voxels; expected {}",
+                    q.nums().len() / per,
+                    count
+                )));
+            }
+            if let Some(v) = q.nums().iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(q.err(format!("value {v}: values must be finite and ≥ 0")));
+            }
+            Ok(Some(q.nums().iter().map(|&v| v as f32).collect()))
+        };
+        let (medium, emission) = if ty == "uniformgrid" {
+            if p.has("temperature") {
+                return Err(fail(
+                    "\"temperature\" grids are not supported: pbrt-v4's emission is then its \
+                     peak-normalised black body times the \"Lescale\" grid, a product of two \
+                     lookups our media do not express"
+                        .into(),
+                ));
+            }
+            let density = list("density", Ty::Float, n)?
+                .ok_or_else(|| fail("no \"density\" values".into()))?;
+            let sa = self
+                .value(p, "sigma_a", Usage::Unbounded)?
+                .map_or(Rgb::ONE, |v| v.rgb());
+            let ss = self
+                .value(p, "sigma_s", Usage::Unbounded)?
+                .map_or(Rgb::ONE, |v| v.rgb());
+            let st = sa + ss;
+            if st.max_element() - st.min_element() > 1e-6 * st.max_element() {
+                return Err(fail(format!(
+                    "sigma_a + sigma_s = {st} is not grey: our grid media have one extinction \
+                     for all wavelengths"
+                )));
+            }
+            let albedo = Rgb::select(st.cmpgt(Rgb::ZERO), ss / st, Rgb::ZERO);
+            let le = self.value(p, "Le", Usage::Illuminant)?.map(|v| v.rgb());
+            // Without a "Lescale" grid pbrt-v4 scales Le by a one-voxel grid: a tent over
+            // the box, 1 at its centre.
+            let (le_res, le_scale) = match list("Lescale", Ty::Float, n)? {
+                Some(s) => (res, s),
+                None => ([1; 3], vec![1.0]),
+            };
+            let emission = le.filter(|l| *l != Rgb::ZERO).map(|l| {
+                let data = le_scale.iter().flat_map(|&s| (l * s).to_array()).collect();
+                MediumEmission::Radiance(VolumeParam::Grid(volume(le_res, 3, data)))
+            });
+            let medium = Medium::Heterogeneous {
+                sigma_t: volume(res, 1, density),
+                albedo: VolumeParam::Const(albedo),
+                scale: scale * st.x,
+            };
+            (medium, emission)
+        } else {
+            let (Some(sa), Some(ss)) = (list("sigma_a", Ty::Rgb, n)?, list("sigma_s", Ty::Rgb, n)?)
+            else {
+                return Err(fail(
+                    "both \"sigma_a\" and \"sigma_s\" grids are needed (pbrt-v4 takes a \
+                     missing one as 1 everywhere in the box, which our grids do not express)"
+                        .into(),
+                ));
+            };
+            let mut density = Vec::with_capacity(n);
+            for (i, (a, s)) in sa.chunks_exact(3).zip(ss.chunks_exact(3)).enumerate() {
+                let t = [a[0] + s[0], a[1] + s[1], a[2] + s[2]];
+                let (mn, mx) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+                if mx - mn > 1e-6 * mx {
+                    return Err(fail(format!(
+                        "voxel {i}: sigma_a + sigma_s = {t:?} is not grey: our grid media \
+                         have one extinction for all wavelengths"
+                    )));
+                }
+                density.push(t[0]);
+            }
+            let le_scale = p.float("Lescale", 1.0)?;
+            let emission = list("Le", Ty::Rgb, n)?
+                .filter(|l| le_scale != 0.0 && l.iter().any(|&v| v > 0.0))
+                .map(|l| {
+                    let data = l.iter().map(|&v| v * le_scale).collect();
+                    MediumEmission::Radiance(VolumeParam::Grid(volume(res, 3, data)))
+                });
+            let medium = Medium::Heterogeneous {
+                sigma_t: volume(res, 1, density),
+                albedo: VolumeParam::SigmaSGrid(volume(res, 3, ss)),
+                scale,
+            };
+            (medium, emission)
+        };
+        Ok(MediumDesc {
+            medium,
+            phase: if g == 0.0 {
+                PhaseDesc::Isotropic
+            } else {
+                PhaseDesc::HenyeyGreenstein { g }
+            },
+            emission,
+            name: Some(name.to_string()),
+            loc: loc.clone(),
+        })
     }
 
     pub(super) fn medium_id(&self, name: &Option<String>, loc: &Loc) -> Result<Option<MediumId>> {
@@ -1402,7 +1560,44 @@ impl Loader {
                 }
             }
             "goniometric" | "projection" => {
-                return Err(err(loc, format!("light \"{ty}\" is not supported yet")));
+                let Some((f, fp)) = p.string_opt("filename")? else {
+                    return Err(err(loc, format!("{ty}: needs a \"string filename\"")));
+                };
+                let path = self.resolve(f);
+                if !path.is_file() {
+                    return Err(fp.err(format!("image '{}' not found", path.display())));
+                }
+                let power = p.float_opt("power")?.filter(|&v| v > 0.0);
+                if ty == "goniometric" {
+                    // pbrt-v4 looks the image up with the light's y and z swapped: the
+                    // equal-area map's pole is the light's +y.
+                    let swap =
+                        Mat4::from_cols(glam::Vec4::X, glam::Vec4::Z, glam::Vec4::Y, glam::Vec4::W);
+                    Emitter::ImagePoint {
+                        to_world: ctm * swap,
+                        path,
+                        intensity: self.light_value(p, "I", scale)?.rgb(),
+                        profile: ImageProfile::Goniometric,
+                        power,
+                    }
+                } else {
+                    let fov = p.float("fov", 90.0)?;
+                    if !(fov > 0.0 && fov < 180.0) {
+                        return Err(err(
+                            loc,
+                            format!("projection: fov {fov} is outside (0, 180)"),
+                        ));
+                    }
+                    // pbrt-v4 flips the light's y so that the image's first row is lit
+                    // towards the light's +y.
+                    Emitter::ImagePoint {
+                        to_world: ctm * Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0)),
+                        path,
+                        intensity: Rgb::splat(scale),
+                        profile: ImageProfile::Projection { fov },
+                        power,
+                    }
+                }
             }
             _ => {
                 return Err(err(

@@ -136,9 +136,6 @@ impl Param {
                         ty.arity()
                     )));
                 }
-                if ty == Ty::Rgb && v.len() != 3 {
-                    return Err(what(&format!("expected 3 values, found {}", v.len())));
-                }
             }
             (Vals::Nums(v), Ty::Spectrum) => {
                 if v.len() < 4 || v.len() % 2 != 0 {

@@ -1,7 +1,7 @@
 //! pbrt-v4 shapes → the scene model: triangle meshes (inline or PLY), spheres and disks as
-//! themselves, and the shapes our renderer lacks (cylinders, partial disks, bilinear patches,
-//! Loop subdivision surfaces) as triangles made at load time. Alpha, area lights, media and
-//! `ReverseOrientation` apply to every kind.
+//! themselves, and the shapes our renderer lacks (cylinders, partial spheres and disks,
+//! bilinear patches, Loop subdivision surfaces) as triangles made at load time. Alpha, area
+//! lights, media and `ReverseOrientation` apply to every kind.
 
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -53,22 +53,31 @@ impl Loader {
             }
             "sphere" => {
                 let r = p.float("radius", 1.0)?;
-                let zmin = p.float("zmin", -r)?;
-                let zmax = p.float("zmax", r)?;
+                let z0 = p.float("zmin", -r)?;
+                let z1 = p.float("zmax", r)?;
                 let phimax = p.float("phimax", 360.0)?;
-                if !(r > 0.0 && r.is_finite()) {
+                if !(r > 0.0 && r.is_finite() && z0.is_finite() && z1.is_finite()) {
                     return Err(err(loc, format!("sphere: radius {r} must be positive")));
                 }
-                if zmin > -r || zmax < r || phimax < 360.0 {
-                    return Err(err(
-                        loc,
-                        "sphere: partial spheres (zmin, zmax, phimax) are not supported",
-                    ));
-                }
-                object_area = Some(4.0 * PI * r * r);
-                Shape::Sphere {
-                    center: Vec3::ZERO,
-                    radius: r,
+                // pbrt-v4 orders and clamps the z range and clamps φmax to [0°, 360°].
+                let (zmin, zmax) = (z0.min(z1).clamp(-r, r), z0.max(z1).clamp(-r, r));
+                let phimax = phimax.clamp(0.0, 360.0).to_radians();
+                object_area = Some(phimax * r * (zmax - zmin));
+                if zmin > -r || zmax < r || phimax < 2.0 * PI {
+                    Shape::Mesh(Arc::new(partial_sphere(r, zmin, zmax, phimax)))
+                } else {
+                    // Ours runs v = θ/π from +z, pbrt-v4's v = 1 − θ/π: mirrored in z the
+                    // sphere and its u = φ/2π are unchanged and v becomes pbrt's. Not on
+                    // sphere lights: a mirrored sphere in a textured scene is built as an
+                    // ellipsoid, whose emission is sampled by area rather than by the cone
+                    // the sphere subtends.
+                    if self.gs.area_light.is_none() {
+                        to_world = m0 * Mat4::from_scale(Vec3::new(1.0, 1.0, -1.0));
+                    }
+                    Shape::Sphere {
+                        center: Vec3::ZERO,
+                        radius: r,
+                    }
                 }
             }
             "disk" => {
@@ -408,6 +417,54 @@ fn annulus(h: f32, ri: f32, r: f32, phimax: f32) -> TriMesh {
     m
 }
 
+/// Rings of a tessellated partial sphere per π of θ (its segments in φ are [`SEGMENTS`] per
+/// 2π: both steps 2π/256).
+const RINGS: u32 = SEGMENTS / 2;
+
+/// The part of the sphere of radius `r` between the heights `zmin` and `zmax` and the angles
+/// φ ∈ [0, φmax], open, with outward normals and pbrt-v4's uv: u = φ/φmax,
+/// v = (θ − θmin)/(θmax − θmin), θ from +z, θmin at `zmin`.
+fn partial_sphere(r: f32, zmin: f32, zmax: f32, phimax: f32) -> TriMesh {
+    let (t0, t1) = (
+        (zmin / r).clamp(-1.0, 1.0).acos(),
+        (zmax / r).clamp(-1.0, 1.0).acos(),
+    );
+    let n = ((SEGMENTS as f32 * phimax / (2.0 * PI)).ceil() as u32).max(1);
+    let k = ((RINGS as f32 * (t0 - t1) / PI).ceil() as u32).max(1);
+    let mut m = TriMesh::default();
+    for j in 0..=k {
+        let theta = t0 + (t1 - t0) * j as f32 / k as f32;
+        let (mut st, mut ct) = theta.sin_cos();
+        // A ring at a pole is exactly a point, so that its triangles collapse exactly.
+        if j == 0 && zmin <= -r || j == k && zmax >= r {
+            (st, ct) = (0.0, ct.signum());
+        }
+        for i in 0..=n {
+            let (sp, cp) = (phimax * i as f32 / n as f32).sin_cos();
+            let d = Vec3::new(st * cp, st * sp, ct);
+            m.positions.push(d * r);
+            m.normals.push(d);
+            m.uvs
+                .push(Vec2::new(i as f32 / n as f32, j as f32 / k as f32));
+        }
+    }
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..k {
+        for i in 0..n {
+            // Ring j is below ring j + 1; a ring at a pole is a point, and its triangles
+            // collapse: those are left out.
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            for t in [[a, b, c], [a, c, d]] {
+                let [p, q, w] = t.map(|v| m.positions[v as usize]);
+                if (q - p).cross(w - p).length_squared() > 0.0 {
+                    m.indices.push(t);
+                }
+            }
+        }
+    }
+    m
+}
+
 /// A cylinder around z from z0 to z1 with outward normals, uv = (φ/φmax, (z − z0)/(z1 − z0)).
 fn cylinder(r: f32, z0: f32, z1: f32, phimax: f32) -> TriMesh {
     let n = ((SEGMENTS as f32 * phimax / (2.0 * PI)).ceil() as u32).max(1);
@@ -433,6 +490,52 @@ fn cylinder(r: f32, z0: f32, z1: f32, phimax: f32) -> TriMesh {
 mod tests {
     use super::*;
 
+    fn area(m: &TriMesh) -> f64 {
+        m.indices
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3());
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+
+    /// The tessellation (2π/256 steps in φ and θ) is inscribed in the sphere: its area falls
+    /// short of pbrt-v4's φmax·r·(zmax − zmin) by less than 2e-4 relative, its uv are pbrt's.
+    #[test]
+    fn partial_spheres_have_pbrts_area_and_uv() {
+        for (r, z0, z1, phimax) in [
+            (1.0f32, -1.0f32, 1.0f32, 2.0 * PI),
+            (2.0, -0.5, 1.5, PI / 3.0),
+            (0.5, 0.0, 0.5, 1.9 * PI),
+            (1.0, -0.999, -0.99, 0.01),
+        ] {
+            let m = partial_sphere(r, z0, z1, phimax);
+            let want = f64::from(phimax * r * (z1 - z0));
+            let rel = (area(&m) - want) / want;
+            assert!(
+                (-2e-4..=0.0).contains(&rel),
+                "{r} {z0} {z1} {phimax}: {rel:e}"
+            );
+            for (p, uv) in m.positions.iter().zip(&m.uvs) {
+                let phi = p.y.atan2(p.x).rem_euclid(2.0 * PI);
+                let phi = if uv.x > 0.5 && phi < 1e-3 {
+                    2.0 * PI
+                } else {
+                    phi
+                };
+                let theta = (p.z / r).clamp(-1.0, 1.0).acos();
+                let (t0, t1) = ((z0 / r).acos(), (z1 / r).acos());
+                let v = (theta - t0) / (t1 - t0);
+                if p.x.hypot(p.y) > 1e-4 * r {
+                    assert!((phi / phimax - uv.x).abs() < 1e-3, "u at {p}: {uv}");
+                }
+                assert!((v - uv.y).abs() < 1e-3, "v at {p}: {uv}");
+                assert!((p.length() - r).abs() < 1e-5 * r);
+            }
+        }
+    }
+
     #[test]
     fn tessellated_normals_face_out() {
         let c = cylinder(1.0, -1.0, 1.0, 2.0 * PI);
@@ -441,6 +544,11 @@ mod tests {
             let n = (b - a).cross(d - a);
             let mid = (a + b + d) / 3.0;
             assert!(n.dot(Vec3::new(mid.x, mid.y, 0.0)) > 0.0);
+        }
+        let s = partial_sphere(2.0, -2.0, 1.0, 1.5 * PI);
+        for t in &s.indices {
+            let [a, b, d] = t.map(|i| s.positions[i as usize]);
+            assert!((b - a).cross(d - a).dot(a + b + d) > 0.0);
         }
         let d = annulus(0.5, 0.25, 1.0, PI);
         for t in &d.indices {
