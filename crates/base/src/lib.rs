@@ -190,6 +190,9 @@ pub enum FilterDesc {
     Gaussian { stddev: f32, radius: f32 },
     /// Mitchell–Netravali with parameters B and C (radius 2).
     Mitchell { b: f32, c: f32, radius: f32 },
+    /// Windowed sinc, `sinc(x) · sinc(x / tau)` on `|x| ≤ radius` (Mitsuba's `lanczos`:
+    /// radius = tau = `lobes`, default 3; pbrt-v4's `sinc`: radius 4, tau 3).
+    Lanczos { radius: f32, tau: f32 },
 }
 
 /// A tone-mapping operator for display outputs.

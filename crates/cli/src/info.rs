@@ -53,6 +53,7 @@ fn filter(f: &FilterDesc) -> String {
         FilterDesc::Mitchell { b, c, radius } => {
             format!("mitchell (B {b}, C {c}, radius {radius})")
         }
+        FilterDesc::Lanczos { radius, tau } => format!("lanczos (radius {radius}, tau {tau})"),
     }
 }
 

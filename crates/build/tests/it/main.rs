@@ -30,5 +30,6 @@ mod photon_density;
 mod photon_emission;
 mod references;
 mod render_seeds;
+mod repo_references;
 mod sppm;
 mod volpath_record;

@@ -51,7 +51,11 @@ fn render_batches(
     render_desc_batches(&desc, spp, mode)
 }
 
-fn render_desc_batches(desc: &scene::SceneDesc, spp: u32, mode: RenderMode) -> Vec<Image> {
+pub(crate) fn render_desc_batches(
+    desc: &scene::SceneDesc,
+    spp: u32,
+    mode: RenderMode,
+) -> Vec<Image> {
     let opts = BuildOptions {
         spp: Some(spp),
         mode,
@@ -133,8 +137,20 @@ pub(crate) fn check_desc(
 }
 
 fn check_batches(shared: &Path, name: &str, batches: Vec<Image>, mitsuba_rel_mse: f64, spp: u32) {
-    let refs = shared.join("references");
-    let reference = load_reference(&refs.join(name)).expect("reference loads");
+    let prefix = shared.join("references").join(name);
+    check_against(&prefix, name, batches, mitsuba_rel_mse, spp)
+}
+
+/// The block t-test and noise parity of `batches` against the reference at `prefix`
+/// (`prefix.exr` and `prefix.stderr.exr`).
+pub(crate) fn check_against(
+    prefix: &Path,
+    name: &str,
+    batches: Vec<Image>,
+    mitsuba_rel_mse: f64,
+    spp: u32,
+) {
+    let reference = load_reference(prefix).expect("reference loads");
     let parity = mean_image(&batches[..(PARITY_SPP / spp) as usize]);
     let rel_mse = rel_mse(&parity, &reference.mean).expect("same size");
     let result = compare(&reference, &TestImages::Batches(batches)).expect("comparable");

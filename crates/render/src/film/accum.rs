@@ -238,6 +238,9 @@ impl FilmTile {
             Filter::Mitchell { b, c, radius } => {
                 self.splat(p, l, radius, |x| filter::mitchell_1d(x, b, c, radius))
             }
+            Filter::Lanczos { radius, tau } => {
+                self.splat(p, l, radius, |x| filter::lanczos_1d(x, radius, tau))
+            }
         }
     }
 

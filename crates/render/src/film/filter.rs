@@ -10,6 +10,7 @@
 //! | tent     | 1 − |x|/r                                                     | r = 1             |
 //! | gaussian | max(0, exp(−x²/2σ²) − exp(−r²/2σ²)) (truncation value removed) | σ = 0.5, r = 4σ   |
 //! | mitchell | Mitchell–Netravali cubic of `t = 2|x|/r ∈ [0, 2]`             | B = C = 1/3, r = 2 |
+//! | lanczos  | sinc(x) sinc(x/τ), sinc(x) = sin(πx)/(πx) (negative lobes kept) | r = τ = 3         |
 //!
 //! The values are unnormalised, as in Mitsuba: the film divides by the sum of the weights.
 //! Mitsuba's gaussian evaluates a Remez fit of the same truncated profile (its LLVM variants)
@@ -33,6 +34,7 @@ pub enum Filter {
     Tent { radius: f32 },
     Gaussian { stddev: f32, radius: f32 },
     Mitchell { b: f32, c: f32, radius: f32 },
+    Lanczos { radius: f32, tau: f32 },
 }
 
 #[inline]
@@ -80,6 +82,22 @@ pub(crate) fn mitchell_1d(x: f32, b: f32, c: f32, radius: f32) -> f32 {
     v * (1.0 / 6.0)
 }
 
+/// Mitsuba 3's windowed sinc (its `lanczos`, evaluated as `sin(πx) sin(πx/τ) / (π² x² / τ)`,
+/// 1 below 10⁻⁵ pixels).
+#[inline]
+pub(crate) fn lanczos_1d(x: f32, radius: f32, tau: f32) -> f32 {
+    let x = x.abs();
+    if x > radius {
+        return 0.0;
+    }
+    if x < 1e-5 {
+        return 1.0;
+    }
+    let x1 = std::f32::consts::PI * x;
+    let x2 = x1 / tau;
+    (x1.sin() * x2.sin()) / (x1 * x2)
+}
+
 impl Filter {
     /// The filter described by `desc` (invalid parameters replaced by defaults).
     pub fn new(desc: &FilterDesc) -> Filter {
@@ -104,6 +122,10 @@ impl Filter {
                 c: if c.is_finite() { c } else { 1.0 / 3.0 },
                 radius: radius_or(radius, 2.0),
             },
+            FilterDesc::Lanczos { radius, tau } => Filter::Lanczos {
+                radius: radius_or(radius, 3.0),
+                tau: radius_or(tau, 3.0),
+            },
         }
     }
 
@@ -122,7 +144,8 @@ impl Filter {
             Filter::Box { radius }
             | Filter::Tent { radius }
             | Filter::Gaussian { radius, .. }
-            | Filter::Mitchell { radius, .. } => radius,
+            | Filter::Mitchell { radius, .. }
+            | Filter::Lanczos { radius, .. } => radius,
         }
     }
 
@@ -134,6 +157,7 @@ impl Filter {
             Filter::Tent { radius } => tent_1d(x, radius),
             Filter::Gaussian { stddev, radius } => gaussian_1d(x, stddev, radius),
             Filter::Mitchell { b, c, radius } => mitchell_1d(x, b, c, radius),
+            Filter::Lanczos { radius, tau } => lanczos_1d(x, radius, tau),
         }
     }
 
@@ -182,6 +206,23 @@ impl Filter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lanczos_is_a_windowed_sinc() {
+        let f = Filter::new(&FilterDesc::Lanczos {
+            radius: 3.0,
+            tau: 3.0,
+        });
+        assert_eq!(f.eval_1d(0.0), 1.0);
+        // Zeros at the integers, a negative lobe between 1 and 2, nothing beyond the radius.
+        for x in [1.0f32, 2.0, -2.0] {
+            assert!(f.eval_1d(x).abs() < 1e-6, "g({x}) = {}", f.eval_1d(x));
+        }
+        let pi = std::f32::consts::PI;
+        let want = (1.5 * pi).sin() * (0.5 * pi).sin() / (1.5 * pi * 0.5 * pi);
+        assert!((f.eval_1d(1.5) - want).abs() < 1e-6 && want < 0.0);
+        assert_eq!(f.eval_1d(3.01), 0.0);
+    }
 
     #[test]
     fn profiles_match_mitsuba_values() {

@@ -1521,15 +1521,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 radius: 2.0,
             },
             "lanczos" => {
-                self.ctx.warn(
-                    pl.loc(),
-                    "rfilter 'lanczos' is not supported: using mitchell",
-                );
-                let _ = pl.props.int_opt("lobes")?;
-                FilterDesc::Mitchell {
-                    b: 1.0 / 3.0,
-                    c: 1.0 / 3.0,
-                    radius: 2.0,
+                let lobes = pl.props.int_in("lobes", 3, 1, 16)?;
+                FilterDesc::Lanczos {
+                    radius: lobes as f32,
+                    tau: lobes as f32,
                 }
             }
             _ => {

@@ -1772,17 +1772,10 @@ impl Loader {
                         c: q.float("C", 1.0 / 3.0)?,
                         radius: r(2.0)?,
                     },
-                    "sinc" => {
-                        let _ = (r(4.0)?, q.float("tau", 3.0)?);
-                        self.warn(
-                            &q.loc,
-                            "pixel filter \"sinc\" is not supported: gaussian used",
-                        );
-                        FilterDesc::Gaussian {
-                            stddev: 0.5,
-                            radius: 1.5,
-                        }
-                    }
+                    "sinc" => FilterDesc::Lanczos {
+                        radius: r(4.0)?,
+                        tau: q.float("tau", 3.0)?,
+                    },
                     _ => return Err(err(&q.loc, format!("unknown pixel filter \"{ty}\""))),
                 };
                 if q.float("xradius", 0.0)? != q.float("yradius", 0.0)? {
@@ -1795,7 +1788,8 @@ impl Loader {
                 if let FilterDesc::Box { radius: r }
                 | FilterDesc::Tent { radius: r }
                 | FilterDesc::Gaussian { radius: r, .. }
-                | FilterDesc::Mitchell { radius: r, .. } = f
+                | FilterDesc::Mitchell { radius: r, .. }
+                | FilterDesc::Lanczos { radius: r, .. } = f
                     && !(r > 0.0 && r <= 64.0)
                 {
                     return Err(err(
