@@ -307,6 +307,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
         threads: plan.threads,
         quiet: args.quiet,
         adaptive: None,
+        denoise: None,
+        display_server: None,
     };
     if !args.layers {
         return render_scene_with(

@@ -136,6 +136,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
         threads: args.threads,
         quiet: args.quiet,
         adaptive,
+        denoise: None,
+        display_server: None,
     };
     crate::render_scene(&desc, &job)
 }

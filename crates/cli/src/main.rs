@@ -4,6 +4,7 @@
 mod comp30019;
 mod cs184;
 mod debug_paths;
+mod denoise;
 mod info;
 mod memory;
 mod progress;
@@ -72,6 +73,9 @@ enum Command {
     Cs184(cs184::Args),
     /// Trace a few paths through one pixel and write their segments (PLY edges or JSON).
     DebugPaths(debug_paths::Args),
+    /// Denoise an existing image with Intel Open Image Denoise (`pip install pyoidn`), with
+    /// optional albedo and normal images (as `render --denoise --keep-noisy` writes them).
+    Denoise(denoise::DenoiseCmd),
     /// Compare renders with a reference (relMSE, mean ratio, block t-test of
     /// ../shared/references/README.md). Exit code 1 when the t-test fails.
     Compare {
@@ -160,6 +164,13 @@ struct RenderArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
+    /// Show the image in a running tev as it converges (pbrt-v4's flag; tev listens on
+    /// 127.0.0.1:14158 by default). The render never waits for it; if nothing listens, a
+    /// warning, and later passes try again.
+    #[arg(long, value_name = "HOST:PORT")]
+    display_server: Option<String>,
+    #[command(flatten)]
+    denoise: denoise::DenoiseArgs,
     #[command(flatten)]
     view: ViewArgs,
     #[command(flatten)]
@@ -179,7 +190,7 @@ pub(crate) struct TransportArgs {
     /// Sample generator: independent, stratified, halton or sobol.
     #[arg(long, value_name = "KIND", value_parser = parse_sampler)]
     sampler: Option<scene::SamplerKind>,
-    /// Reconstruction filter with Mitsuba's defaults: box, tent, gaussian or mitchell.
+    /// Reconstruction filter with Mitsuba's defaults: box, tent, gaussian, mitchell or lanczos.
     #[arg(long, value_name = "KIND", value_parser = parse_filter)]
     filter: Option<scene::FilterDesc>,
     /// Clamp every camera sample to this largest component (removes fireflies; biased).
@@ -203,7 +214,7 @@ fn parse_sampler(s: &str) -> Result<scene::SamplerKind, String> {
     }
 }
 
-fn parse_filter(s: &str) -> Result<scene::FilterDesc, String> {
+pub(crate) fn parse_filter(s: &str) -> Result<scene::FilterDesc, String> {
     use scene::FilterDesc as F;
     match s {
         "box" => Ok(F::Box { radius: 0.5 }),
@@ -217,13 +228,17 @@ fn parse_filter(s: &str) -> Result<scene::FilterDesc, String> {
             c: 1.0 / 3.0,
             radius: 2.0,
         }),
+        "lanczos" => Ok(F::Lanczos {
+            radius: 3.0,
+            tau: 3.0,
+        }),
         _ => Err(format!(
-            "expected box, tent, gaussian or mitchell, found '{s}'"
+            "expected box, tent, gaussian, mitchell or lanczos, found '{s}'"
         )),
     }
 }
 
-fn parse_on_off(s: &str) -> Result<bool, String> {
+pub(crate) fn parse_on_off(s: &str) -> Result<bool, String> {
     match s {
         "on" => Ok(true),
         "off" => Ok(false),
@@ -871,6 +886,7 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
     };
     print_warnings(&desc);
     args.view.apply(&mut desc, args.sensor)?;
+    let denoising = args.denoise.resolve()?.map(Arc::new);
     let mut args = args;
     args.transport.apply(&mut desc, &mut args.integrator)?;
     // CENG795: without -o, every camera (or --camera NAME) renders to its own ImageName,
@@ -901,7 +917,7 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
                 Some(o) => vec![confined_output(dir, &o)?],
                 None => default_outputs(&args.scene),
             };
-            let job = render_job(&args, outputs, i);
+            let job = render_job(&args, outputs, i, denoising.clone());
             render_scene(&desc, &job)?;
         }
         return Ok(());
@@ -915,10 +931,15 @@ fn cmd_render(args: RenderArgs) -> Result<(), Failure> {
     } else {
         args.output.clone()
     };
-    render_scene(&desc, &render_job(&args, outputs, sensor))
+    render_scene(&desc, &render_job(&args, outputs, sensor, denoising))
 }
 
-fn render_job(args: &RenderArgs, outputs: Vec<PathBuf>, sensor: usize) -> RenderJob {
+fn render_job(
+    args: &RenderArgs,
+    outputs: Vec<PathBuf>,
+    sensor: usize,
+    denoise: Option<Arc<denoise::Denoising>>,
+) -> RenderJob {
     RenderJob {
         outputs,
         stderr: args.stderr.clone(),
@@ -936,6 +957,8 @@ fn render_job(args: &RenderArgs, outputs: Vec<PathBuf>, sensor: usize) -> Render
         threads: args.threads,
         quiet: args.quiet,
         adaptive: args.adaptive,
+        denoise,
+        display_server: args.display_server.clone(),
     }
 }
 
@@ -952,6 +975,10 @@ pub(crate) struct RenderJob {
     pub quiet: bool,
     /// CS184 adaptive sampling (the spp is the cap); writes `<first output>_rate.png`.
     pub adaptive: Option<AdaptiveSettings>,
+    /// Denoise the developed image before it is written.
+    pub denoise: Option<Arc<denoise::Denoising>>,
+    /// Live view: a tev at this address.
+    pub display_server: Option<String>,
 }
 
 /// What the course-compatible commands add to [`render_scene`].
@@ -1013,10 +1040,14 @@ pub(crate) fn render_scene_with(
 
     let start = std::time::Instant::now();
     let build::Built {
-        scene,
+        mut scene,
         integrator,
         spp,
     } = build(desc, &job.build).map_err(Failure::input)?;
+    let user_filter = job
+        .denoise
+        .as_ref()
+        .map(|_| denoise::Denoising::prepare(&mut scene));
     if !job.quiet {
         eprintln!(
             "built the scene (BVH, lights) in {:.3} s",
@@ -1076,16 +1107,37 @@ pub(crate) fn render_scene_with(
         .build()
         .map_err(Failure::other)?;
     let reporter = progress::Reporter::new(job.quiet);
-    let outcome = match &job.adaptive {
-        None if extras.progressive => {
-            let observer = Progressive {
-                inner: &reporter,
-                outputs: &job.outputs,
-                develop: extras.develop,
-            };
-            pool.install(|| render(&scene, &integrator, &ropts, &observer))
+    let display = match &job.display_server {
+        Some(server) => {
+            let name = job
+                .outputs
+                .first()
+                .and_then(|o| o.file_name())
+                .map_or("penumbra".into(), |n| n.to_string_lossy().into_owned());
+            Some(render::display::Display::start(server, &name).map_err(Failure::input)?)
         }
-        None => pool.install(|| render(&scene, &integrator, &ropts, &reporter)),
+        None => None,
+    };
+    let progressive = Progressive {
+        inner: &reporter,
+        outputs: &job.outputs,
+        develop: extras.develop,
+    };
+    let base: &dyn RenderObserver = if extras.progressive {
+        &progressive
+    } else {
+        &reporter
+    };
+    let live = display.as_ref().map(|display| denoise::Live {
+        inner: base,
+        display,
+    });
+    let observer: &dyn RenderObserver = match &live {
+        Some(l) => l,
+        None => base,
+    };
+    let outcome = match &job.adaptive {
+        None => pool.install(|| render(&scene, &integrator, &ropts, observer)),
         Some(settings) => {
             if job.time.is_some() {
                 return Err(Failure::input(
@@ -1093,7 +1145,7 @@ pub(crate) fn render_scene_with(
                 ));
             }
             let a = pool
-                .install(|| render_adaptive(&scene, &integrator, &ropts, settings, &reporter))
+                .install(|| render_adaptive(&scene, &integrator, &ropts, settings, observer))
                 .expect("checked above: a per-sample integrator");
             let (mean_spp, rate_image) = (a.mean_spp(), a.rate_image());
             let outcome = render::render::RenderOutcome {
@@ -1121,8 +1173,19 @@ pub(crate) fn render_scene_with(
     }
 
     let mut image = outcome.film.develop();
+    let mut layers = Vec::new();
+    if let (Some(d), Some(filter)) = (&job.denoise, &user_filter) {
+        let denoised = pool.install(|| d.apply(&scene, outcome.spp, image, filter, job.quiet))?;
+        image = denoised.image;
+        layers = denoised.layers;
+    }
     if let Some(f) = extras.develop {
         f(&mut image);
+    }
+    if let Some(display) = display
+        && !display.finish(denoise::final_frame(&image, &layers))
+    {
+        eprintln!("warning: live view: tev did not take the final image in time");
     }
     // A depth AOV holds distances: as 8-bit PNG anything beyond 1 was white. PNGs get the
     // depths divided by the largest one (said once); EXR, PFM and HDR keep the distances.
@@ -1291,6 +1354,7 @@ fn main() -> ExitCode {
         Command::Comp30019(args) => comp30019::run(args),
         Command::Cs184(args) => cs184::run(args),
         Command::DebugPaths(args) => debug_paths::run(args),
+        Command::Denoise(args) => denoise::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -9,6 +9,8 @@ pub mod bsdf;
 
 pub mod camera;
 pub mod compare;
+pub mod denoise;
+pub mod display;
 pub mod drive;
 pub mod film;
 pub mod geometry;

@@ -7,6 +7,7 @@ mod cli;
 mod comp30019;
 mod cs184;
 mod debug_paths;
+mod denoise;
 mod flags;
 mod fuzz;
 mod hardening;

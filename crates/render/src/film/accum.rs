@@ -663,6 +663,70 @@ mod tests {
     /// quadrature's error, at the film's edges and beside the square too (normalising each
     /// splat to sum to 1 was off by up to 5.6 % there with the gaussian). Off-film splats
     /// are dropped, non-finite ones counted; camera samples add beneath; `clear` forgets.
+    /// A dense grid of samples developed with the one-pixel box filter and then given a
+    /// filter by `Filter::apply_to_box_image` equals the same samples splatted with that
+    /// filter (up to the variation of the radiance inside a pixel): what denoising relies on.
+    #[test]
+    fn box_image_refiltered_matches_the_filter() {
+        let radiance = |p: Vec2| {
+            // A step (an edge through pixels) and a gentle ramp.
+            let step = if p.x + 0.3 * p.y > 6.4 { 1.0 } else { 0.05 };
+            Vec3::new(step, 0.2 + 0.03 * p.y, step * 0.5)
+        };
+        for desc in [
+            FilterDesc::Tent { radius: 1.0 },
+            FilterDesc::Gaussian {
+                stddev: 0.5,
+                radius: 2.0,
+            },
+            FilterDesc::Mitchell {
+                b: 1.0 / 3.0,
+                c: 1.0 / 3.0,
+                radius: 2.0,
+            },
+            FilterDesc::Lanczos {
+                radius: 2.0,
+                tau: 2.0,
+            },
+        ] {
+            let (w, h, n) = (12u32, 10u32, 48u32);
+            let filter = Filter::new(&desc);
+            let mut direct = Film::new(w, h, None, filter);
+            let mut boxed = Film::new(w, h, None, Filter::new(&FilterDesc::Box { radius: 0.5 }));
+            let mut t1 = direct.tile(UVec2::ZERO, UVec2::new(w, h));
+            let mut t2 = boxed.tile(UVec2::ZERO, UVec2::new(w, h));
+            for py in 0..h * n {
+                for px in 0..w * n {
+                    let p = (Vec2::new(px as f32, py as f32) + 0.5) / n as f32;
+                    t1.add_sample(p, radiance(p));
+                    t2.add_sample(p, radiance(p));
+                }
+            }
+            direct.merge(&t1);
+            boxed.merge(&t2);
+            let (a, b) = (
+                direct.develop(),
+                filter.apply_to_box_image(&boxed.develop()),
+            );
+            for (i, (x, y)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+                // Close where the radiance is linear over the support (up to the film border, where
+                // the truncated support shifts the mean along the ramp); pixels that
+                // the edge crosses within the support differ by part of the step (0.95).
+                let c = Vec2::new((i as u32 % w) as f32, (i as u32 / w) as f32) + 0.5;
+                let to_edge = (c.x + 0.3 * c.y - 6.4).abs() / 1.09f32.sqrt();
+                let tol = if to_edge > filter.radius() + 0.8 {
+                    3e-3
+                } else {
+                    0.1
+                };
+                assert!(
+                    (*x - *y).abs().max_element() < tol,
+                    "{desc:?} pixel {i}: filtered {x}, box then filter {y}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn splats_develop_to_the_camera_samples_image() {
         let radiance = |p: Vec2| {

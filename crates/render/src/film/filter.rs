@@ -21,7 +21,8 @@
 //! capped at 8σ (beyond it the truncated profile is < 10⁻¹³ and would only cost pixel updates),
 //! and every radius at [`MAX_RADIUS`], which bounds the border of a film tile.
 
-use crate::math::Vec2;
+use super::Image;
+use crate::math::{Vec2, Vec3};
 use base::FilterDesc;
 
 /// Largest filter radius, in pixels (a film tile stores a border this wide around its pixels).
@@ -200,6 +201,53 @@ impl Filter {
         } else {
             1.0
         }
+    }
+}
+
+impl Filter {
+    /// Whether this is the box filter of one pixel (a sample counts in its own pixel only).
+    pub fn is_pixel_box(&self) -> bool {
+        matches!(*self, Filter::Box { radius } if radius <= 0.5)
+    }
+
+    /// `img`, an image made with the one-pixel box filter (each pixel the mean over its own
+    /// area), reconstructed with this filter instead: each pixel the filter-weighted mean of
+    /// its neighbours, the weight of a neighbour `k` pixels away `∫ g` over that pixel
+    /// (separable, two passes), normalised over the neighbours inside the image as the film
+    /// normalises by the weights of the samples it received. Denoising renders with the box
+    /// filter (its noise independent from pixel to pixel, as denoisers are trained on) and
+    /// applies the scene's filter to the denoised image this way.
+    pub fn apply_to_box_image(&self, img: &Image) -> Image {
+        if self.is_pixel_box() {
+            return img.clone();
+        }
+        let k = (self.radius() + 0.5).ceil() as i64;
+        let w: Vec<f32> = (-k..=k)
+            .map(|o| self.integral_1d(o as f32 - 0.5, o as f32 + 0.5) as f32)
+            .collect();
+        let (width, height) = (img.width as i64, img.height as i64);
+        let pass = |src: &Image, horizontal: bool| -> Image {
+            let mut out = src.clone();
+            for y in 0..height {
+                for x in 0..width {
+                    let (mut sum, mut wsum) = (Vec3::ZERO, 0.0f32);
+                    for (i, &wk) in w.iter().enumerate() {
+                        let o = i as i64 - k;
+                        let (sx, sy) = if horizontal { (x + o, y) } else { (x, y + o) };
+                        if sx < 0 || sy < 0 || sx >= width || sy >= height {
+                            continue;
+                        }
+                        sum += src.get(sx as u32, sy as u32) * wk;
+                        wsum += wk;
+                    }
+                    if wsum.abs() > 1e-6 {
+                        out.set(x as u32, y as u32, sum / wsum);
+                    }
+                }
+            }
+            out
+        };
+        pass(&pass(img, true), false)
     }
 }
 

@@ -23,7 +23,18 @@ pub enum Aov {
     Depth,
     /// Fraction of the cosine-weighted hemisphere that is unoccluded within `length`.
     AmbientOcclusion { samples: u32, length: f32 },
+    /// The denoiser's albedo: the reflectance colour of the first non-delta hit, seen through
+    /// mirrors, glass and null boundaries (their sampled weights multiplied in), clamped to
+    /// [0, 1]; 0 on an emitter; where the ray escapes, the environment's radiance clamped to
+    /// [0, 1].
+    DenoiseAlbedo,
+    /// The denoiser's normal: the world-space shading normal of the same first non-delta hit;
+    /// 0 on an emitter and where the ray escapes.
+    DenoiseNormal,
 }
+
+/// Longest chain of delta or null surfaces the denoiser's auxiliary rays follow.
+const MAX_DELTA_CHAIN: u32 = 16;
 
 impl<M: PathMode> Estimator<M> for Aov {
     fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
@@ -34,6 +45,8 @@ impl<M: PathMode> Estimator<M> for Aov {
             Aov::AmbientOcclusion { samples, length } => {
                 ambient_occlusion(scene, cray, sampler, samples, length)
             }
+            Aov::DenoiseAlbedo => first_non_delta(scene, cray, sampler, false),
+            Aov::DenoiseNormal => first_non_delta(scene, cray, sampler, true),
         }
     }
 }
@@ -45,6 +58,8 @@ impl IntegratorModel for Aov {
             Aov::Albedo => "albedo",
             Aov::Depth => "depth",
             Aov::AmbientOcclusion { .. } => "ao",
+            Aov::DenoiseAlbedo => "denoise-albedo",
+            Aov::DenoiseNormal => "denoise-normal",
         }
     }
 
@@ -63,6 +78,56 @@ fn albedo(scene: &Scene, cray: &CameraRay) -> Vec3 {
     scene
         .intersect(&cray.ray, cray.t_max)
         .map_or(Vec3::ZERO, |si| scene.albedo(&si))
+}
+
+/// The albedo (or, with `normal`, the normal) of the first hit whose BSDF has a non-delta
+/// part, following delta lobes as sampled (so glass shows what lies behind or is reflected
+/// in it, in proportion) and null surfaces straight on.
+fn first_non_delta(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, normal: bool) -> Vec3 {
+    use crate::bsdf::TransportMode;
+    use crate::integrators::transport::{emitter_hit, environment};
+    use crate::spectral::lanes::RgbMode;
+    let mut ray = cray.ray;
+    let mut t_max = cray.t_max;
+    let mut weight = Vec3::ONE;
+    for _ in 0..MAX_DELTA_CHAIN {
+        let Some(si) = scene.intersect(&ray, t_max) else {
+            if normal {
+                return Vec3::ZERO;
+            }
+            let le = environment(scene, ray.d, &RgbMode, weight, |_, _| 1.0);
+            return le.clamp(Vec3::ZERO, Vec3::ONE);
+        };
+        let Some((bsdf, frame)) = scene.bsdf_at(&si) else {
+            // A null boundary (or no material): on through it.
+            ray = si.spawn_ray(ray.d);
+            t_max = f32::INFINITY;
+            continue;
+        };
+        if bsdf.has_smooth() {
+            // An emitter seen directly is "no surface" to the denoiser (albedo and normal 0),
+            // which sets it apart from the surface around it: a luminaire in a ceiling has the
+            // ceiling's normal and often its reflectance. On Mitsuba's Cornell box at 16 spp
+            // this cut the denoised relMSE from 1.44e-3 (albedo: the emission's colour) and
+            // 2.37e-3 (the emitter's reflectance) to 1.10e-3, the light's edges being most of it.
+            if emitter_hit(scene, &si, &RgbMode).is_some() {
+                return Vec3::ZERO;
+            }
+            return if normal {
+                si.shading.n
+            } else {
+                (weight * bsdf.albedo()).clamp(Vec3::ZERO, Vec3::ONE)
+            };
+        }
+        let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
+        let Some(s) = bsdf.sample(frame.to_local(si.wo), u1, u2, TransportMode::Radiance) else {
+            return Vec3::ZERO;
+        };
+        weight *= s.weight;
+        ray = si.spawn_ray(frame.to_world(s.wi));
+        t_max = f32::INFINITY;
+    }
+    Vec3::ZERO
 }
 
 /// Distance along the camera ray from its origin on the near-clip plane (Mitsuba's `depth`
