@@ -1183,7 +1183,10 @@ pub(crate) fn render_scene_with(
         f(&mut image);
     }
     if let Some(display) = display
-        && !display.finish(denoise::final_frame(&image, &layers))
+        && !display.finish(
+            denoise::final_frame(&image, &layers),
+            render::display::Display::final_wait(outcome.elapsed),
+        )
     {
         eprintln!("warning: live view: tev did not take the final image in time");
     }

@@ -9,7 +9,7 @@
 //! changed since it last sent them, at most every [`Display::INTERVAL`]. When nothing listens
 //! it says so once on stderr and tries again with later images; a failed send drops the
 //! connection and the next image reconnects. [`Display::finish`] hands over the final image
-//! and waits a bounded time ([`Display::FINAL_WAIT`]) for it to go out.
+//! and waits a bounded time ([`Display::final_wait`]) for it to go out.
 //!
 //! Packets (little-endian, as tev's `Ipc.cpp` reads them): a `u32` length of the whole
 //! packet, a type byte (4 `CreateImage`, 6 `UpdateImage` version 3), `grabFocus` as a byte,
@@ -188,8 +188,6 @@ pub struct Display {
 impl Display {
     /// Shortest time between two rounds of updates.
     pub const INTERVAL: Duration = Duration::from_millis(250);
-    /// How long [`Display::finish`] waits for the final image to go out.
-    pub const FINAL_WAIT: Duration = Duration::from_secs(3);
     /// Connection and write time-outs (a viewer that stops reading loses its connection).
     const TIMEOUT: Duration = Duration::from_secs(2);
 
@@ -226,11 +224,18 @@ impl Display {
         cvar.notify_all();
     }
 
-    /// Hands over the final image and waits up to [`Display::FINAL_WAIT`] for the sender to
-    /// deliver it; returns whether it did.
-    pub fn finish(mut self, frame: Frame) -> bool {
+    /// The longest wait for the final image after a render that took `elapsed`: 2 % of it,
+    /// at least half a second (a local tev takes a 4K image in well under that), so that a
+    /// slow or stuck viewer costs the render at most that.
+    pub fn final_wait(elapsed: Duration) -> Duration {
+        (elapsed / 50).max(Duration::from_millis(500))
+    }
+
+    /// Hands over the final image and waits up to `wait` for the sender to deliver it;
+    /// returns whether it did.
+    pub fn finish(mut self, frame: Frame, wait: Duration) -> bool {
         let (lock, cvar) = &*self.shared;
-        let deadline = Instant::now() + Self::FINAL_WAIT;
+        let deadline = Instant::now() + wait;
         let mut m = lock.lock().unwrap_or_else(|e| e.into_inner());
         m.pending = Some(frame);
         m.closing = true;
@@ -380,8 +385,14 @@ impl Sender {
         match result {
             Ok(()) => *shown = Some(frame),
             Err(e) => {
+                let why = match e.kind() {
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut => {
+                        "it stopped reading".to_string()
+                    }
+                    _ => e.to_string(),
+                };
                 eprintln!(
-                    "warning: live view: lost tev at {} ({e}){}",
+                    "warning: live view: lost tev at {} ({why}){}",
                     self.server,
                     if last {
                         "; the final image was not shown"
@@ -547,7 +558,7 @@ mod tests {
             d.update(Frame::rgb(&image(300, 200, k as f32)));
         }
         let last = Frame::rgb(&image(300, 200, 7.5)).with_layer("albedo", &image(300, 200, 0.5));
-        assert!(d.finish(last.clone()));
+        assert!(d.finish(last.clone(), Duration::from_secs(5)));
         let v = viewer.join().unwrap();
         assert_eq!(v.size, (300, 200));
         assert_eq!(v.channels, last.channels);
@@ -570,7 +581,7 @@ mod tests {
         std::thread::sleep(Duration::from_millis(100));
         let mut b = a.clone();
         b.data[0] = 42.0; // the first tile only
-        assert!(d.finish(b.clone()));
+        assert!(d.finish(b.clone(), Duration::from_secs(5)));
         let v = viewer.join().unwrap();
         assert_eq!(v.data, b.data);
         // 4 tiles for the first image (or none if it was replaced first), 1 or 4 for the second.
@@ -589,7 +600,7 @@ mod tests {
         let d = Display::start(&format!("127.0.0.1:{port}"), "x").unwrap();
         d.update(Frame::rgb(&image(8, 8, 1.0)));
         // The sender gives up on the final image quickly (connection refused) and says done.
-        assert!(d.finish(Frame::rgb(&image(8, 8, 2.0))));
+        assert!(d.finish(Frame::rgb(&image(8, 8, 2.0)), Duration::from_secs(5)));
     }
 
     #[test]
