@@ -198,6 +198,17 @@ fn batches(integrator: &str, count: u64, spp: u32) -> Vec<render::film::Image> {
         .collect()
 }
 
+/// The glowing sphere by `volpath`, 8 × 512 spp: the reference of the two tests below,
+/// rendered once for both.
+fn volpath_reference() -> &'static render::compare::Reference {
+    static REFERENCE: std::sync::OnceLock<render::compare::Reference> = std::sync::OnceLock::new();
+    REFERENCE.get_or_init(|| {
+        let volpath =
+            r#"<integrator type="volpath"><integer name="max_depth" value="8"/></integrator>"#;
+        render::compare::Reference::from_batches(&batches(volpath, 8, 512)).unwrap()
+    })
+}
+
 /// BDPT and MLT find a medium's emission (by the camera subpath's collision estimator,
 /// the one strategy that samples it) and light scattered in it: BDPT against `volpath` by
 /// the block t-test (16 × 32 spp against 8 × 512 spp, α = 0.01 Šidák-corrected inside);
@@ -205,12 +216,10 @@ fn batches(integrator: &str, count: u64, spp: u32) -> Vec<render::film::Image> {
 /// (Šidák over 3: |z| < 3.59).
 #[test]
 fn bdpt_and_mlt_render_emitting_media_as_volpath_does() {
-    use render::compare::{Reference, TestImages, compare};
-    let volpath =
-        r#"<integrator type="volpath"><integer name="max_depth" value="8"/></integrator>"#;
-    let reference = Reference::from_batches(&batches(volpath, 8, 512)).unwrap();
+    use render::compare::{TestImages, compare};
+    let reference = volpath_reference();
     let bdpt = r#"<integrator type="bdpt"><integer name="max_depth" value="8"/></integrator>"#;
-    let result = compare(&reference, &TestImages::Batches(batches(bdpt, 16, 32))).unwrap();
+    let result = compare(reference, &TestImages::Batches(batches(bdpt, 16, 32))).unwrap();
     println!("bdpt: {result}");
     assert!(result.passed, "bdpt: {result}");
 
@@ -242,20 +251,14 @@ fn bdpt_and_mlt_render_emitting_media_as_volpath_does() {
 /// 1.5 % of volpath's per channel (measured +0.5 / −0.6 / −1.4 %).
 #[test]
 fn light_paths_start_in_emitting_media() {
-    use render::compare::{Reference, TestImages, compare};
-    let volpath =
-        r#"<integrator type="volpath"><integer name="max_depth" value="8"/></integrator>"#;
-    let reference = Reference::from_batches(&batches(volpath, 8, 512)).unwrap();
+    use render::compare::{TestImages, compare};
+    let reference = volpath_reference();
     for integrator in [
         r#"<integrator type="ptracer"><integer name="max_depth" value="8"/></integrator>"#,
         r#"<integrator type="photonmapper"><integer name="max_depth" value="8"/>
                 <integer name="globalPhotons" value="1000000"/></integrator>"#,
     ] {
-        let result = compare(
-            &reference,
-            &TestImages::Batches(batches(integrator, 16, 32)),
-        )
-        .unwrap();
+        let result = compare(reference, &TestImages::Batches(batches(integrator, 16, 32))).unwrap();
         println!("{integrator}: {result}");
         assert!(result.passed, "{integrator}: {result}");
     }
