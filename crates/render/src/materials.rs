@@ -14,10 +14,10 @@ use base::PhongModel;
 use base::dispersion::{Dispersion, DispersionSampling};
 
 use crate::bsdf::{
-    Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, DiffuseTransmission, Ggx, IdealLobe,
-    Layered, LayeredBase, LayeredInterface, Microfacet, MicrofacetType, NoriMicrofacet,
-    PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic, RoughPlasticTables,
-    ThinDielectric, rgb_sampling_weight,
+    Blend, Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, DiffuseTransmission, Ggx,
+    IdealLobe, Layered, LayeredBase, LayeredInterface, Microfacet, MicrofacetType, NoriMicrofacet,
+    PhongFamily, Plastic, Principled, RoughConductor, RoughDielectric, RoughPlastic,
+    RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
 };
 use crate::math::{Frame, Vec3};
 use crate::sampling::sampler::{hash2, u64_to_unit};
@@ -148,6 +148,13 @@ pub enum MaterialKind {
     },
     /// pbrt-v4's layered `coateddiffuse` / `coatedconductor` (boxed: rare and large).
     Coated(Box<Coated>),
+    /// Mitsuba's `principled` (boxed: rare and large).
+    Principled(Box<PrincipledParams>),
+    /// Mitsuba's `blendbsdf`: `(1 − weight)·kinds[0] + weight·kinds[1]`, both evaluated.
+    Blend {
+        weight: FloatRef,
+        kinds: Box<[MaterialKind; 2]>,
+    },
     /// The CENG795 Phong family, with the ideal lobe of a course mirror, conductor or
     /// dielectric on top when `ideal` is set.
     Phong {
@@ -161,6 +168,46 @@ pub enum MaterialKind {
         absorption: f32,
         ideal: Option<CourseLobe>,
     },
+}
+
+/// The parameters of Mitsuba's `principled` (see [`crate::bsdf::Principled`]).
+#[derive(Clone, Debug)]
+pub struct PrincipledParams {
+    pub base_color: ColorRef,
+    pub roughness: FloatRef,
+    pub anisotropic: FloatRef,
+    pub metallic: FloatRef,
+    pub spec_trans: FloatRef,
+    pub spec_tint: FloatRef,
+    pub sheen: FloatRef,
+    pub sheen_tint: FloatRef,
+    pub flatness: FloatRef,
+    pub clearcoat: FloatRef,
+    pub clearcoat_gloss: FloatRef,
+    /// Interior / exterior index.
+    pub eta: f32,
+    /// Sampling rates: main specular, clearcoat, diffuse reflection.
+    pub rates: [f32; 3],
+}
+
+impl PrincipledParams {
+    fn bsdf<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Principled<M::C> {
+        let rgb = p.color(&self.base_color, at);
+        let f = |r: &FloatRef| p.float(r, at);
+        let mut b = Principled::with_base(m.albedo_read(p, &self.base_color, rgb), rgb, self.eta);
+        b.roughness = f(&self.roughness);
+        b.anisotropic = f(&self.anisotropic);
+        b.metallic = f(&self.metallic);
+        b.spec_trans = f(&self.spec_trans);
+        b.spec_tint = f(&self.spec_tint);
+        b.sheen = f(&self.sheen);
+        b.sheen_tint = f(&self.sheen_tint);
+        b.flatness = f(&self.flatness);
+        b.clearcoat = f(&self.clearcoat);
+        b.clearcoat_gloss = f(&self.clearcoat_gloss);
+        b.rates = self.rates;
+        b
+    }
 }
 
 /// The parameters of a pbrt-v4 coated material (see [`crate::bsdf::Layered`]).
@@ -353,6 +400,8 @@ impl MaterialKind {
             | MaterialKind::RoughDielectric {
                 alpha_u, alpha_v, ..
             } => alpha_u == alpha_v,
+            MaterialKind::Principled(b) => b.anisotropic == TexRef::Const(0.0),
+            MaterialKind::Blend { kinds, .. } => kinds.iter().all(MaterialKind::isotropic),
             MaterialKind::Coated(c) => {
                 c.alpha_u == c.alpha_v
                     && match &c.base {
@@ -521,6 +570,12 @@ impl MaterialKind {
                 ))
             }
             MaterialKind::Coated(c) => Bsdf::Layered(Box::new(c.bsdf(p, at, m))),
+            MaterialKind::Principled(b) => Bsdf::Principled(Box::new(b.bsdf(p, at, m))),
+            MaterialKind::Blend { weight, kinds } => Bsdf::Blend(Box::new(Blend::new(
+                p.float(weight, at),
+                kinds[0].blend_part(p, at, m),
+                kinds[1].blend_part(p, at, m),
+            ))),
             MaterialKind::Phong {
                 model,
                 normalized,
@@ -551,6 +606,15 @@ impl MaterialKind {
                 }
             }
         }
+    }
+}
+
+impl MaterialKind {
+    /// A part of a blend (out of line: [`MaterialKind::bsdf_in`] is inlined into its callers
+    /// and cannot recurse into itself there).
+    #[inline(never)]
+    fn blend_part<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
+        self.bsdf_in(p, at, m)
     }
 }
 

@@ -713,12 +713,42 @@ pub enum Material {
         conductor_k: ColorValue,
         reflectance: Option<ColorParam>,
     },
+    /// Mitsuba 3's `principled` (Disney's BSDF as Mitsuba defines it).
+    Principled(Box<PrincipledDesc>),
+    /// Mitsuba 3's `blendbsdf`: (1 − weight)·materials[0] + weight·materials[1], both
+    /// evaluated at every query (unlike `Mix`, which picks one).
+    Blend {
+        materials: [MaterialId; 2],
+        weight: FloatParam,
+    },
     /// pbrt-v4's `mix`: at each shading point one of `materials` is chosen, the second with
     /// probability `amount` (a deterministic hash of the point and direction, as pbrt-v4 does).
     Mix {
         materials: [MaterialId; 2],
         amount: FloatParam,
     },
+}
+
+/// Mitsuba 3's `principled` parameters, with its defaults (base colour 0.5, roughness 0.5,
+/// everything else 0, sampling rates 1). `eta` is the interior/exterior index, given or made
+/// from `specular` (η = 2/(1 − √(0.08·specular)) − 1, specular 0.5 by default).
+#[derive(Clone, Debug)]
+pub struct PrincipledDesc {
+    pub base_color: ColorParam,
+    pub roughness: FloatParam,
+    pub anisotropic: FloatParam,
+    pub metallic: FloatParam,
+    pub spec_trans: FloatParam,
+    pub spec_tint: FloatParam,
+    pub sheen: FloatParam,
+    pub sheen_tint: FloatParam,
+    pub flatness: FloatParam,
+    pub clearcoat: FloatParam,
+    pub clearcoat_gloss: FloatParam,
+    pub eta: f32,
+    /// `main_specular_sampling_rate`, `clearcoat_sampling_rate`,
+    /// `diffuse_reflectance_sampling_rate`.
+    pub rates: [f32; 3],
 }
 
 /// The ideal lobe of a CENG795 `mirror`, `conductor` or `dielectric` material, traced on top
@@ -771,6 +801,8 @@ impl Material {
             Material::CoatedDiffuse { .. } => "coateddiffuse",
             Material::CoatedConductor { .. } => "coatedconductor",
             Material::Mix { .. } => "mix",
+            Material::Principled(_) => "principled",
+            Material::Blend { .. } => "blendbsdf",
         }
     }
 }

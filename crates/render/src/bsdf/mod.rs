@@ -16,6 +16,7 @@
 //!   looked up by the caller before building the `Bsdf`. Rough plastic's precomputed tables
 //!   are shared (`Arc`) rather than copied, so `Bsdf` is `Clone` but not `Copy`.
 
+mod blend;
 mod conductor;
 mod course;
 mod dielectric;
@@ -27,11 +28,13 @@ pub mod microfacet;
 mod nori_microfacet;
 mod phong;
 mod plastic;
+mod principled;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
 mod thin_dielectric;
 
+pub use blend::Blend;
 pub use conductor::Conductor;
 pub use course::{CourseMaterial, IdealLobe};
 pub use dielectric::Dielectric;
@@ -42,6 +45,7 @@ pub use microfacet::{Microfacet, MicrofacetType};
 pub use nori_microfacet::NoriMicrofacet;
 pub use phong::PhongFamily;
 pub use plastic::{Plastic, rgb_sampling_weight};
+pub use principled::{Principled, disney_alphas, luminance};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{RoughPlastic, RoughPlasticTables};
@@ -132,6 +136,10 @@ pub enum Bsdf<C: Color = Vec3> {
     DiffuseTransmission(DiffuseTransmission<C>),
     /// Boxed for the same reason as `Course` (pbrt-v4 scenes only).
     Layered(Box<Layered<C>>),
+    /// Boxed: a dozen parameters (Mitsuba scenes only).
+    Principled(Box<Principled<C>>),
+    /// Mitsuba's `blendbsdf` of two models (boxed: it holds two `Bsdf`s).
+    Blend(Box<Blend<C>>),
 }
 
 /// `$e` on the model inside `$self`.
@@ -154,6 +162,14 @@ macro_rules! dispatch {
             }
             Bsdf::DiffuseTransmission($b) => $e,
             Bsdf::Layered($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::Principled($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::Blend($b) => {
                 let $b = &**$b;
                 $e
             }
@@ -208,10 +224,12 @@ impl<C: Color> Bsdf<C> {
     /// Has a non-delta transmission lobe.
     #[inline]
     pub fn has_transmission(&self) -> bool {
-        matches!(
-            self,
-            Bsdf::RoughDielectric(_) | Bsdf::DiffuseTransmission(_)
-        )
+        match self {
+            Bsdf::RoughDielectric(_) | Bsdf::DiffuseTransmission(_) => true,
+            Bsdf::Principled(p) => p.spec_trans > 0.0 && p.metallic < 1.0,
+            Bsdf::Blend(b) => b.bsdfs.iter().any(Bsdf::has_transmission),
+            _ => false,
+        }
     }
 
     /// A colour for the albedo AOV.
@@ -247,6 +265,18 @@ impl_from!(
 impl<C: Color> From<CourseMaterial<C>> for Bsdf<C> {
     fn from(b: CourseMaterial<C>) -> Bsdf<C> {
         Bsdf::Course(Box::new(b))
+    }
+}
+
+impl<C: Color> From<Principled<C>> for Bsdf<C> {
+    fn from(b: Principled<C>) -> Bsdf<C> {
+        Bsdf::Principled(Box::new(b))
+    }
+}
+
+impl<C: Color> From<Blend<C>> for Bsdf<C> {
+    fn from(b: Blend<C>) -> Bsdf<C> {
+        Bsdf::Blend(Box::new(b))
     }
 }
 

@@ -16,6 +16,9 @@ use crate::spectra::{self, SpectrumUse};
 use crate::{LoadError, Loc, Result, Warning};
 use base::dispersion::Dispersion;
 
+#[path = "bsdf_principled.rs"]
+mod bsdf_principled;
+
 /// Largest accepted film side and pixel count (a bigger film would not fit in memory).
 const MAX_FILM_SIDE: i64 = 1 << 16;
 const MAX_FILM_PIXELS: i64 = 1 << 28;
@@ -1023,6 +1026,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 Material::Mask { nested, opacity }
             }
             "null" => Material::Null,
+            "principled" => self.principled(pl)?,
+            "blendbsdf" => self.blendbsdf(pl)?,
             // Nori
             "mirror" => Material::Mirror {
                 reflectance: ColorParam::constant(1.0),
@@ -1057,7 +1062,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 return Err(unknown_type(
                     pl,
                     "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-                     roughdielectric, plastic, roughplastic, twosided, null, mirror, microfacet",
+                     roughdielectric, plastic, roughplastic, twosided, null, principled, blendbsdf, mirror, \
+                     microfacet",
                 ));
             }
         };
