@@ -52,6 +52,7 @@ pub(crate) fn beer_absorption(
         match &materials.get(id.0 as usize)?.material {
             Material::NormalMap { nested, .. }
             | Material::BumpMap { nested, .. }
+            | Material::HeightBump { nested, .. }
             | Material::Mask { nested, .. } => id = *nested,
             Material::Dielectric {
                 absorption: Some(sigma),
@@ -248,6 +249,21 @@ impl MaterialResolver<'_> {
                     perturbs.push(Perturb::BumpMap {
                         texture: texture.0,
                         factor: *factor,
+                    });
+                    id = *nested;
+                }
+                Material::HeightBump {
+                    nested,
+                    texture,
+                    scale,
+                    flip_invalid_normals,
+                    shadowing,
+                } => {
+                    perturbs.push(Perturb::HeightBump {
+                        texture: texture.0,
+                        scale: *scale,
+                        flip: *flip_invalid_normals,
+                        shadowing: *shadowing,
                     });
                     id = *nested;
                 }
@@ -583,6 +599,7 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
         | Material::TwoSided { .. }
         | Material::NormalMap { .. }
         | Material::BumpMap { .. }
+        | Material::HeightBump { .. }
         | Material::Mask { .. }
         | Material::Mix { .. }
         | Material::Blend { .. } => return None,

@@ -664,6 +664,17 @@ pub enum Material {
         texture: TextureId,
         factor: f32,
     },
+    /// Mitsuba 3's `bumpmap` around `nested`: ∂p/∂u and ∂p/∂v get `scale` times the
+    /// texture's uv gradient (its first channel) along the shading normal, their cross product
+    /// is the shading normal; `flip_invalid_normals` and `use_shadowing_function` (both on by
+    /// default) as Mitsuba 3.9.
+    HeightBump {
+        nested: MaterialId,
+        texture: TextureId,
+        scale: f32,
+        flip_invalid_normals: bool,
+        shadowing: bool,
+    },
     /// No shading at all (CENG795 `replace_all`): the surface shows `color` as radiance to
     /// whoever looks at it, reflects nothing and lights nothing else.
     Unlit { color: ColorParam },
@@ -803,6 +814,7 @@ impl Material {
             Material::Mix { .. } => "mix",
             Material::Principled(_) => "principled",
             Material::Blend { .. } => "blendbsdf",
+            Material::HeightBump { .. } => "bumpmap",
         }
     }
 }

@@ -12,3 +12,17 @@ use crate::repo_references::check_repo_reference;
 fn principled() {
     check_repo_reference("principled");
 }
+
+/// `blendbsdf`: a constant weight, a bitmap weight, and a blend of blends with a rough
+/// plastic and a measured conductor.
+#[test]
+fn blendbsdf() {
+    check_repo_reference("blendbsdf");
+}
+
+/// `bumpmap` over a bitmap height map (bilinear, raw 8-bit grey), as in Bitterli's bathroom:
+/// a diffuse and a rough plastic rectangle, positive and negative `scale`, a tiled `to_uv`.
+#[test]
+fn bumpmap() {
+    check_repo_reference("bumpmap");
+}

@@ -17,6 +17,7 @@
 //!   are shared (`Arc`) rather than copied, so `Bsdf` is `Clone` but not `Copy`.
 
 mod blend;
+mod bumped;
 mod conductor;
 mod course;
 mod dielectric;
@@ -35,6 +36,7 @@ mod rough_plastic;
 mod thin_dielectric;
 
 pub use blend::Blend;
+pub use bumped::Bumped;
 pub use conductor::Conductor;
 pub use course::{CourseMaterial, IdealLobe};
 pub use dielectric::Dielectric;
@@ -140,6 +142,8 @@ pub enum Bsdf<C: Color = Vec3> {
     Principled(Box<Principled<C>>),
     /// Mitsuba's `blendbsdf` of two models (boxed: it holds two `Bsdf`s).
     Blend(Box<Blend<C>>),
+    /// A model under Mitsuba's `bumpmap` (boxed: it holds a `Bsdf`).
+    Bumped(Box<Bumped<C>>),
 }
 
 /// `$e` on the model inside `$self`.
@@ -170,6 +174,10 @@ macro_rules! dispatch {
                 $e
             }
             Bsdf::Blend($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::Bumped($b) => {
                 let $b = &**$b;
                 $e
             }
@@ -228,6 +236,7 @@ impl<C: Color> Bsdf<C> {
             Bsdf::RoughDielectric(_) | Bsdf::DiffuseTransmission(_) => true,
             Bsdf::Principled(p) => p.spec_trans > 0.0 && p.metallic < 1.0,
             Bsdf::Blend(b) => b.bsdfs.iter().any(Bsdf::has_transmission),
+            Bsdf::Bumped(b) => b.inner.has_transmission(),
             _ => false,
         }
     }

@@ -95,4 +95,24 @@ impl<'s> SceneBuilder<'_, 's> {
             weight: self.float_param(pl, "weight", 0.5)?,
         })
     }
+
+    /// `bumpmap`: one nested bsdf, one texture (the height, any name), `scale` (1),
+    /// `flip_invalid_normals` and `use_shadowing_function` (both true).
+    pub(super) fn bumpmap(&mut self, pl: &Plugin<'s>) -> Result<Material> {
+        let nested = self.one_nested_bsdf(pl)?;
+        let textures: Vec<_> = pl.children_with(&["texture"]).collect();
+        let [c] = textures[..] else {
+            return Err(err(
+                pl.loc(),
+                format!("bumpmap needs one nested texture, found {}", textures.len()),
+            ));
+        };
+        Ok(Material::HeightBump {
+            nested,
+            texture: self.texture(c)?,
+            scale: pl.props.float("scale", 1.0)?,
+            flip_invalid_normals: pl.props.bool("flip_invalid_normals", true)?,
+            shadowing: pl.props.bool("use_shadowing_function", true)?,
+        })
+    }
 }

@@ -1038,31 +1038,12 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
                 kd: self.rgb(pl, "kd", Vec3::splat(0.5), false)?,
             },
-            // Wrappers whose effect we do not model: keep the nested material.
-            "bumpmap" => {
-                let nested = self.nested_bsdfs(pl)?;
-                let Some(&inner) = nested.first() else {
-                    return Err(err(pl.loc(), format!("{} needs a nested bsdf", pl.ty)));
-                };
-                self.ctx.warn(
-                    pl.loc(),
-                    format!("bsdf '{}' is not supported: using its nested bsdf", pl.ty),
-                );
-                for p in &pl.props.props {
-                    p.used.set(true);
-                }
-                for c in &pl.children {
-                    if c.elem.tag == "texture" {
-                        // consumed by the wrapper
-                    }
-                }
-                return Ok(Err(inner));
-            }
+            "bumpmap" => self.bumpmap(pl)?,
             _ => {
                 return Err(unknown_type(
                     pl,
                     "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-                     roughdielectric, plastic, roughplastic, twosided, null, principled, blendbsdf, mirror, \
+                     roughdielectric, plastic, roughplastic, twosided, null, principled, blendbsdf, bumpmap, mirror, \
                      microfacet",
                 ));
             }
