@@ -579,6 +579,24 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
                 roughness: i.roughness,
             }),
         },
+        Material::PolarizedPlastic {
+            distribution,
+            alpha_u,
+            alpha_v,
+            diffuse_reflectance,
+            specular_reflectance,
+            int_ior,
+            ext_ior,
+        } => MaterialKind::PolarizedPlastic {
+            microfacet: Microfacet::new(
+                MicrofacetType::from(*distribution),
+                alpha(*alpha_u),
+                alpha(*alpha_v),
+            ),
+            eta: int_ior / ext_ior,
+            diffuse: declared.color_ref(diffuse_reflectance),
+            specular: declared.color_ref(specular_reflectance),
+        },
         Material::Principled(d) => MaterialKind::Principled(Box::new(PrincipledParams {
             base_color: declared.color_ref(&d.base_color),
             roughness: float_ref(&d.roughness),

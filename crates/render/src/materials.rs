@@ -16,8 +16,8 @@ use base::dispersion::{Dispersion, DispersionSampling};
 use crate::bsdf::{
     Blend, Bsdf, Bumped, Conductor, CourseMaterial, Dielectric, Diffuse, DiffuseTransmission, Ggx,
     IdealLobe, Layered, LayeredBase, LayeredInterface, Microfacet, MicrofacetType, NoriMicrofacet,
-    PhongFamily, Plastic, Principled, RoughConductor, RoughDielectric, RoughPlastic,
-    RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
+    PhongFamily, Plastic, PolarizedPlastic, Principled, RoughConductor, RoughDielectric,
+    RoughPlastic, RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
 };
 use crate::math::{Frame, Vec3};
 use crate::sampling::sampler::{hash2, u64_to_unit};
@@ -185,6 +185,13 @@ pub enum MaterialKind {
     Coated(Box<Coated>),
     /// Mitsuba's `principled` (boxed: rare and large).
     Principled(Box<PrincipledParams>),
+    /// Mitsuba's `pplastic` (unpolarised).
+    PolarizedPlastic {
+        microfacet: Microfacet,
+        eta: f32,
+        diffuse: ColorRef,
+        specular: ColorRef,
+    },
     /// Mitsuba's `blendbsdf`: `(1 − weight)·kinds[0] + weight·kinds[1]`, both evaluated.
     Blend {
         weight: FloatRef,
@@ -522,6 +529,7 @@ impl MaterialKind {
             } => alpha_u == alpha_v,
             MaterialKind::Principled(b) => b.anisotropic == TexRef::Const(0.0),
             MaterialKind::Blend { kinds, .. } => kinds.iter().all(MaterialKind::isotropic),
+            MaterialKind::PolarizedPlastic { microfacet, .. } => microfacet.is_isotropic(),
             MaterialKind::Coated(c) => {
                 c.alpha_u == c.alpha_v
                     && match &c.base {
@@ -691,6 +699,21 @@ impl MaterialKind {
             }
             MaterialKind::Coated(c) => Bsdf::Layered(Box::new(c.bsdf(p, at, m))),
             MaterialKind::Principled(b) => Bsdf::Principled(Box::new(b.bsdf(p, at, m))),
+            MaterialKind::PolarizedPlastic {
+                microfacet,
+                eta,
+                diffuse,
+                specular,
+            } => {
+                let (d, s) = (p.color(diffuse, at), p.color(specular, at));
+                Bsdf::PolarizedPlastic(PolarizedPlastic {
+                    distribution: *microfacet,
+                    eta: *eta,
+                    diffuse_reflectance: m.albedo_read(p, diffuse, d),
+                    specular_reflectance: m.albedo_read(p, specular, s),
+                    specular_sampling_weight: rgb_sampling_weight(d, s),
+                })
+            }
             MaterialKind::Blend { weight, kinds } => Bsdf::Blend(Box::new(Blend::new(
                 p.float(weight, at),
                 kinds[0].blend_part(p, at, m),

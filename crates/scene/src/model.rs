@@ -726,6 +726,17 @@ pub enum Material {
     },
     /// Mitsuba 3's `principled` (Disney's BSDF as Mitsuba defines it).
     Principled(Box<PrincipledDesc>),
+    /// Mitsuba 3's `pplastic` as its unpolarised variants render it (`alpha_u`/`alpha_v`
+    /// constants, Beckmann by default, α = 0.1, polypropylene in air).
+    PolarizedPlastic {
+        distribution: MicrofacetDistribution,
+        alpha_u: f32,
+        alpha_v: f32,
+        diffuse_reflectance: ColorParam,
+        specular_reflectance: ColorParam,
+        int_ior: f32,
+        ext_ior: f32,
+    },
     /// Mitsuba 3's `blendbsdf`: (1 − weight)·materials[0] + weight·materials[1], both
     /// evaluated at every query (unlike `Mix`, which picks one).
     Blend {
@@ -814,6 +825,7 @@ impl Material {
             Material::Mix { .. } => "mix",
             Material::Principled(_) => "principled",
             Material::Blend { .. } => "blendbsdf",
+            Material::PolarizedPlastic { .. } => "pplastic",
             Material::HeightBump { .. } => "bumpmap",
         }
     }

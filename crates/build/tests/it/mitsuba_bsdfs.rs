@@ -26,3 +26,10 @@ fn blendbsdf() {
 fn bumpmap() {
     check_repo_reference("bumpmap");
 }
+
+/// `pplastic` (unpolarised): Mitsuba's example, an anisotropic GGX one with a textured
+/// diffuse reflectance and a tinted specular one, a textured ground.
+#[test]
+fn pplastic() {
+    check_repo_reference("pplastic");
+}

@@ -29,6 +29,7 @@ pub mod microfacet;
 mod nori_microfacet;
 mod phong;
 mod plastic;
+mod pplastic;
 mod principled;
 mod rough_conductor;
 mod rough_dielectric;
@@ -47,6 +48,7 @@ pub use microfacet::{Microfacet, MicrofacetType};
 pub use nori_microfacet::NoriMicrofacet;
 pub use phong::PhongFamily;
 pub use plastic::{Plastic, rgb_sampling_weight};
+pub use pplastic::PolarizedPlastic;
 pub use principled::{Principled, disney_alphas, luminance};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
@@ -140,6 +142,7 @@ pub enum Bsdf<C: Color = Vec3> {
     Layered(Box<Layered<C>>),
     /// Boxed: a dozen parameters (Mitsuba scenes only).
     Principled(Box<Principled<C>>),
+    PolarizedPlastic(PolarizedPlastic<C>),
     /// Mitsuba's `blendbsdf` of two models (boxed: it holds two `Bsdf`s).
     Blend(Box<Blend<C>>),
     /// A model under Mitsuba's `bumpmap` (boxed: it holds a `Bsdf`).
@@ -173,6 +176,7 @@ macro_rules! dispatch {
                 let $b = &**$b;
                 $e
             }
+            Bsdf::PolarizedPlastic($b) => $e,
             Bsdf::Blend($b) => {
                 let $b = &**$b;
                 $e
@@ -268,7 +272,8 @@ impl_from!(
     RoughPlastic,
     NoriMicrofacet,
     PhongFamily,
-    DiffuseTransmission
+    DiffuseTransmission,
+    PolarizedPlastic
 );
 
 impl<C: Color> From<CourseMaterial<C>> for Bsdf<C> {

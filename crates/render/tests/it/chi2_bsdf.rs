@@ -15,7 +15,8 @@
 use base::PhongModel;
 use render::bsdf::{
     Blend, Bsdf, CourseMaterial, Diffuse, IdealLobe, MicrofacetType, NoriMicrofacet, PhongFamily,
-    Plastic, Principled, RoughConductor, RoughDielectric, RoughPlastic, TransportMode,
+    Plastic, PolarizedPlastic, Principled, RoughConductor, RoughDielectric, RoughPlastic,
+    TransportMode,
 };
 use render::math::{Vec2, Vec3};
 use render::spectral::SampledSpectrum;
@@ -114,6 +115,25 @@ fn cases() -> Vec<(String, Bsdf, Vec3)> {
         if transmits {
             add(format!("principled {tag}"), b.into(), true);
         }
+    }
+    // Mitsuba's pplastic (unpolarised).
+    for (kind, au, av) in [
+        (MicrofacetType::Beckmann, 0.1, 0.1),
+        (MicrofacetType::Ggx, 0.4, 0.4),
+        (MicrofacetType::Ggx, 0.1, 0.5),
+    ] {
+        add(
+            format!("pplastic {kind:?} α=({au},{av})"),
+            PolarizedPlastic {
+                distribution: render::bsdf::Microfacet::new(kind, au, av),
+                eta: 1.49,
+                diffuse_reflectance: Vec3::new(0.3, 0.5, 0.2),
+                specular_reflectance: Vec3::ONE,
+                specular_sampling_weight: 1.0 / (1.0 + 1.0 / 3.0),
+            }
+            .into(),
+            false,
+        );
     }
     // Mitsuba's blendbsdf of non-delta models (its sample weight is then eval/pdf of the blend).
     let gold = RoughConductor::new(MicrofacetType::Ggx, 0.2, 0.2, gold_eta, gold_k, Vec3::ONE);
@@ -344,6 +364,11 @@ fn chi2_principled() {
 }
 
 #[test]
+fn chi2_pplastic() {
+    run_family(|n| n.starts_with("pplastic"));
+}
+
+#[test]
 fn chi2_blendbsdf() {
     run_family(|n| n.starts_with("blendbsdf"));
 }
@@ -366,6 +391,7 @@ fn families_cover_all_cases() {
         "phong-family",
         "principled",
         "blendbsdf",
+        "pplastic",
     ];
     assert!(
         cases()

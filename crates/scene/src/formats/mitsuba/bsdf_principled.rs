@@ -2,7 +2,7 @@
 //! the scene model, with Mitsuba 3.9's parameter names and defaults. A child of `build.rs`
 //! (it uses the builder's parameter readers); `material_of` calls into it.
 
-use super::{Result, SceneBuilder, err};
+use super::{Result, SceneBuilder, err, ior};
 use crate::formats::mitsuba::plugin::Plugin;
 use crate::model::*;
 
@@ -113,6 +113,39 @@ impl<'s> SceneBuilder<'_, 's> {
             scale: pl.props.float("scale", 1.0)?,
             flip_invalid_normals: pl.props.bool("flip_invalid_normals", true)?,
             shadowing: pl.props.bool("use_shadowing_function", true)?,
+        })
+    }
+
+    /// `pplastic`: `alpha` or `alpha_u`/`alpha_v` (floats), `distribution`, the reflectances
+    /// (textures allowed), `int_ior`/`ext_ior`, which must differ.
+    pub(super) fn pplastic(&mut self, pl: &Plugin<'s>) -> Result<Material> {
+        let int_ior = self.ior(pl, "int_ior", ior::POLYPROPYLENE)?;
+        let ext_ior = self.ior(pl, "ext_ior", ior::AIR)?;
+        if int_ior == ext_ior {
+            return Err(err(
+                pl.loc(),
+                "pplastic: the interior and exterior indices of refraction must differ",
+            ));
+        }
+        let (alpha_u, alpha_v) = if pl.props.has("alpha_u") || pl.props.has("alpha_v") {
+            (
+                pl.props.float("alpha_u", 0.1)?,
+                pl.props.float("alpha_v", 0.1)?,
+            )
+        } else {
+            let a = pl.props.float("alpha", 0.1)?;
+            (a, a)
+        };
+        // Visible normals are always sampled: without them only the noise would differ.
+        pl.props.bool("sample_visible", true)?;
+        Ok(Material::PolarizedPlastic {
+            distribution: self.distribution(pl)?,
+            alpha_u,
+            alpha_v,
+            diffuse_reflectance: self.color(pl, "diffuse_reflectance", 0.5, false)?,
+            specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,
+            int_ior,
+            ext_ior,
         })
     }
 }

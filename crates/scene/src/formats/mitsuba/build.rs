@@ -1028,6 +1028,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "null" => Material::Null,
             "principled" => self.principled(pl)?,
             "blendbsdf" => self.blendbsdf(pl)?,
+            "pplastic" => self.pplastic(pl)?,
             // Nori
             "mirror" => Material::Mirror {
                 reflectance: ColorParam::constant(1.0),
@@ -1043,7 +1044,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 return Err(unknown_type(
                     pl,
                     "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-                     roughdielectric, plastic, roughplastic, twosided, null, principled, blendbsdf, bumpmap, mirror, \
+                     roughdielectric, plastic, roughplastic, twosided, null, principled, blendbsdf, bumpmap, pplastic, \
+                     mirror, \
                      microfacet",
                 ));
             }
