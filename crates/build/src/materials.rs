@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use render::bsdf::{IdealLobe, Microfacet, MicrofacetType, NoriMicrofacet, RoughPlasticTables};
 use render::materials::{
-    Coated, CoatedBase, ConductorSpectra, CourseLobe, Layer, MaterialKind, Perturb, RtMaterial,
-    Then, alpha,
+    Coated, CoatedBase, ConductorSpectra, CourseLobe, Layer, MaterialKind, Perturb,
+    PrincipledParams, RtMaterial, Then, alpha,
 };
 use render::math::PVec3;
 use render::spectral::DeclaredSpectrum;
@@ -52,6 +52,7 @@ pub(crate) fn beer_absorption(
         match &materials.get(id.0 as usize)?.material {
             Material::NormalMap { nested, .. }
             | Material::BumpMap { nested, .. }
+            | Material::HeightBump { nested, .. }
             | Material::Mask { nested, .. } => id = *nested,
             Material::Dielectric {
                 absorption: Some(sigma),
@@ -251,6 +252,21 @@ impl MaterialResolver<'_> {
                     });
                     id = *nested;
                 }
+                Material::HeightBump {
+                    nested,
+                    texture,
+                    scale,
+                    flip_invalid_normals,
+                    shadowing,
+                } => {
+                    perturbs.push(Perturb::HeightBump {
+                        texture: texture.0,
+                        scale: *scale,
+                        flip: *flip_invalid_normals,
+                        shadowing: *shadowing,
+                    });
+                    id = *nested;
+                }
                 // The opacity acts in `Scene::intersect` (a cut-out is never hit).
                 Material::Mask { nested, .. } => id = *nested,
                 Material::Mix { materials, amount } => {
@@ -272,6 +288,45 @@ impl MaterialResolver<'_> {
                             layers: Box::new([a, b]),
                         },
                     );
+                }
+                Material::Blend { materials, weight } => {
+                    if depth >= MAX_SIDE_NESTING {
+                        return Err(BuildError {
+                            loc: loc.clone(),
+                            message: format!(
+                                "twosided, mix and blend materials nested more than {MAX_SIDE_NESTING} deep"
+                            ),
+                        });
+                    }
+                    let a = self.layer(materials[0], outer, depth + 1, loc)?;
+                    let b = self.layer(materials[1], outer, depth + 1, loc)?;
+                    let then = match (a, b) {
+                        // Two scattering models in the same frame: Mitsuba's blend, both
+                        // evaluated.
+                        (
+                            Layer {
+                                perturbs: pa,
+                                then: Then::Model(Some(ka)),
+                            },
+                            Layer {
+                                perturbs: pb,
+                                then: Then::Model(Some(kb)),
+                            },
+                        ) if pa.is_empty() && pb.is_empty() => {
+                            Then::Model(Some(MaterialKind::Blend {
+                                weight: float_ref(weight),
+                                kinds: Box::new([ka, kb]),
+                            }))
+                        }
+                        // A wrapper (two-sided, bump or normal map, null) below the blend:
+                        // one of the two chosen per hit with the blend's probability, which
+                        // has the blend's mean but not its MIS densities.
+                        (a, b) => Then::Mix {
+                            amount: float_ref(weight),
+                            layers: Box::new([a, b]),
+                        },
+                    };
+                    return done(perturbs, outer, then);
                 }
                 _ => {
                     let kind = self.kind(id);
@@ -524,13 +579,48 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
                 roughness: i.roughness,
             }),
         },
+        Material::PolarizedPlastic {
+            distribution,
+            alpha_u,
+            alpha_v,
+            diffuse_reflectance,
+            specular_reflectance,
+            int_ior,
+            ext_ior,
+        } => MaterialKind::PolarizedPlastic {
+            microfacet: Microfacet::new(
+                MicrofacetType::from(*distribution),
+                alpha(*alpha_u),
+                alpha(*alpha_v),
+            ),
+            eta: int_ior / ext_ior,
+            diffuse: declared.color_ref(diffuse_reflectance),
+            specular: declared.color_ref(specular_reflectance),
+        },
+        Material::Principled(d) => MaterialKind::Principled(Box::new(PrincipledParams {
+            base_color: declared.color_ref(&d.base_color),
+            roughness: float_ref(&d.roughness),
+            anisotropic: float_ref(&d.anisotropic),
+            metallic: float_ref(&d.metallic),
+            spec_trans: float_ref(&d.spec_trans),
+            spec_tint: float_ref(&d.spec_tint),
+            sheen: float_ref(&d.sheen),
+            sheen_tint: float_ref(&d.sheen_tint),
+            flatness: float_ref(&d.flatness),
+            clearcoat: float_ref(&d.clearcoat),
+            clearcoat_gloss: float_ref(&d.clearcoat_gloss),
+            eta: d.eta,
+            rates: d.rates,
+        })),
         Material::Null
         | Material::Unlit { .. }
         | Material::TwoSided { .. }
         | Material::NormalMap { .. }
         | Material::BumpMap { .. }
+        | Material::HeightBump { .. }
         | Material::Mask { .. }
-        | Material::Mix { .. } => return None,
+        | Material::Mix { .. }
+        | Material::Blend { .. } => return None,
     })
 }
 

@@ -14,10 +14,10 @@ use base::PhongModel;
 use base::dispersion::{Dispersion, DispersionSampling};
 
 use crate::bsdf::{
-    Bsdf, Conductor, CourseMaterial, Dielectric, Diffuse, DiffuseTransmission, Ggx, IdealLobe,
-    Layered, LayeredBase, LayeredInterface, Microfacet, MicrofacetType, NoriMicrofacet,
-    PhongFamily, Plastic, RoughConductor, RoughDielectric, RoughPlastic, RoughPlasticTables,
-    ThinDielectric, rgb_sampling_weight,
+    Blend, Bsdf, Bumped, Conductor, CourseMaterial, Dielectric, Diffuse, DiffuseTransmission, Ggx,
+    IdealLobe, Layered, LayeredBase, LayeredInterface, Microfacet, MicrofacetType, NoriMicrofacet,
+    PhongFamily, Plastic, PolarizedPlastic, Principled, RoughConductor, RoughDielectric,
+    RoughPlastic, RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
 };
 use crate::math::{Frame, Vec3};
 use crate::sampling::sampler::{hash2, u64_to_unit};
@@ -65,6 +65,41 @@ pub enum Perturb {
     NormalMap { texture: u32 },
     /// Bump map: the normal tilts against the texture's height gradient times `factor`.
     BumpMap { texture: u32, factor: f32 },
+    /// Mitsuba 3's `bumpmap`: ∂p/∂u and ∂p/∂v get `scale` times the height's uv gradient
+    /// along the normal; their cross product is the new normal (on the geometric normal's
+    /// side, mirrored about the old one when `flip` and the viewer sees its back); the BSDF
+    /// is then wrapped in [`crate::bsdf::Bumped`] (side test, and the terminator's
+    /// shadowing when `shadowing`). Needs the shape's ∂p/∂u, ∂p/∂v (meshes): elsewhere the
+    /// frame is left as it is.
+    HeightBump {
+        texture: u32,
+        scale: f32,
+        flip: bool,
+        shadowing: bool,
+    },
+}
+
+/// What a [`Perturb::HeightBump`] leaves for the BSDF: the unperturbed and perturbed normals
+/// (world space) and the shadowing term's α² (`None`: no shadowing).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BumpShading {
+    pub n_orig: Vec3,
+    pub n_pert: Vec3,
+    pub alpha2: Option<f32>,
+}
+
+impl BumpShading {
+    /// `bsdf` wrapped as Mitsuba's `bumpmap` wraps its nested BSDF, in `frame` (the final
+    /// shading frame).
+    #[inline]
+    pub fn wrap<C: Color>(&self, bsdf: Bsdf<C>, frame: &Frame) -> Bsdf<C> {
+        Bsdf::Bumped(Box::new(Bumped {
+            inner: bsdf,
+            n_orig: frame.to_local(self.n_orig),
+            n_pert: frame.to_local(self.n_pert),
+            alpha2: self.alpha2,
+        }))
+    }
 }
 
 /// A scattering model with its parameters, evaluated into a [`Bsdf`] at each hit.
@@ -148,6 +183,20 @@ pub enum MaterialKind {
     },
     /// pbrt-v4's layered `coateddiffuse` / `coatedconductor` (boxed: rare and large).
     Coated(Box<Coated>),
+    /// Mitsuba's `principled` (boxed: rare and large).
+    Principled(Box<PrincipledParams>),
+    /// Mitsuba's `pplastic` (unpolarised).
+    PolarizedPlastic {
+        microfacet: Microfacet,
+        eta: f32,
+        diffuse: ColorRef,
+        specular: ColorRef,
+    },
+    /// Mitsuba's `blendbsdf`: `(1 − weight)·kinds[0] + weight·kinds[1]`, both evaluated.
+    Blend {
+        weight: FloatRef,
+        kinds: Box<[MaterialKind; 2]>,
+    },
     /// The CENG795 Phong family, with the ideal lobe of a course mirror, conductor or
     /// dielectric on top when `ideal` is set.
     Phong {
@@ -161,6 +210,46 @@ pub enum MaterialKind {
         absorption: f32,
         ideal: Option<CourseLobe>,
     },
+}
+
+/// The parameters of Mitsuba's `principled` (see [`crate::bsdf::Principled`]).
+#[derive(Clone, Debug)]
+pub struct PrincipledParams {
+    pub base_color: ColorRef,
+    pub roughness: FloatRef,
+    pub anisotropic: FloatRef,
+    pub metallic: FloatRef,
+    pub spec_trans: FloatRef,
+    pub spec_tint: FloatRef,
+    pub sheen: FloatRef,
+    pub sheen_tint: FloatRef,
+    pub flatness: FloatRef,
+    pub clearcoat: FloatRef,
+    pub clearcoat_gloss: FloatRef,
+    /// Interior / exterior index.
+    pub eta: f32,
+    /// Sampling rates: main specular, clearcoat, diffuse reflection.
+    pub rates: [f32; 3],
+}
+
+impl PrincipledParams {
+    fn bsdf<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Principled<M::C> {
+        let rgb = p.color(&self.base_color, at);
+        let f = |r: &FloatRef| p.float(r, at);
+        let mut b = Principled::with_base(m.albedo_read(p, &self.base_color, rgb), rgb, self.eta);
+        b.roughness = f(&self.roughness);
+        b.anisotropic = f(&self.anisotropic);
+        b.metallic = f(&self.metallic);
+        b.spec_trans = f(&self.spec_trans);
+        b.spec_tint = f(&self.spec_tint);
+        b.sheen = f(&self.sheen);
+        b.sheen_tint = f(&self.sheen_tint);
+        b.flatness = f(&self.flatness);
+        b.clearcoat = f(&self.clearcoat);
+        b.clearcoat_gloss = f(&self.clearcoat_gloss);
+        b.rates = self.rates;
+        b
+    }
 }
 
 /// The parameters of a pbrt-v4 coated material (see [`crate::bsdf::Layered`]).
@@ -243,21 +332,46 @@ impl RtMaterial {
     /// The scattering model at `si` and the shading frame it lives in (perturbed by normal
     /// and bump maps, flipped on the back side of a two-sided material); `None` when the
     /// surface does not scatter.
+    /// `derivs` gives the shape's ∂p/∂u, ∂p/∂v at `si` (read only by Mitsuba's bump maps);
+    /// the last such bump map's [`BumpShading`] is returned with the model.
     #[inline(always)]
     pub fn resolve(
         &self,
         textures: &Textures,
         si: &SurfaceInteraction,
         at: TexCoord,
-    ) -> Option<(&MaterialKind, Frame)> {
+        derivs: impl Fn() -> Option<(Vec3, Vec3)>,
+    ) -> Option<(&MaterialKind, Frame, Option<BumpShading>)> {
         let mut frame = si.shading;
         let mut layer = &self.surface;
+        let mut bump = None;
         loop {
             for p in &layer.perturbs {
-                frame = p.apply(textures, at, frame);
+                frame = match *p {
+                    Perturb::HeightBump {
+                        texture,
+                        scale,
+                        flip,
+                        shadowing,
+                    } => match derivs() {
+                        Some(d) => {
+                            let h = HeightBumpAt {
+                                gradient: textures.get(texture).uv_gradient(at) * scale,
+                                derivs: d,
+                                ng: si.ng,
+                                wo: si.wo,
+                            };
+                            let (f, b) = h.frame(frame, flip, shadowing);
+                            bump = Some(b);
+                            f
+                        }
+                        None => frame,
+                    },
+                    _ => p.apply(textures, at, frame),
+                };
             }
             match &layer.then {
-                Then::Model(kind) => return kind.as_ref().map(|k| (k, frame)),
+                Then::Model(kind) => return kind.as_ref().map(|k| (k, frame, bump)),
                 Then::Mix { amount, layers } => {
                     layer = &layers
                         [usize::from(mix_picks_second(textures.float(amount, at), si.p, si.wo))];
@@ -320,6 +434,64 @@ pub fn mix_picks_second(amount: f32, p: Vec3, wo: Vec3) -> bool {
     u64_to_unit(hash2(bits(p), bits(wo))) <= amount
 }
 
+/// A Mitsuba bump map's inputs at one point.
+struct HeightBumpAt {
+    /// scale · ∂h/∂(u, v).
+    gradient: crate::math::Vec2,
+    derivs: (Vec3, Vec3),
+    ng: Vec3,
+    wo: Vec3,
+}
+
+impl HeightBumpAt {
+    /// The perturbed frame and what the BSDF wrapper needs (see [`Perturb::HeightBump`]).
+    fn frame(&self, frame: Frame, flip: bool, shadowing: bool) -> (Frame, BumpShading) {
+        let n = frame.n;
+        let (dpdu, dpdv) = self.derivs;
+        let du = dpdu + n * (self.gradient.x - n.dot(dpdu));
+        let dv = dpdv + n * (self.gradient.y - n.dot(dpdv));
+        let mut cr = du.cross(dv);
+        if self.ng.dot(cr) < 0.0 {
+            cr = -cr;
+        }
+        let mut nl = frame.to_local(cr);
+        if flip {
+            let w = frame.to_local(self.wo);
+            if w.z * w.dot(nl) <= 0.0 {
+                nl = Vec3::new(-nl.x, -nl.y, nl.z);
+            }
+        }
+        let len2 = nl.length_squared();
+        let nl = if len2 > 0.0 && len2.is_finite() {
+            nl / len2.sqrt()
+        } else {
+            Vec3::Z
+        };
+        let s = Vec3::X - nl * nl.x;
+        let s2 = s.length_squared();
+        let s = if s2 > 0.0 && s2.is_finite() {
+            s / s2.sqrt()
+        } else {
+            Vec3::Y
+        };
+        let t = nl.cross(s);
+        let tan2 = (1.0 - nl.z * nl.z).max(0.0) / (nl.z * nl.z);
+        let perturbed = Frame {
+            s: frame.to_world(s),
+            t: frame.to_world(t),
+            n: frame.to_world(nl),
+        };
+        (
+            perturbed,
+            BumpShading {
+                n_orig: n,
+                n_pert: perturbed.n,
+                alpha2: shadowing.then(|| (0.125 * tan2).min(1.0)),
+            },
+        )
+    }
+}
+
 impl Perturb {
     #[inline]
     fn apply(&self, textures: &Textures, at: TexCoord, frame: Frame) -> Frame {
@@ -340,6 +512,8 @@ impl Perturb {
                 let tilted = (n - factor * (g - g.dot(n) * n)).normalize_or(n);
                 Frame::from_normal_tangent(tilted, frame.s)
             }
+            // Applied by `RtMaterial::resolve`, which has the shape's derivatives.
+            Perturb::HeightBump { .. } => frame,
         }
     }
 }
@@ -353,6 +527,9 @@ impl MaterialKind {
             | MaterialKind::RoughDielectric {
                 alpha_u, alpha_v, ..
             } => alpha_u == alpha_v,
+            MaterialKind::Principled(b) => b.anisotropic == TexRef::Const(0.0),
+            MaterialKind::Blend { kinds, .. } => kinds.iter().all(MaterialKind::isotropic),
+            MaterialKind::PolarizedPlastic { microfacet, .. } => microfacet.is_isotropic(),
             MaterialKind::Coated(c) => {
                 c.alpha_u == c.alpha_v
                     && match &c.base {
@@ -521,6 +698,27 @@ impl MaterialKind {
                 ))
             }
             MaterialKind::Coated(c) => Bsdf::Layered(Box::new(c.bsdf(p, at, m))),
+            MaterialKind::Principled(b) => Bsdf::Principled(Box::new(b.bsdf(p, at, m))),
+            MaterialKind::PolarizedPlastic {
+                microfacet,
+                eta,
+                diffuse,
+                specular,
+            } => {
+                let (d, s) = (p.color(diffuse, at), p.color(specular, at));
+                Bsdf::PolarizedPlastic(PolarizedPlastic {
+                    distribution: *microfacet,
+                    eta: *eta,
+                    diffuse_reflectance: m.albedo_read(p, diffuse, d),
+                    specular_reflectance: m.albedo_read(p, specular, s),
+                    specular_sampling_weight: rgb_sampling_weight(d, s),
+                })
+            }
+            MaterialKind::Blend { weight, kinds } => Bsdf::Blend(Box::new(Blend::new(
+                p.float(weight, at),
+                kinds[0].blend_part(p, at, m),
+                kinds[1].blend_part(p, at, m),
+            ))),
             MaterialKind::Phong {
                 model,
                 normalized,
@@ -551,6 +749,15 @@ impl MaterialKind {
                 }
             }
         }
+    }
+}
+
+impl MaterialKind {
+    /// A part of a blend (out of line: [`MaterialKind::bsdf_in`] is inlined into its callers
+    /// and cannot recurse into itself there).
+    #[inline(never)]
+    fn blend_part<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> Bsdf<M::C> {
+        self.bsdf_in(p, at, m)
     }
 }
 

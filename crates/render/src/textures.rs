@@ -582,6 +582,63 @@ impl Texture {
         }
     }
 
+    /// ∂/∂(u, v) of the first channel (Mitsuba's `eval_1_grad`, the height a bump map reads):
+    /// exact for bilinear bitmaps (the derivative of the bilinear patch, chained through
+    /// `to_uv`), 0 for nearest-neighbour bitmaps, checkerboards and constants, central
+    /// differences elsewhere.
+    pub fn uv_gradient(&self, at: TexCoord) -> Vec2 {
+        match self {
+            Texture::Constant(_) | Texture::Checkerboard { .. } => Vec2::ZERO,
+            Texture::Bitmap {
+                image,
+                filter,
+                wrap,
+                to_uv,
+                corner_texels,
+                mips: None,
+            } => {
+                if *filter == TextureFilter::Nearest {
+                    return Vec2::ZERO;
+                }
+                let p = to_uv.transform_point2(at.uv);
+                if !p.is_finite() {
+                    return Vec2::ZERO;
+                }
+                let (w, h) = (image.width, image.height);
+                let shift = if *corner_texels { 0.5 } else { 0.0 };
+                let xs = p.x * w as f32 + shift - 0.5;
+                let ys = p.y * h as f32 + shift - 0.5;
+                let (x0, y0) = (xs.floor(), ys.floor());
+                let (fx, fy) = (xs - x0, ys - y0);
+                let (x0, y0) = (x0 as i64, y0 as i64);
+                let px = |dx: i64, dy: i64| {
+                    image
+                        .get(wrap_index(x0 + dx, w, *wrap), wrap_index(y0 + dy, h, *wrap))
+                        .x
+                };
+                let (f00, f10, f01, f11) = (px(0, 0), px(1, 0), px(0, 1), px(1, 1));
+                let dfdx = ((1.0 - fy) * (f10 - f00) + fy * (f11 - f01)) * w as f32;
+                let dfdy = ((1.0 - fx) * (f01 - f00) + fx * (f11 - f10)) * h as f32;
+                let (c0, c1) = (to_uv.x_axis, to_uv.y_axis);
+                Vec2::new(dfdx * c0.x + dfdy * c0.y, dfdx * c1.x + dfdy * c1.y)
+            }
+            _ => {
+                let e = 1e-3;
+                let f = |d: Vec2| {
+                    self.eval(TexCoord {
+                        uv: at.uv + d,
+                        ..at
+                    })
+                    .x
+                };
+                Vec2::new(
+                    f(Vec2::new(e, 0.0)) - f(Vec2::new(-e, 0.0)),
+                    f(Vec2::new(0.0, e)) - f(Vec2::new(0.0, -e)),
+                ) / (2.0 * e)
+            }
+        }
+    }
+
     /// Whether a lookup's footprint changes the value (a MIP-filtered bitmap inside).
     pub fn uses_footprint(&self) -> bool {
         match self {

@@ -265,8 +265,13 @@ impl Scene {
         m: &M,
     ) -> Option<(Bsdf<M::C>, Frame)> {
         let at = self.tex_at(si);
-        let (kind, frame) = self.material(si)?.resolve(&self.textures, si, at)?;
-        Some((kind.bsdf_in(&self.textures, at, m), frame))
+        let derivs = || self.shapes[si.shape as usize].geom.uv_derivatives(si.prim);
+        let (kind, frame, bump) = self.material(si)?.resolve(&self.textures, si, at, derivs)?;
+        let bsdf = kind.bsdf_in(&self.textures, at, m);
+        Some(match bump {
+            None => (bsdf, frame),
+            Some(b) => (b.wrap(bsdf, &frame), frame),
+        })
     }
 
     /// Where textures are looked up at `si`, with the lookup's footprint in uv when the

@@ -664,6 +664,17 @@ pub enum Material {
         texture: TextureId,
         factor: f32,
     },
+    /// Mitsuba 3's `bumpmap` around `nested`: ∂p/∂u and ∂p/∂v get `scale` times the
+    /// texture's uv gradient (its first channel) along the shading normal, their cross product
+    /// is the shading normal; `flip_invalid_normals` and `use_shadowing_function` (both on by
+    /// default) as Mitsuba 3.9.
+    HeightBump {
+        nested: MaterialId,
+        texture: TextureId,
+        scale: f32,
+        flip_invalid_normals: bool,
+        shadowing: bool,
+    },
     /// No shading at all (CENG795 `replace_all`): the surface shows `color` as radiance to
     /// whoever looks at it, reflects nothing and lights nothing else.
     Unlit { color: ColorParam },
@@ -713,12 +724,53 @@ pub enum Material {
         conductor_k: ColorValue,
         reflectance: Option<ColorParam>,
     },
+    /// Mitsuba 3's `principled` (Disney's BSDF as Mitsuba defines it).
+    Principled(Box<PrincipledDesc>),
+    /// Mitsuba 3's `pplastic` as its unpolarised variants render it (`alpha_u`/`alpha_v`
+    /// constants, Beckmann by default, α = 0.1, polypropylene in air).
+    PolarizedPlastic {
+        distribution: MicrofacetDistribution,
+        alpha_u: f32,
+        alpha_v: f32,
+        diffuse_reflectance: ColorParam,
+        specular_reflectance: ColorParam,
+        int_ior: f32,
+        ext_ior: f32,
+    },
+    /// Mitsuba 3's `blendbsdf`: (1 − weight)·materials[0] + weight·materials[1], both
+    /// evaluated at every query (unlike `Mix`, which picks one).
+    Blend {
+        materials: [MaterialId; 2],
+        weight: FloatParam,
+    },
     /// pbrt-v4's `mix`: at each shading point one of `materials` is chosen, the second with
     /// probability `amount` (a deterministic hash of the point and direction, as pbrt-v4 does).
     Mix {
         materials: [MaterialId; 2],
         amount: FloatParam,
     },
+}
+
+/// Mitsuba 3's `principled` parameters, with its defaults (base colour 0.5, roughness 0.5,
+/// everything else 0, sampling rates 1). `eta` is the interior/exterior index, given or made
+/// from `specular` (η = 2/(1 − √(0.08·specular)) − 1, specular 0.5 by default).
+#[derive(Clone, Debug)]
+pub struct PrincipledDesc {
+    pub base_color: ColorParam,
+    pub roughness: FloatParam,
+    pub anisotropic: FloatParam,
+    pub metallic: FloatParam,
+    pub spec_trans: FloatParam,
+    pub spec_tint: FloatParam,
+    pub sheen: FloatParam,
+    pub sheen_tint: FloatParam,
+    pub flatness: FloatParam,
+    pub clearcoat: FloatParam,
+    pub clearcoat_gloss: FloatParam,
+    pub eta: f32,
+    /// `main_specular_sampling_rate`, `clearcoat_sampling_rate`,
+    /// `diffuse_reflectance_sampling_rate`.
+    pub rates: [f32; 3],
 }
 
 /// The ideal lobe of a CENG795 `mirror`, `conductor` or `dielectric` material, traced on top
@@ -771,6 +823,10 @@ impl Material {
             Material::CoatedDiffuse { .. } => "coateddiffuse",
             Material::CoatedConductor { .. } => "coatedconductor",
             Material::Mix { .. } => "mix",
+            Material::Principled(_) => "principled",
+            Material::Blend { .. } => "blendbsdf",
+            Material::PolarizedPlastic { .. } => "pplastic",
+            Material::HeightBump { .. } => "bumpmap",
         }
     }
 }

@@ -16,6 +16,8 @@
 //!   looked up by the caller before building the `Bsdf`. Rough plastic's precomputed tables
 //!   are shared (`Arc`) rather than copied, so `Bsdf` is `Clone` but not `Copy`.
 
+mod blend;
+mod bumped;
 mod conductor;
 mod course;
 mod dielectric;
@@ -27,11 +29,15 @@ pub mod microfacet;
 mod nori_microfacet;
 mod phong;
 mod plastic;
+mod pplastic;
+mod principled;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
 mod thin_dielectric;
 
+pub use blend::Blend;
+pub use bumped::Bumped;
 pub use conductor::Conductor;
 pub use course::{CourseMaterial, IdealLobe};
 pub use dielectric::Dielectric;
@@ -42,6 +48,8 @@ pub use microfacet::{Microfacet, MicrofacetType};
 pub use nori_microfacet::NoriMicrofacet;
 pub use phong::PhongFamily;
 pub use plastic::{Plastic, rgb_sampling_weight};
+pub use pplastic::PolarizedPlastic;
+pub use principled::{Principled, disney_alphas, luminance};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{RoughPlastic, RoughPlasticTables};
@@ -132,6 +140,13 @@ pub enum Bsdf<C: Color = Vec3> {
     DiffuseTransmission(DiffuseTransmission<C>),
     /// Boxed for the same reason as `Course` (pbrt-v4 scenes only).
     Layered(Box<Layered<C>>),
+    /// Boxed: a dozen parameters (Mitsuba scenes only).
+    Principled(Box<Principled<C>>),
+    PolarizedPlastic(PolarizedPlastic<C>),
+    /// Mitsuba's `blendbsdf` of two models (boxed: it holds two `Bsdf`s).
+    Blend(Box<Blend<C>>),
+    /// A model under Mitsuba's `bumpmap` (boxed: it holds a `Bsdf`).
+    Bumped(Box<Bumped<C>>),
 }
 
 /// `$e` on the model inside `$self`.
@@ -154,6 +169,19 @@ macro_rules! dispatch {
             }
             Bsdf::DiffuseTransmission($b) => $e,
             Bsdf::Layered($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::Principled($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::PolarizedPlastic($b) => $e,
+            Bsdf::Blend($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::Bumped($b) => {
                 let $b = &**$b;
                 $e
             }
@@ -208,10 +236,13 @@ impl<C: Color> Bsdf<C> {
     /// Has a non-delta transmission lobe.
     #[inline]
     pub fn has_transmission(&self) -> bool {
-        matches!(
-            self,
-            Bsdf::RoughDielectric(_) | Bsdf::DiffuseTransmission(_)
-        )
+        match self {
+            Bsdf::RoughDielectric(_) | Bsdf::DiffuseTransmission(_) => true,
+            Bsdf::Principled(p) => p.spec_trans > 0.0 && p.metallic < 1.0,
+            Bsdf::Blend(b) => b.bsdfs.iter().any(Bsdf::has_transmission),
+            Bsdf::Bumped(b) => b.inner.has_transmission(),
+            _ => false,
+        }
     }
 
     /// A colour for the albedo AOV.
@@ -241,12 +272,25 @@ impl_from!(
     RoughPlastic,
     NoriMicrofacet,
     PhongFamily,
-    DiffuseTransmission
+    DiffuseTransmission,
+    PolarizedPlastic
 );
 
 impl<C: Color> From<CourseMaterial<C>> for Bsdf<C> {
     fn from(b: CourseMaterial<C>) -> Bsdf<C> {
         Bsdf::Course(Box::new(b))
+    }
+}
+
+impl<C: Color> From<Principled<C>> for Bsdf<C> {
+    fn from(b: Principled<C>) -> Bsdf<C> {
+        Bsdf::Principled(Box::new(b))
+    }
+}
+
+impl<C: Color> From<Blend<C>> for Bsdf<C> {
+    fn from(b: Blend<C>) -> Bsdf<C> {
+        Bsdf::Blend(Box::new(b))
     }
 }
 

@@ -14,8 +14,9 @@
 
 use base::PhongModel;
 use render::bsdf::{
-    Bsdf, CourseMaterial, Diffuse, IdealLobe, MicrofacetType, NoriMicrofacet, PhongFamily, Plastic,
-    RoughConductor, RoughDielectric, RoughPlastic, TransportMode,
+    Blend, Bsdf, CourseMaterial, Diffuse, IdealLobe, MicrofacetType, NoriMicrofacet, PhongFamily,
+    Plastic, PolarizedPlastic, Principled, RoughConductor, RoughDielectric, RoughPlastic,
+    TransportMode,
 };
 use render::math::{Vec2, Vec3};
 use render::spectral::SampledSpectrum;
@@ -104,6 +105,63 @@ fn cases() -> Vec<(String, Bsdf, Vec3)> {
             true,
         );
     }
+    // Mitsuba's principled: each lobe alone and together, isotropic and anisotropic, with and
+    // without transmission (seen from inside too).
+    for (tag, f) in principled_configs() {
+        let mut b = Principled::new(Vec3::new(0.8, 0.4, 0.2), 1.5);
+        f(&mut b);
+        let transmits = b.spec_trans > 0.0;
+        add(format!("principled {tag}"), b.clone().into(), false);
+        if transmits {
+            add(format!("principled {tag}"), b.into(), true);
+        }
+    }
+    // Mitsuba's pplastic (unpolarised).
+    for (kind, au, av) in [
+        (MicrofacetType::Beckmann, 0.1, 0.1),
+        (MicrofacetType::Ggx, 0.4, 0.4),
+        (MicrofacetType::Ggx, 0.1, 0.5),
+    ] {
+        add(
+            format!("pplastic {kind:?} α=({au},{av})"),
+            PolarizedPlastic {
+                distribution: render::bsdf::Microfacet::new(kind, au, av),
+                eta: 1.49,
+                diffuse_reflectance: Vec3::new(0.3, 0.5, 0.2),
+                specular_reflectance: Vec3::ONE,
+                specular_sampling_weight: 1.0 / (1.0 + 1.0 / 3.0),
+            }
+            .into(),
+            false,
+        );
+    }
+    // Mitsuba's blendbsdf of non-delta models (its sample weight is then eval/pdf of the blend).
+    let gold = RoughConductor::new(MicrofacetType::Ggx, 0.2, 0.2, gold_eta, gold_k, Vec3::ONE);
+    let mut glass = Principled::new(Vec3::new(0.9, 0.9, 0.8), 1.5);
+    glass.spec_trans = 0.8;
+    glass.roughness = 0.4;
+    for (w, tag) in [
+        (0.3, "diffuse+roughconductor"),
+        (0.75, "diffuse+roughconductor"),
+    ] {
+        add(
+            format!("blendbsdf {tag} w={w}"),
+            Blend::new(
+                w,
+                Diffuse::new(Vec3::new(0.2, 0.6, 0.3)).into(),
+                gold.into(),
+            )
+            .into(),
+            false,
+        );
+    }
+    let blend = Bsdf::from(Blend::new(0.5, gold.into(), glass.into()));
+    add(
+        "blendbsdf roughconductor+principled".into(),
+        blend.clone(),
+        false,
+    );
+    add("blendbsdf roughconductor+principled".into(), blend, true);
     // The three configurations of Nori's chi2test-microfacet.xml.
     for (alpha, int_ior, ext_ior, kd) in [
         (0.1, 1.33, 1.01, Vec3::ZERO),
@@ -169,6 +227,42 @@ fn cases() -> Vec<(String, Bsdf, Vec3)> {
         );
     }
     out
+}
+
+type PrincipledConfig = (&'static str, fn(&mut Principled));
+
+/// Parameter sets of the principled χ² cases.
+fn principled_configs() -> Vec<PrincipledConfig> {
+    vec![
+        ("default", |_| {}),
+        ("metallic anisotropic", |b| {
+            b.metallic = 0.7;
+            b.anisotropic = 0.6;
+            b.roughness = 0.3;
+            b.spec_tint = 0.4;
+        }),
+        ("glossy clearcoat sheen", |b| {
+            b.roughness = 0.1;
+            b.clearcoat = 0.8;
+            b.clearcoat_gloss = 0.6;
+            b.sheen = 0.7;
+            b.sheen_tint = 0.5;
+            b.flatness = 0.5;
+        }),
+        ("spec_trans rough", |b| {
+            b.spec_trans = 0.7;
+            b.roughness = 0.6;
+            b.metallic = 0.1;
+            b.clearcoat = 0.3;
+        }),
+        ("spec_trans smooth anisotropic", |b| {
+            b.spec_trans = 1.0;
+            b.roughness = 0.25;
+            b.anisotropic = 0.5;
+            b.eta = 1.33;
+            b.rates = [1.5, 1.0, 0.5];
+        }),
+    ]
 }
 
 fn rel_close(a: Vec3, b: Vec3, tol: f32) -> bool {
@@ -265,6 +359,21 @@ fn chi2_phong_family() {
 }
 
 #[test]
+fn chi2_principled() {
+    run_family(|n| n.starts_with("principled"));
+}
+
+#[test]
+fn chi2_pplastic() {
+    run_family(|n| n.starts_with("pplastic"));
+}
+
+#[test]
+fn chi2_blendbsdf() {
+    run_family(|n| n.starts_with("blendbsdf"));
+}
+
+#[test]
 fn chi2_rough_plastic_and_nori() {
     run_family(|n| n.starts_with("roughplastic") || n.starts_with("nori"));
 }
@@ -280,6 +389,9 @@ fn families_cover_all_cases() {
         "roughplastic",
         "nori",
         "phong-family",
+        "principled",
+        "blendbsdf",
+        "pplastic",
     ];
     assert!(
         cases()

@@ -269,3 +269,46 @@ fn nori_microfacet_ttest() {
         );
     }
 }
+
+/// Mitsuba's `blendbsdf` of two energy-conserving models (white diffuse, a rough mirror of
+/// F = 1) keeps the blend of their albedos, (1 − w)·1 + w·a_conductor, whatever the weight;
+/// `pplastic` with a white base never exceeds 1 (its two parts share the light the interface
+/// lets through). Monte Carlo, 4σ.
+#[test]
+fn blendbsdf_and_pplastic_furnace() {
+    use render::bsdf::{Blend, Microfacet, PolarizedPlastic};
+    let rc = RoughConductor::new(
+        MicrofacetType::Ggx,
+        0.3,
+        0.3,
+        Vec3::ZERO,
+        Vec3::ONE,
+        Vec3::ONE,
+    );
+    for w in [0.2, 0.7] {
+        let blend = Bsdf::from(Blend::new(w, Diffuse::new(Vec3::ONE).into(), rc.into()));
+        for a in ANGLES {
+            let m = albedo(&blend, dir(a), TransportMode::Radiance, 100_000, 7);
+            let c = albedo(&Bsdf::from(rc), dir(a), TransportMode::Radiance, 100_000, 8);
+            let expect = (1.0 - w) as f64 + w as f64 * c.mean;
+            let sigma = (m.variance() / m.n as f64 + c.variance() / c.n as f64).sqrt();
+            assert!(
+                (m.mean - expect).abs() < 4.0 * sigma + 1e-6,
+                "blend w={w} θ={a}: {} vs {expect} (σ {sigma})",
+                m.mean
+            );
+        }
+    }
+    let pp = Bsdf::from(PolarizedPlastic {
+        distribution: Microfacet::new(MicrofacetType::Beckmann, 0.2, 0.2),
+        eta: 1.49,
+        diffuse_reflectance: Vec3::ONE,
+        specular_reflectance: Vec3::ONE,
+        specular_sampling_weight: 0.5,
+    });
+    for a in ANGLES {
+        let m = albedo(&pp, dir(a), TransportMode::Radiance, 100_000, 9);
+        let sigma = (m.variance() / m.n as f64).sqrt();
+        assert!(m.mean <= 1.0 + 4.0 * sigma, "pplastic θ={a}: {}", m.mean);
+    }
+}

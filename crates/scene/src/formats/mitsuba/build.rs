@@ -16,6 +16,9 @@ use crate::spectra::{self, SpectrumUse};
 use crate::{LoadError, Loc, Result, Warning};
 use base::dispersion::Dispersion;
 
+#[path = "bsdf_principled.rs"]
+mod bsdf_principled;
+
 /// Largest accepted film side and pixel count (a bigger film would not fit in memory).
 const MAX_FILM_SIDE: i64 = 1 << 16;
 const MAX_FILM_PIXELS: i64 = 1 << 28;
@@ -1023,6 +1026,9 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 Material::Mask { nested, opacity }
             }
             "null" => Material::Null,
+            "principled" => self.principled(pl)?,
+            "blendbsdf" => self.blendbsdf(pl)?,
+            "pplastic" => self.pplastic(pl)?,
             // Nori
             "mirror" => Material::Mirror {
                 reflectance: ColorParam::constant(1.0),
@@ -1033,31 +1039,14 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 ext_ior: self.ior(pl, "ext_ior", ior::AIR)?,
                 kd: self.rgb(pl, "kd", Vec3::splat(0.5), false)?,
             },
-            // Wrappers whose effect we do not model: keep the nested material.
-            "bumpmap" => {
-                let nested = self.nested_bsdfs(pl)?;
-                let Some(&inner) = nested.first() else {
-                    return Err(err(pl.loc(), format!("{} needs a nested bsdf", pl.ty)));
-                };
-                self.ctx.warn(
-                    pl.loc(),
-                    format!("bsdf '{}' is not supported: using its nested bsdf", pl.ty),
-                );
-                for p in &pl.props.props {
-                    p.used.set(true);
-                }
-                for c in &pl.children {
-                    if c.elem.tag == "texture" {
-                        // consumed by the wrapper
-                    }
-                }
-                return Ok(Err(inner));
-            }
+            "bumpmap" => self.bumpmap(pl)?,
             _ => {
                 return Err(unknown_type(
                     pl,
                     "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-                     roughdielectric, plastic, roughplastic, twosided, null, mirror, microfacet",
+                     roughdielectric, plastic, roughplastic, twosided, null, principled, blendbsdf, bumpmap, pplastic, \
+                     mirror, \
+                     microfacet",
                 ));
             }
         };
