@@ -17,6 +17,7 @@ mod instancing;
 mod light_selection;
 mod media_emission;
 mod mip_filtering;
+mod mitsuba_emitters;
 mod motion_blur;
 mod nori;
 mod nori_vdb_box;

@@ -7,6 +7,8 @@ use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec3};
 
+mod emitters;
+
 use super::ior;
 use super::plugin::{Child, Plugin};
 use super::props::{ColorSpec, Value, parse_floats};
@@ -1205,12 +1207,18 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     mapping: EnvMapping::LatLong,
                 }
             }
-            _ => {
-                return Err(unknown_type(
-                    pl,
-                    "area, point, spot, directional, constant, envmap",
-                ));
-            }
+            _ => match self.extra_emitter(pl, to_world)? {
+                Some(e) => e,
+                None => {
+                    return Err(unknown_type(
+                        pl,
+                        &format!(
+                            "area, point, spot, directional, constant, envmap, {}",
+                            emitters::TYPES.join(", ")
+                        ),
+                    ));
+                }
+            },
         };
         Ok(Some(e))
     }
