@@ -22,6 +22,12 @@ fn sunsky_place() {
     check_repo_reference("sunsky_place");
 }
 
+/// The Mitsuba 3 form of `v06/legacy_box.xml` (`mitsuba_legacy.rs`) against its reference.
+#[test]
+fn legacy_box() {
+    check_repo_reference("legacy_box");
+}
+
 /// A scene of one `sunsky` emitter and nothing else (the build needs a camera).
 fn sky_scene(d: SunSkyDesc) -> SceneDesc {
     let path = crate::repo_references::mitsuba_scenes().join("sunsky.xml");

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use glam::{Mat3, Mat4, Vec3};
 
 mod emitters;
+mod legacy;
 
 use super::ior;
 use super::plugin::{Child, Plugin};
@@ -315,7 +316,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         };
         let usage = usage_for(name, emitter);
         let value = match &p.value {
-            Value::Color(spec) => spec_to_value(spec, usage, &p.loc)?,
+            Value::Color(spec) => match self.legacy_color(spec) {
+                Some(v) => v,
+                None => spec_to_value(spec, usage, &p.loc)?,
+            },
             Value::Float(v) => ColorValue::Rgb(Vec3::splat(*v as f32)),
             Value::Int(v) => ColorValue::Rgb(Vec3::splat(*v as f32)),
             other => {
@@ -548,10 +552,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             return Ok(t);
         }
         let pl = self.ctx.plugin(c.elem)?;
-        let to_uv = pl
-            .props
-            .transform("to_uv")?
-            .map_or(Mat3::IDENTITY, extract_uv);
+        let to_uv = match pl.props.transform("to_uv")? {
+            Some(m) => extract_uv(m),
+            None => self.legacy_uv_transform(&pl)?.unwrap_or(Mat3::IDENTITY),
+        };
         let texture = match pl.ty.as_str() {
             "bitmap" => {
                 let path = self.ctx.file_param(&pl, "bitmap texture")?;
