@@ -15,6 +15,13 @@ fn sunsky() {
     check_repo_reference("sunsky");
 }
 
+/// `sunsky.xml` in spectral mode against Mitsuba's `llvm_ad_spectral` (the 11-channel
+/// datasets, interpolated in wavelength, black beyond 720 nm as in Mitsuba).
+#[test]
+fn sunsky_spectral() {
+    check_repo_reference("sunsky_spectral");
+}
+
 /// `sunsky` placed by date, time and place, with `complex_sun` widened to 4°, an RGB
 /// albedo and a y-up frame.
 #[test]
