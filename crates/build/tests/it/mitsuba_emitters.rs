@@ -35,6 +35,39 @@ fn legacy_box() {
     check_repo_reference("legacy_box");
 }
 
+/// Mitsuba 3's `prb` (its differentiable path tracer, rendering forward what `path`
+/// renders): `sunsky.xml` with `prb` renders the reference of its `path` form.
+#[test]
+fn prb_renders_as_path() {
+    let dir = crate::repo_references::mitsuba_scenes();
+    let text = std::fs::read_to_string(dir.join("sunsky.xml")).unwrap();
+    let tmp = std::env::temp_dir().join(format!("penumbra-prb-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let path = tmp.join("sunsky_prb.xml");
+    std::fs::write(
+        &path,
+        text.replace(r#"<integrator type="path">"#, r#"<integrator type="prb">"#),
+    )
+    .unwrap();
+    let scene::Document::Scene(desc) = scene::load(&path, &Default::default()).unwrap() else {
+        panic!("not a scene")
+    };
+    let _ = std::fs::remove_dir_all(&tmp);
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let batches = crate::references::render_desc_batches(
+        &desc,
+        crate::references::SPP,
+        scene::RenderMode::Rgb,
+    );
+    crate::references::check_against(
+        &dir.join("refs/sunsky"),
+        "sunsky (prb)",
+        batches,
+        1.225e-4,
+        crate::references::SPP,
+    );
+}
+
 /// A scene of one `sunsky` emitter and nothing else (the build needs a camera).
 fn sky_scene(d: SunSkyDesc) -> SceneDesc {
     let path = crate::repo_references::mitsuba_scenes().join("sunsky.xml");

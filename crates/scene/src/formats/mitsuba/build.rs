@@ -1807,7 +1807,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     fn integrator(&mut self, pl: &Plugin<'s>) -> Result<IntegratorDesc> {
         let i = match pl.ty.as_str() {
-            "volpath" | "volpathmis" => IntegratorDesc::VolPath {
+            // Mitsuba 3's `prb`/`prbvolpath` render (forward) what `path`/`volpath` render.
+            "volpath" | "volpathmis" | "prbvolpath" => IntegratorDesc::VolPath {
                 max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
                 rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
                 hide_emitters: pl.props.bool("hide_emitters", false)?,
@@ -1828,7 +1829,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     }
                 },
             },
-            "path" => IntegratorDesc::Path(PathDesc {
+            "path" | "prb" => IntegratorDesc::Path(PathDesc {
                 max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
                 rr: RussianRoulette::Throughput {
                     from_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
