@@ -148,21 +148,27 @@ pub(crate) struct SolarPlace {
 /// Lara-Coira, Solar Energy 70(5), 2001): ecliptic, then celestial, then local coordinates,
 /// with the parallax correction.
 pub(crate) fn sun_position(t: &SolarTime, p: &SolarPlace) -> (f64, f64) {
-    use std::f64::consts::{PI, TAU};
+    use std::f32::consts::{PI, TAU};
+    // In single precision throughout, as Mitsuba computes it: the Julian date near 2.46·10⁶
+    // keeps a quarter of a day in f32, which moves the sun by up to a few hundredths of a
+    // degree; doing it in f64 would be more accurate and differ from Mitsuba by as much.
     // Days since noon, 1 January 2000, UT; the Julian day by integer arithmetic that
     // truncates as C does (Rust's `/` on integers too).
-    let ut_hours = t.hour - p.timezone + (t.minute + t.second / 60.0) / 60.0;
-    let a = (t.month - 14) / 12;
-    let jd_noon = (1461 * (t.year + 4800 + a)) / 4 + (367 * (t.month - 2 - 12 * a)) / 12
-        - (3 * ((t.year + 4900 + a) / 100)) / 4
-        + t.day
+    let (hour, minute, second) = (t.hour as f32, t.minute as f32, t.second as f32);
+    let ut_hours = hour - p.timezone as f32 + (minute + second / 60.0) / 60.0;
+    let (year, month, day) = (t.year as i32, t.month as i32, t.day as i32);
+    let a = (month - 14) / 12;
+    let jd_noon = (1461 * (year + 4800 + a)) / 4 + (367 * (month - 2 - 12 * a)) / 12
+        - (3 * ((year + 4900 + a) / 100)) / 4
+        + day
         - 32075;
-    let n = jd_noon as f64 - 0.5 + ut_hours / 24.0 - 2_451_545.0;
+    let jd = jd_noon as f32 - 0.5 + ut_hours / 24.0;
+    let n = jd - 2_451_545.0;
 
     // Ecliptic longitude and obliquity.
     let omega = 2.1429 - 0.0010394594 * n;
-    let mean_longitude = 4.8950630 + 0.017202791698 * n;
-    let anomaly = 6.2400600 + 0.0172019699 * n;
+    let mean_longitude = 4.895_063 + 0.017202791698 * n;
+    let anomaly = 6.24006 + 0.0172019699 * n;
     let lambda = mean_longitude + 0.03341607 * anomaly.sin() + 0.00034894 * (2.0 * anomaly).sin()
         - 0.0001134
         - 0.0000203 * omega.sin();
@@ -176,9 +182,9 @@ pub(crate) fn sun_position(t: &SolarTime, p: &SolarPlace) -> (f64, f64) {
     let declination = (obliquity.sin() * lambda.sin()).asin();
 
     // Local coordinates.
-    let gmst = 6.6974243242 + 0.0657098283 * n + ut_hours;
-    let lmst = (gmst * 15.0 + p.longitude).to_radians();
-    let lat = p.latitude.to_radians();
+    let gmst = 6.697_424_3 + 0.0657098283 * n + ut_hours;
+    let lmst = (gmst * 15.0 + p.longitude as f32).to_radians();
+    let lat = (p.latitude as f32).to_radians();
     let hour_angle = lmst - ra;
     let mut zenith =
         (lat.cos() * hour_angle.cos() * declination.cos() + declination.sin() * lat.sin()).acos();
@@ -189,8 +195,8 @@ pub(crate) fn sun_position(t: &SolarTime, p: &SolarPlace) -> (f64, f64) {
     }
     const EARTH_MEAN_RADIUS: f64 = 6371.01; // km
     const ASTRONOMICAL_UNIT: f64 = 149_597_890.0; // km
-    zenith += EARTH_MEAN_RADIUS / ASTRONOMICAL_UNIT * zenith.sin();
-    (zenith, azimuth - PI)
+    zenith += (EARTH_MEAN_RADIUS / ASTRONOMICAL_UNIT) as f32 * zenith.sin();
+    (zenith as f64, (azimuth - PI) as f64)
 }
 
 #[cfg(test)]
