@@ -147,6 +147,8 @@ pub(crate) struct SolarPlace {
 /// "Computing the solar vector" (Blanco-Muriel, Alarcón-Padilla, López-Moratalla and
 /// Lara-Coira, Solar Energy 70(5), 2001): ecliptic, then celestial, then local coordinates,
 /// with the parallax correction.
+// The paper's constants as published (f32 rounds them as Mitsuba's compiler does).
+#[allow(clippy::excessive_precision)]
 pub(crate) fn sun_position(t: &SolarTime, p: &SolarPlace) -> (f64, f64) {
     use std::f32::consts::{PI, TAU};
     // In single precision throughout, as Mitsuba computes it: the Julian date near 2.46·10⁶
