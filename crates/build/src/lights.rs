@@ -6,7 +6,7 @@ use std::sync::Arc;
 use render::image_io::{self, Decode};
 use render::lights::{
     AreaLight, ConstantLight, DirectionalLight, EnvMap, ImagePointLight, ImageProfile, Light,
-    PointLight, SpotLight,
+    PointLight, SpotLight, SunSkyLight,
 };
 use render::shapes::ShapeInfo;
 use render::shapes::{MeshSampling, ShapeGeom};
@@ -158,6 +158,7 @@ pub(crate) fn lights(
             } => Light::ImagePoint(Arc::new(image_point(
                 to_world, path, *intensity, *profile, *power, &e.loc,
             )?)),
+            scene::Emitter::SunSky(d) => Light::SunSky(Arc::new(sunsky(d))),
             scene::Emitter::EnvMap {
                 path,
                 scale,
@@ -178,6 +179,35 @@ pub(crate) fn lights(
         shape_lights: shape_light,
         media,
     })
+}
+
+/// Mitsuba 3's `sunsky`: the model's coefficients for this turbidity, albedo and sun, in the
+/// emitter's frame (the rotation of `to_world`). The spectral datasets read the albedo at the
+/// model's 11 wavelengths: a grey albedo as it is, a coloured one upsampled from its RGB.
+fn sunsky(d: &scene::SunSkyDesc) -> SunSkyLight {
+    use render::lights::sunsky_model::{self, SunSkyModel, SunSkyParams, WAVELENGTH_COUNT};
+    use render::spectral::Spectrum;
+    use render::spectral::rgb::{RgbAlbedoSpectrum, RgbToSpectrumTable};
+    let a = d.albedo;
+    let albedo_spectral = if a.x == a.y && a.y == a.z {
+        [a.x; WAVELENGTH_COUNT]
+    } else {
+        let s = RgbAlbedoSpectrum::new(RgbToSpectrumTable::srgb(), a.into());
+        std::array::from_fn(|i| s.eval(sunsky_model::wavelength(i)))
+    };
+    let rot = render::math::Mat3::from_mat4(d.to_world);
+    let sun_dir = (rot.inverse() * render::math::Vec3::from(d.sun_direction)).normalize();
+    let model = SunSkyModel::new(&SunSkyParams {
+        turbidity: d.turbidity,
+        albedo_rgb: a.to_array(),
+        albedo_spectral,
+        sun_dir,
+        sun_scale: d.sun_scale,
+        sky_scale: d.sky_scale,
+        sun_half_aperture: (0.5 * d.sun_aperture).to_radians(),
+        complex_sun: d.complex_sun,
+    });
+    SunSkyLight::new(model, rot)
 }
 
 /// An image-modulated point light: the frame's rotation (a uniform scale divided out), the

@@ -983,6 +983,9 @@ pub enum Emitter {
         profile: ImageProfile,
         power: Option<f32>,
     },
+    /// Mitsuba 3's `sunsky`: the Hošek–Wilkie sky and sun (the renderer's
+    /// `lights::sunsky_model`), in the frame of `to_world` (z up).
+    SunSky(SunSkyDesc),
     /// Image-based environment light.
     EnvMap {
         /// Resolved by the loader: absolute, or relative to the working directory.
@@ -991,6 +994,25 @@ pub enum Emitter {
         to_world: Mat4,
         mapping: EnvMapping,
     },
+}
+
+/// Mitsuba 3's `sunsky` parameters, with the sun's position already resolved.
+#[derive(Clone, Debug)]
+pub struct SunSkyDesc {
+    /// Atmospheric turbidity in [1, 10].
+    pub turbidity: f32,
+    /// Ground albedo (each channel in [0, 1]; a grey one is the same at every wavelength).
+    pub albedo: Rgb,
+    /// Towards the sun's centre, world space (from `sun_direction`, or from the date, time
+    /// and place by Blanco-Muriel et al.'s solar vector, as Mitsuba computes it).
+    pub sun_direction: Vec3,
+    pub sun_scale: f32,
+    pub sky_scale: f32,
+    /// The sun's full aperture, degrees.
+    pub sun_aperture: f32,
+    /// The solar radiance function with limb darkening instead of a uniform disk.
+    pub complex_sun: bool,
+    pub to_world: Mat4,
 }
 
 /// How an [`Emitter::ImagePoint`] maps directions to its image.
@@ -1012,6 +1034,7 @@ impl Emitter {
             Emitter::Directional { .. } => "directional",
             Emitter::Constant { .. } => "constant",
             Emitter::EnvMap { .. } => "envmap",
+            Emitter::SunSky(_) => "sunsky",
             Emitter::Ambient { .. } => "ambient",
             Emitter::ImagePoint {
                 profile: ImageProfile::Goniometric,

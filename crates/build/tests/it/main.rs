@@ -18,6 +18,8 @@ mod light_selection;
 mod media_emission;
 mod mip_filtering;
 mod mitsuba_bsdfs;
+mod mitsuba_emitters;
+mod mitsuba_legacy;
 mod motion_blur;
 mod nori;
 mod nori_vdb_box;

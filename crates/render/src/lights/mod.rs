@@ -1,6 +1,7 @@
 //! Emitters and their sampling, following Mitsuba 3's definitions: a file per kind behind
 //! one enum, dispatched like `bsdf/` — [`AreaLight`] (an emitting shape), [`PointLight`],
-//! [`SpotLight`], [`DirectionalLight`], [`ConstantLight`] and [`EnvMap`]. Light selection
+//! [`SpotLight`], [`DirectionalLight`], [`ConstantLight`], [`EnvMap`] and [`SunSkyLight`]
+//! (Mitsuba's `sunsky`, its model in [`sunsky_model`]). Light selection
 //! ([`select`]) and the light BVH ([`bvh`]) read each kind's power and bounds.
 //!
 //! Adding an emitter kind: a file here with its struct and its [`LightModel`] impl, a
@@ -15,6 +16,8 @@ mod image_point;
 mod point;
 pub mod select;
 mod spot;
+mod sunsky;
+pub mod sunsky_model;
 
 use std::sync::Arc;
 
@@ -26,6 +29,7 @@ pub use envmap::EnvMap;
 pub use image_point::{ImagePointLight, Profile as ImageProfile};
 pub use point::PointLight;
 pub use spot::SpotLight;
+pub use sunsky::SunSkyLight;
 
 use crate::geometry::Ray;
 use crate::math::{Vec2, Vec3};
@@ -215,6 +219,7 @@ pub enum Light {
     Constant(ConstantLight),
     EnvMap(Arc<EnvMap>),
     ImagePoint(Arc<ImagePointLight>),
+    SunSky(Arc<SunSkyLight>),
 }
 
 macro_rules! dispatch {
@@ -227,6 +232,7 @@ macro_rules! dispatch {
             Light::Constant($l) => $e,
             Light::EnvMap($l) => $e,
             Light::ImagePoint($l) => $e,
+            Light::SunSky($l) => $e,
         }
     };
 }

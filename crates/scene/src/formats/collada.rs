@@ -1091,11 +1091,34 @@ impl<'a, 'input> Ctx<'a, 'input> {
 
         // Orthonormal frame from the node transform; ours looks along +z with +x to the left.
         let origin = m.transform_point3(Vec3::ZERO);
-        let fwd = m.transform_vector3(-Vec3::Z).normalize_or_zero();
+        // CS184: c_dir = unit(transform * (0, 0, -1, 1)) (w = 1: the translation counts).
+        let view_dir = m.transform_point3(-Vec3::Z).normalize_or_zero();
+        let mut fwd = m.transform_vector3(-Vec3::Z).normalize_or_zero();
         let up0 = m.transform_vector3(Vec3::Y);
-        let left = up0.cross(fwd).normalize_or_zero();
+        let mut left = up0.cross(fwd).normalize_or_zero();
         if fwd == Vec3::ZERO || left == Vec3::ZERO || !left.is_finite() {
-            return Err(self.err(node, "camera node with a degenerate transform"));
+            // The course's program never builds a frame from the node's matrix: it places
+            // the camera from the view direction alone (`place_cs184` below, once the
+            // scene's bounds are known). So does this loader when the matrix has no frame
+            // (CS184's CBgems.dae: a 15-number matrix whose third row is zero).
+            if view_dir == Vec3::ZERO || !view_dir.is_finite() {
+                return Err(self.err(
+                    node,
+                    "camera node with a degenerate transform and no view direction",
+                ));
+            }
+            self.warn(
+                node,
+                "camera node with a degenerate transform: the camera is placed from its \
+                 view direction alone, as the course's program places it",
+            );
+            fwd = view_dir;
+            let hint = if fwd.y.abs() < 0.999 {
+                Vec3::Y
+            } else {
+                Vec3::Z
+            };
+            left = hint.cross(fwd).normalize();
         }
         let up = fwd.cross(left);
         let to_world = Mat4::from_cols(
@@ -1104,9 +1127,11 @@ impl<'a, 'input> Ctx<'a, 'input> {
             fwd.extend(0.0),
             origin.extend(1.0),
         );
-        // CS184: c_dir = unit(transform * (0, 0, -1, 1)) (w = 1: the translation counts).
-        self.view_dirs
-            .push(m.transform_point3(-Vec3::Z).normalize_or(-fwd));
+        self.view_dirs.push(if view_dir == Vec3::ZERO {
+            -fwd
+        } else {
+            view_dir
+        });
         let width = DEFAULT_WIDTH;
         let height = ((width as f32 / aspect).round() as u32).clamp(1, 1 << 16);
         Ok(Sensor {

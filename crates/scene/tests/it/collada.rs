@@ -94,3 +94,38 @@ fn cornell_spheres_match_the_course_layout() {
     assert!(n.y < 0.0 && n.x.abs() < 1e-6 && n.z.abs() < 1e-6);
     assert!((light.to_world.transform_point3(scene::Vec3::ZERO).y - 1.49).abs() < 1e-4);
 }
+
+/// CS184's `CBgems.dae` gives its camera a 15-number `<matrix>` whose third row is zero: no
+/// frame can be made of it. The course's program never uses one (it places the camera from
+/// the view direction and the scene's bounds), and neither do we: the file loads with a
+/// warning, its camera where the same node with a proper matrix (`floor_sphere.dae`'s, of the
+/// same view direction) puts it.
+#[test]
+fn camera_with_a_degenerate_matrix_is_placed_from_its_view_direction() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let good = root.join("scenes/cs184/floor_sphere.dae");
+    let text = std::fs::read_to_string(&good).unwrap();
+    let matrix = "-1 0 0 0 0 0 1 3 0 1 0 0 0 0 0 1";
+    assert!(text.contains(matrix));
+    let dir = std::env::temp_dir().join(format!("penumbra-cbgems-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("degenerate_camera.dae");
+    // CBgems.dae's camera matrix, verbatim.
+    std::fs::write(&bad, text.replace(matrix, "-1 0 0 0 0 0 1 3 0 0 0 0 0 0 1")).unwrap();
+    let load = |p: &Path| match scene::load(p, &LoadOptions::default()) {
+        Ok(Document::Scene(d)) => d,
+        Ok(_) => panic!("not a scene"),
+        Err(e) => panic!("{}: {e}", p.display()),
+    };
+    let (a, b) = (load(&good), load(&bad));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        b.warnings
+            .iter()
+            .any(|w| w.message.contains("placed from its view direction")),
+        "{:?}",
+        b.warnings
+    );
+    let (ma, mb) = (a.sensors[0].camera.to_world, b.sensors[0].camera.to_world);
+    assert!(ma.abs_diff_eq(mb, 1e-5), "{ma:?} vs {mb:?}");
+}

@@ -7,6 +7,10 @@ use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec3};
 
+mod emitters;
+mod legacy;
+mod principled;
+
 use super::ior;
 use super::plugin::{Child, Plugin};
 use super::props::{ColorSpec, Value, parse_floats};
@@ -15,9 +19,6 @@ use crate::model::*;
 use crate::spectra::{self, SpectrumUse};
 use crate::{LoadError, Loc, Result, Warning};
 use base::dispersion::Dispersion;
-
-#[path = "bsdf_principled.rs"]
-mod bsdf_principled;
 
 /// Largest accepted film side and pixel count (a bigger film would not fit in memory).
 const MAX_FILM_SIDE: i64 = 1 << 16;
@@ -316,7 +317,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         };
         let usage = usage_for(name, emitter);
         let value = match &p.value {
-            Value::Color(spec) => spec_to_value(spec, usage, &p.loc)?,
+            Value::Color(spec) => match self.legacy_color(spec) {
+                Some(v) => v,
+                None => spec_to_value(spec, usage, &p.loc)?,
+            },
             Value::Float(v) => ColorValue::Rgb(Vec3::splat(*v as f32)),
             Value::Int(v) => ColorValue::Rgb(Vec3::splat(*v as f32)),
             other => {
@@ -549,10 +553,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             return Ok(t);
         }
         let pl = self.ctx.plugin(c.elem)?;
-        let to_uv = pl
-            .props
-            .transform("to_uv")?
-            .map_or(Mat3::IDENTITY, extract_uv);
+        let to_uv = match pl.props.transform("to_uv")? {
+            Some(m) => extract_uv(m),
+            None => self.legacy_uv_transform(&pl)?.unwrap_or(Mat3::IDENTITY),
+        };
         let texture = match pl.ty.as_str() {
             "bitmap" => {
                 let path = self.ctx.file_param(&pl, "bitmap texture")?;
@@ -1194,12 +1198,18 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     mapping: EnvMapping::LatLong,
                 }
             }
-            _ => {
-                return Err(unknown_type(
-                    pl,
-                    "area, point, spot, directional, constant, envmap",
-                ));
-            }
+            _ => match self.extra_emitter(pl, to_world)? {
+                Some(e) => e,
+                None => {
+                    return Err(unknown_type(
+                        pl,
+                        &format!(
+                            "area, point, spot, directional, constant, envmap, {}",
+                            emitters::TYPES.join(", ")
+                        ),
+                    ));
+                }
+            },
         };
         Ok(Some(e))
     }
@@ -1784,7 +1794,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     fn integrator(&mut self, pl: &Plugin<'s>) -> Result<IntegratorDesc> {
         let i = match pl.ty.as_str() {
-            "volpath" | "volpathmis" => IntegratorDesc::VolPath {
+            // Mitsuba 3's `prb`/`prbvolpath` render (forward) what `path`/`volpath` render.
+            "volpath" | "volpathmis" | "prbvolpath" => IntegratorDesc::VolPath {
                 max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
                 rr_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
                 hide_emitters: pl.props.bool("hide_emitters", false)?,
@@ -1805,7 +1816,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     }
                 },
             },
-            "path" => IntegratorDesc::Path(PathDesc {
+            "path" | "prb" => IntegratorDesc::Path(PathDesc {
                 max_depth: pl.props.int_in("max_depth", -1, -1, i32::MAX as i64)? as i32,
                 rr: RussianRoulette::Throughput {
                     from_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
