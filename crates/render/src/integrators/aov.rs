@@ -107,9 +107,8 @@ fn first_non_delta(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, norma
         if bsdf.has_smooth() {
             // An emitter seen directly is "no surface" to the denoiser (albedo and normal 0),
             // which sets it apart from the surface around it: a luminaire in a ceiling has the
-            // ceiling's normal and often its reflectance. On Mitsuba's Cornell box at 16 spp
-            // this cut the denoised relMSE from 1.44e-3 (albedo: the emission's colour) and
-            // 2.37e-3 (the emitter's reflectance) to 1.10e-3, the light's edges being most of it.
+            // ceiling's normal and often its reflectance (the alternatives measured are in
+            // bench/README.md, "Denoising").
             if emitter_hit(scene, &si, &RgbMode).is_some() {
                 return Vec3::ZERO;
             }
