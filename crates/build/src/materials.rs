@@ -7,7 +7,7 @@ use std::sync::Arc;
 use render::bsdf::{IdealLobe, Microfacet, MicrofacetType, NoriMicrofacet, RoughPlasticTables};
 use render::materials::{
     Coated, CoatedBase, ConductorSpectra, CourseLobe, Layer, MaterialKind, Perturb,
-    PrincipledParams, RtMaterial, Then, alpha,
+    PrincipledParams, PrincipledThinParams, RtMaterial, Then, alpha,
 };
 use render::math::PVec3;
 use render::spectral::DeclaredSpectrum;
@@ -612,6 +612,21 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
             eta: d.eta,
             rates: d.rates,
         })),
+        Material::PrincipledThin(d) => {
+            MaterialKind::PrincipledThin(Box::new(PrincipledThinParams {
+                base_color: declared.color_ref(&d.base_color),
+                roughness: float_ref(&d.roughness),
+                anisotropic: float_ref(&d.anisotropic),
+                spec_trans: float_ref(&d.spec_trans),
+                spec_tint: float_ref(&d.spec_tint),
+                sheen: float_ref(&d.sheen),
+                sheen_tint: float_ref(&d.sheen_tint),
+                flatness: float_ref(&d.flatness),
+                diff_trans: float_ref(&d.diff_trans),
+                eta: float_ref(&d.eta),
+                rates: d.rates,
+            }))
+        }
         Material::Null
         | Material::Unlit { .. }
         | Material::TwoSided { .. }

@@ -16,8 +16,8 @@ use base::dispersion::{Dispersion, DispersionSampling};
 use crate::bsdf::{
     Blend, Bsdf, Bumped, Conductor, CourseMaterial, Dielectric, Diffuse, DiffuseTransmission, Ggx,
     IdealLobe, Layered, LayeredBase, LayeredInterface, Microfacet, MicrofacetType, NoriMicrofacet,
-    PhongFamily, Plastic, PolarizedPlastic, Principled, RoughConductor, RoughDielectric,
-    RoughPlastic, RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
+    PhongFamily, Plastic, PolarizedPlastic, Principled, PrincipledThin, RoughConductor,
+    RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric, rgb_sampling_weight,
 };
 use crate::math::{Frame, Vec3};
 use crate::sampling::sampler::{hash2, u64_to_unit};
@@ -185,6 +185,8 @@ pub enum MaterialKind {
     Coated(Box<Coated>),
     /// Mitsuba's `principled` (boxed: rare and large).
     Principled(Box<PrincipledParams>),
+    /// Mitsuba's `principledthin` (boxed: rare and large).
+    PrincipledThin(Box<PrincipledThinParams>),
     /// Mitsuba's `pplastic` (unpolarised).
     PolarizedPlastic {
         microfacet: Microfacet,
@@ -247,6 +249,44 @@ impl PrincipledParams {
         b.flatness = f(&self.flatness);
         b.clearcoat = f(&self.clearcoat);
         b.clearcoat_gloss = f(&self.clearcoat_gloss);
+        b.rates = self.rates;
+        b
+    }
+}
+
+/// The parameters of Mitsuba's `principledthin` (see [`crate::bsdf::PrincipledThin`]).
+#[derive(Clone, Debug)]
+pub struct PrincipledThinParams {
+    pub base_color: ColorRef,
+    pub roughness: FloatRef,
+    pub anisotropic: FloatRef,
+    pub spec_trans: FloatRef,
+    pub spec_tint: FloatRef,
+    pub sheen: FloatRef,
+    pub sheen_tint: FloatRef,
+    pub flatness: FloatRef,
+    /// Mitsuba's 0..2 `diff_trans`.
+    pub diff_trans: FloatRef,
+    pub eta: FloatRef,
+    /// Sampling rates: specular reflection, specular transmission, diffuse reflection,
+    /// diffuse transmission.
+    pub rates: [f32; 4],
+}
+
+impl PrincipledThinParams {
+    fn bsdf<P: Params, M: ColorMode>(&self, p: &P, at: TexCoord, m: &M) -> PrincipledThin<M::C> {
+        let rgb = p.color(&self.base_color, at);
+        let f = |r: &FloatRef| p.float(r, at);
+        let mut b = PrincipledThin::with_base(m.albedo_read(p, &self.base_color, rgb), rgb);
+        b.roughness = f(&self.roughness);
+        b.anisotropic = f(&self.anisotropic);
+        b.spec_trans = f(&self.spec_trans);
+        b.spec_tint = f(&self.spec_tint);
+        b.sheen = f(&self.sheen);
+        b.sheen_tint = f(&self.sheen_tint);
+        b.flatness = f(&self.flatness);
+        b.diff_trans = f(&self.diff_trans);
+        b.eta = f(&self.eta);
         b.rates = self.rates;
         b
     }
@@ -528,6 +568,7 @@ impl MaterialKind {
                 alpha_u, alpha_v, ..
             } => alpha_u == alpha_v,
             MaterialKind::Principled(b) => b.anisotropic == TexRef::Const(0.0),
+            MaterialKind::PrincipledThin(b) => b.anisotropic == TexRef::Const(0.0),
             MaterialKind::Blend { kinds, .. } => kinds.iter().all(MaterialKind::isotropic),
             MaterialKind::PolarizedPlastic { microfacet, .. } => microfacet.is_isotropic(),
             MaterialKind::Coated(c) => {
@@ -699,6 +740,7 @@ impl MaterialKind {
             }
             MaterialKind::Coated(c) => Bsdf::Layered(Box::new(c.bsdf(p, at, m))),
             MaterialKind::Principled(b) => Bsdf::Principled(Box::new(b.bsdf(p, at, m))),
+            MaterialKind::PrincipledThin(b) => Bsdf::PrincipledThin(Box::new(b.bsdf(p, at, m))),
             MaterialKind::PolarizedPlastic {
                 microfacet,
                 eta,

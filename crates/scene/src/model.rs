@@ -726,6 +726,8 @@ pub enum Material {
     },
     /// Mitsuba 3's `principled` (Disney's BSDF as Mitsuba defines it).
     Principled(Box<PrincipledDesc>),
+    /// Mitsuba 3's `principledthin` (the two-sided thin-sheet variant).
+    PrincipledThin(Box<PrincipledThinDesc>),
     /// Mitsuba 3's `pplastic` as its unpolarised variants render it (`alpha_u`/`alpha_v`
     /// constants, Beckmann by default, α = 0.1, polypropylene in air).
     PolarizedPlastic {
@@ -771,6 +773,26 @@ pub struct PrincipledDesc {
     /// `main_specular_sampling_rate`, `clearcoat_sampling_rate`,
     /// `diffuse_reflectance_sampling_rate`.
     pub rates: [f32; 3],
+}
+
+/// Mitsuba 3's `principledthin` parameters, with its defaults (base colour 0.5, roughness
+/// 0.5, eta 1.5, everything else 0, sampling rates 1); every parameter but the rates may be
+/// a texture. `diff_trans` is Mitsuba's, in 0..2.
+#[derive(Clone, Debug)]
+pub struct PrincipledThinDesc {
+    pub base_color: ColorParam,
+    pub roughness: FloatParam,
+    pub anisotropic: FloatParam,
+    pub spec_trans: FloatParam,
+    pub spec_tint: FloatParam,
+    pub sheen: FloatParam,
+    pub sheen_tint: FloatParam,
+    pub flatness: FloatParam,
+    pub diff_trans: FloatParam,
+    pub eta: FloatParam,
+    /// `specular_reflectance_sampling_rate`, `specular_transmittance_sampling_rate`,
+    /// `diffuse_reflectance_sampling_rate`, `diffuse_transmittance_sampling_rate`.
+    pub rates: [f32; 4],
 }
 
 /// The ideal lobe of a CENG795 `mirror`, `conductor` or `dielectric` material, traced on top
@@ -824,6 +846,7 @@ impl Material {
             Material::CoatedConductor { .. } => "coatedconductor",
             Material::Mix { .. } => "mix",
             Material::Principled(_) => "principled",
+            Material::PrincipledThin(_) => "principledthin",
             Material::Blend { .. } => "blendbsdf",
             Material::PolarizedPlastic { .. } => "pplastic",
             Material::HeightBump { .. } => "bumpmap",

@@ -33,3 +33,11 @@ fn bumpmap() {
 fn pplastic() {
     check_repo_reference("pplastic");
 }
+
+/// `principledthin`: a rough anisotropic spec_trans sheet (spec_tint, eta), a diffuse
+/// transmission sheet with sheen and flatness (textured base colour), a sphere with bitmap
+/// spec_trans and roughness, a thin ground; the sheets backlit.
+#[test]
+fn principledthin() {
+    check_repo_reference("principledthin");
+}

@@ -31,6 +31,7 @@ mod phong;
 mod plastic;
 mod pplastic;
 mod principled;
+mod principled_thin;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
@@ -50,6 +51,7 @@ pub use phong::PhongFamily;
 pub use plastic::{Plastic, rgb_sampling_weight};
 pub use pplastic::PolarizedPlastic;
 pub use principled::{Principled, disney_alphas, luminance};
+pub use principled_thin::PrincipledThin;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{RoughPlastic, RoughPlasticTables};
@@ -142,6 +144,8 @@ pub enum Bsdf<C: Color = Vec3> {
     Layered(Box<Layered<C>>),
     /// Boxed: a dozen parameters (Mitsuba scenes only).
     Principled(Box<Principled<C>>),
+    /// Boxed for the same reason as `Principled`.
+    PrincipledThin(Box<PrincipledThin<C>>),
     PolarizedPlastic(PolarizedPlastic<C>),
     /// Mitsuba's `blendbsdf` of two models (boxed: it holds two `Bsdf`s).
     Blend(Box<Blend<C>>),
@@ -173,6 +177,10 @@ macro_rules! dispatch {
                 $e
             }
             Bsdf::Principled($b) => {
+                let $b = &**$b;
+                $e
+            }
+            Bsdf::PrincipledThin($b) => {
                 let $b = &**$b;
                 $e
             }
@@ -239,6 +247,7 @@ impl<C: Color> Bsdf<C> {
         match self {
             Bsdf::RoughDielectric(_) | Bsdf::DiffuseTransmission(_) => true,
             Bsdf::Principled(p) => p.spec_trans > 0.0 && p.metallic < 1.0,
+            Bsdf::PrincipledThin(p) => p.transmits(),
             Bsdf::Blend(b) => b.bsdfs.iter().any(Bsdf::has_transmission),
             Bsdf::Bumped(b) => b.inner.has_transmission(),
             _ => false,
@@ -285,6 +294,12 @@ impl<C: Color> From<CourseMaterial<C>> for Bsdf<C> {
 impl<C: Color> From<Principled<C>> for Bsdf<C> {
     fn from(b: Principled<C>) -> Bsdf<C> {
         Bsdf::Principled(Box::new(b))
+    }
+}
+
+impl<C: Color> From<PrincipledThin<C>> for Bsdf<C> {
+    fn from(b: PrincipledThin<C>) -> Bsdf<C> {
+        Bsdf::PrincipledThin(Box::new(b))
     }
 }
 

@@ -15,8 +15,8 @@
 use base::PhongModel;
 use render::bsdf::{
     Blend, Bsdf, CourseMaterial, Diffuse, IdealLobe, MicrofacetType, NoriMicrofacet, PhongFamily,
-    Plastic, PolarizedPlastic, Principled, RoughConductor, RoughDielectric, RoughPlastic,
-    TransportMode,
+    Plastic, PolarizedPlastic, Principled, PrincipledThin, RoughConductor, RoughDielectric,
+    RoughPlastic, TransportMode,
 };
 use render::math::{Vec2, Vec3};
 use render::spectral::SampledSpectrum;
@@ -115,6 +115,13 @@ fn cases() -> Vec<(String, Bsdf, Vec3)> {
         if transmits {
             add(format!("principled {tag}"), b.into(), true);
         }
+    }
+    // Mitsuba's principledthin: both sides are fronts, so every set from below too.
+    for (tag, f) in principled_thin_configs() {
+        let mut b = PrincipledThin::new(Vec3::new(0.8, 0.4, 0.2));
+        f(&mut b);
+        add(format!("principledthin {tag}"), b.clone().into(), false);
+        add(format!("principledthin {tag}"), b.into(), true);
     }
     // Mitsuba's pplastic (unpolarised).
     for (kind, au, av) in [
@@ -265,6 +272,42 @@ fn principled_configs() -> Vec<PrincipledConfig> {
     ]
 }
 
+type PrincipledThinConfig = (&'static str, fn(&mut PrincipledThin));
+
+/// Parameter sets of the principledthin χ² cases.
+fn principled_thin_configs() -> Vec<PrincipledThinConfig> {
+    vec![
+        ("default", |_| {}),
+        ("spec_trans diff_trans anisotropic", |b| {
+            b.spec_trans = 0.6;
+            b.diff_trans = 0.8;
+            b.anisotropic = 0.7;
+            b.roughness = 0.35;
+            b.spec_tint = 0.5;
+        }),
+        ("glossy spec_trans sheen flatness", |b| {
+            b.spec_trans = 0.8;
+            b.roughness = 0.15;
+            b.eta = 1.33;
+            b.sheen = 0.8;
+            b.sheen_tint = 0.4;
+            b.flatness = 0.6;
+        }),
+        ("all specular, dense", |b| {
+            b.spec_trans = 1.0;
+            b.roughness = 0.5;
+            b.eta = 2.2;
+            b.rates = [0.5, 1.5, 1.0, 1.0];
+        }),
+        ("diffuse transmission only", |b| {
+            b.spec_trans = 0.3;
+            b.diff_trans = 2.0;
+            b.roughness = 0.8;
+            b.rates = [1.0, 1.0, 2.0, 0.7];
+        }),
+    ]
+}
+
 fn rel_close(a: Vec3, b: Vec3, tol: f32) -> bool {
     (a - b).abs().max_element() <= tol * a.abs().max(b.abs()).max_element().max(1e-6)
 }
@@ -360,7 +403,12 @@ fn chi2_phong_family() {
 
 #[test]
 fn chi2_principled() {
-    run_family(|n| n.starts_with("principled"));
+    run_family(|n| n.starts_with("principled "));
+}
+
+#[test]
+fn chi2_principled_thin() {
+    run_family(|n| n.starts_with("principledthin "));
 }
 
 #[test]
@@ -389,7 +437,8 @@ fn families_cover_all_cases() {
         "roughplastic",
         "nori",
         "phong-family",
-        "principled",
+        "principled ",
+        "principledthin ",
         "blendbsdf",
         "pplastic",
     ];

@@ -1182,3 +1182,52 @@ fn dispersive_dielectrics() {
         assert!(e.to_string().contains(what), "{bad}: {e}");
     }
 }
+
+/// `principledthin`: Mitsuba's defaults (base colour 0.5, roughness 0.5, η 1.5, the rest 0,
+/// rates 1), and every parameter a texture, `eta` included.
+#[test]
+fn principledthin_defaults_and_textures() {
+    let s = scene_of(
+        r#"<scene version="3.0.0">
+        <bsdf type="principledthin" id="plain"/>
+        <bsdf type="principledthin" id="textured">
+            <texture name="eta" type="checkerboard"/>
+            <texture name="diff_trans" type="checkerboard"/>
+            <float name="spec_trans" value="0.4"/>
+            <float name="diffuse_transmittance_sampling_rate" value="2"/>
+        </bsdf>
+        </scene>"#,
+    );
+    let by_name = |n: &str| {
+        &s.materials
+            .iter()
+            .find(|m| m.name.as_deref() == Some(n))
+            .unwrap()
+            .material
+    };
+    let Material::PrincipledThin(d) = by_name("plain") else {
+        panic!()
+    };
+    assert!(matches!(&d.base_color, ColorParam::Const(c) if *c == Rgb::splat(0.5)));
+    assert_eq!(d.roughness, FloatParam::Const(0.5));
+    assert_eq!(d.eta, FloatParam::Const(1.5));
+    for p in [
+        &d.anisotropic,
+        &d.spec_trans,
+        &d.spec_tint,
+        &d.sheen,
+        &d.sheen_tint,
+    ] {
+        assert_eq!(*p, FloatParam::Const(0.0));
+    }
+    assert_eq!(d.flatness, FloatParam::Const(0.0));
+    assert_eq!(d.diff_trans, FloatParam::Const(0.0));
+    assert_eq!(d.rates, [1.0; 4]);
+    let Material::PrincipledThin(d) = by_name("textured") else {
+        panic!()
+    };
+    assert!(matches!(d.eta, FloatParam::Texture(_)));
+    assert!(matches!(d.diff_trans, FloatParam::Texture(_)));
+    assert_eq!(d.spec_trans, FloatParam::Const(0.4));
+    assert_eq!(d.rates, [1.0, 1.0, 1.0, 2.0]);
+}

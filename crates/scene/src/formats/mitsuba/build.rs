@@ -1031,6 +1031,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             }
             "null" => Material::Null,
             "principled" => self.principled(pl)?,
+            "principledthin" => self.principledthin(pl)?,
             "blendbsdf" => self.blendbsdf(pl)?,
             "pplastic" => self.pplastic(pl)?,
             // Nori
@@ -1048,7 +1049,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 return Err(unknown_type(
                     pl,
                     "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-                     roughdielectric, plastic, roughplastic, twosided, null, principled, blendbsdf, bumpmap, pplastic, \
+                     roughdielectric, plastic, roughplastic, twosided, null, principled, principledthin, blendbsdf, bumpmap, pplastic, \
                      mirror, \
                      microfacet",
                 ));

@@ -74,6 +74,30 @@ impl<'s> SceneBuilder<'_, 's> {
         })))
     }
 
+    /// `principledthin`: every parameter but the sampling rates may be a texture (`eta`
+    /// too); there is no `specular`.
+    pub(super) fn principledthin(&mut self, pl: &Plugin<'s>) -> Result<Material> {
+        Ok(Material::PrincipledThin(Box::new(PrincipledThinDesc {
+            base_color: self.color(pl, "base_color", 0.5, false)?,
+            roughness: self.float_param(pl, "roughness", 0.5)?,
+            anisotropic: self.float_param(pl, "anisotropic", 0.0)?,
+            spec_trans: self.float_param(pl, "spec_trans", 0.0)?,
+            spec_tint: self.float_param(pl, "spec_tint", 0.0)?,
+            sheen: self.float_param(pl, "sheen", 0.0)?,
+            sheen_tint: self.float_param(pl, "sheen_tint", 0.0)?,
+            flatness: self.float_param(pl, "flatness", 0.0)?,
+            diff_trans: self.float_param(pl, "diff_trans", 0.0)?,
+            eta: self.float_param(pl, "eta", 1.5)?,
+            rates: [
+                pl.props.float("specular_reflectance_sampling_rate", 1.0)?,
+                pl.props
+                    .float("specular_transmittance_sampling_rate", 1.0)?,
+                pl.props.float("diffuse_reflectance_sampling_rate", 1.0)?,
+                pl.props.float("diffuse_transmittance_sampling_rate", 1.0)?,
+            ],
+        })))
+    }
+
     /// `blendbsdf`: two nested bsdfs and a `weight` (float or texture, required), the second
     /// one's share.
     pub(super) fn blendbsdf(&mut self, pl: &Plugin<'s>) -> Result<Material> {
