@@ -69,11 +69,13 @@ fn noisy_and_denoised(scene: &Path, args: &[&str], dir: &Path) -> (Image, Image)
 /// Acceptance 1: relMSE against Mitsuba's references, noisy and denoised, on the two box-
 /// filtered Cornell boxes (so the noisy image is also the plain render).
 ///
-/// bench-cbox at 4 spp: about 50×. mitsuba-cbox at 16 spp: 8.1, 7.6 and 8.7× for seeds 0–2
-/// (8.1× pooled); what is left there is the luminaire's edges, whose coverage at 16 samples
-/// of the independent sampler is noise that no auxiliary image shows (the pixels along it are
-/// ~80 % of the denoised error). The assertion keeps a margin for OIDN builds and hosts: 7×
-/// each seed, 7.5× pooled.
+/// relMSE is an expectation over renders, so mitsuba-cbox's ratio is the pooled one over
+/// seeds: at 16 spp, seeds 0–9 gave 8.1, 7.6, 8.7, 9.9, 9.7, 9.3, 7.2, 8.6, 10.0 and 10.3×
+/// (8.8× pooled; 8.8× over the six tested here). What is left there is the luminaire's
+/// edges, whose coverage at 16 samples of the independent sampler is noise that no auxiliary
+/// image shows (the pixels along it are ~80 % of the denoised error), hence the spread
+/// between seeds. bench-cbox at 4 spp: about 118×. Asserted: 8× pooled (the acceptance
+/// line), 7× at each seed, 8× on bench-cbox.
 #[test]
 fn denoising_lowers_rel_mse() {
     let Some(shared) = scene::testing::shared_dir("references") else {
@@ -100,7 +102,7 @@ fn denoising_lowers_rel_mse() {
     let cbox = load_reference(&shared.join("mitsuba-cbox")).unwrap();
     let scene = shared.join("../scenes/standard/mitsuba-cbox/cbox-rgb.xml");
     let (mut sn, mut sd) = (0.0, 0.0);
-    for seed in ["0", "1", "2"] {
+    for seed in ["0", "1", "2", "3", "4", "5"] {
         let (n, d) = noisy_and_denoised(
             &scene,
             &["-D", "res=128", "--spp", "16", "--seed", seed],
@@ -123,7 +125,7 @@ fn denoising_lowers_rel_mse() {
         sd += rd;
     }
     println!("mitsuba-cbox pooled: {:.2}×", sn / sd);
-    assert!(sn / sd >= 7.5, "mitsuba-cbox pooled: only {:.2}×", sn / sd);
+    assert!(sn / sd >= 8.0, "mitsuba-cbox pooled: only {:.2}×", sn / sd);
 }
 
 /// Per row of `img`, the x where the profile crosses halfway between the row's dark and
