@@ -2,9 +2,8 @@
 //! the sphere.
 
 use super::LightScene;
-use super::select::{disk_before_scene, disk_pdf, mean, scene_radius};
+use super::select::{infinite_emission, infinite_pdf_le, mean, scene_radius};
 use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
-use crate::geometry::Ray;
 use crate::math::{PI, Vec2, Vec3};
 use crate::sampling::warp;
 use crate::shapes::SurfaceInteraction;
@@ -69,22 +68,13 @@ impl LightModel for ConstantLight {
         m: &M,
     ) -> Option<EmissionSample<M::C>> {
         let d = -warp::square_to_uniform_sphere(u_dir);
-        let pdf_dir = warp::uniform_sphere_pdf();
-        let (o, pdf_pos) = disk_before_scene(scene, d, u_pos);
-        Some(EmissionSample {
-            ray: Ray::new(o, d),
-            p: o,
-            weight: m.illuminant_declared(self.radiance, self.spectrum.as_deref())
-                / (pdf_pos * pdf_dir),
-            pdf_pos,
-            pdf_dir,
-            n: Vec3::ZERO,
-        })
+        let radiance = m.illuminant_declared(self.radiance, self.spectrum.as_deref());
+        infinite_emission(scene, d, radiance, warp::uniform_sphere_pdf(), u_pos)
     }
 
     /// (1/π r², 1/4π) along every direction.
     fn pdf_le(&self, scene: &impl LightScene, _p: Vec3, _n: Vec3, _d: Vec3) -> (f32, f32) {
-        (disk_pdf(scene), warp::uniform_sphere_pdf())
+        infinite_pdf_le(scene, warp::uniform_sphere_pdf())
     }
 
     /// The power through a disk of the scene's bounding radius r: 4π·π r²·L.

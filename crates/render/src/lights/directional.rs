@@ -2,9 +2,8 @@
 //! light.
 
 use super::LightScene;
-use super::select::{disk_before_scene, disk_pdf, mean, scene_radius};
+use super::select::{infinite_emission, infinite_pdf_le, mean, scene_radius};
 use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
-use crate::geometry::Ray;
 use crate::math::{PI, Vec2, Vec3};
 use crate::spectral::DeclaredSpectrum;
 use crate::spectral::lanes::ColorMode;
@@ -56,15 +55,8 @@ impl LightModel for DirectionalLight {
         if self.direction == Vec3::ZERO {
             return None;
         }
-        let (o, pdf_pos) = disk_before_scene(scene, self.direction, u_pos);
-        Some(EmissionSample {
-            ray: Ray::new(o, self.direction),
-            p: o,
-            weight: m.illuminant_declared(self.irradiance, self.spectrum.as_deref()) / pdf_pos,
-            pdf_pos,
-            pdf_dir: 1.0,
-            n: Vec3::ZERO,
-        })
+        let irradiance = m.illuminant_declared(self.irradiance, self.spectrum.as_deref());
+        infinite_emission(scene, self.direction, irradiance, 1.0, u_pos)
     }
 
     /// (1/π r², 1) along the light's direction (to a cosine of 1 − 10⁻⁶, about 0.08°: a
@@ -73,7 +65,7 @@ impl LightModel for DirectionalLight {
         if self.direction == Vec3::ZERO || d.dot(self.direction) < 1.0 - 1e-6 {
             return (0.0, 0.0);
         }
-        (disk_pdf(scene), 1.0)
+        infinite_pdf_le(scene, 1.0)
     }
 
     /// The power through a disk of the scene's bounding radius r: π r²·E.

@@ -9,10 +9,9 @@
 use base::EnvMapping;
 
 use super::LightScene;
-use super::select::{disk_before_scene, disk_pdf, mean, scene_radius};
+use super::select::{infinite_emission, infinite_pdf_le, mean, scene_radius};
 use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
 use crate::film::Image;
-use crate::geometry::Ray;
 use crate::math::{INV_PI, Mat3, Mat4, PI, Vec2, Vec3, luminance};
 use crate::sampling::distrib::Distribution2D;
 use crate::sampling::warp;
@@ -243,28 +242,13 @@ impl LightModel for EnvMap {
         m: &M,
     ) -> Option<EmissionSample<M::C>> {
         let (wi, li, pdf_dir) = self.sample(u_dir)?;
-        if !(pdf_dir > 0.0 && pdf_dir.is_finite()) {
-            return None;
-        }
-        let (o, pdf_pos) = disk_before_scene(scene, -wi, u_pos);
-        Some(EmissionSample {
-            ray: Ray::new(o, -wi),
-            p: o,
-            weight: m.illuminant(li) / (pdf_pos * pdf_dir),
-            pdf_pos,
-            pdf_dir,
-            n: Vec3::ZERO,
-        })
+        infinite_emission(scene, -wi, m.illuminant(li), pdf_dir, u_pos)
     }
 
     /// (1/π r², the map's sampling density of −d in solid angle, as `pdf_li`); (0, 0) where
     /// that density is 0.
     fn pdf_le(&self, scene: &impl LightScene, _p: Vec3, _n: Vec3, d: Vec3) -> (f32, f32) {
-        let pdf_dir = self.pdf(-d);
-        if !(pdf_dir > 0.0 && pdf_dir.is_finite()) {
-            return (0.0, 0.0);
-        }
-        (disk_pdf(scene), pdf_dir)
+        infinite_pdf_le(scene, self.pdf(-d))
     }
 
     /// The power through a disk of the scene's bounding radius r: 4π·π r²·L̄, L̄ the

@@ -11,7 +11,8 @@
 
 use base::LightSelection;
 
-use super::LightScene;
+use super::{EmissionSample, LightScene};
+use crate::geometry::Ray;
 use crate::math::{Frame, PI, Vec2, Vec3};
 use crate::sampling::distrib::AliasTable;
 use crate::sampling::warp;
@@ -75,6 +76,40 @@ pub(super) fn disk_before_scene(scene: &impl LightScene, d: Vec3, u: Vec2) -> (V
         c + r * (f.to_world(Vec3::new(p.x, p.y, -1.0))),
         disk_pdf(scene),
     )
+}
+
+/// The emitted ray of an infinite light travelling along the unit direction `d`, carrying
+/// `radiance` (from the direction −d) drawn with solid-angle density `pdf_dir` (1 for a
+/// directional light's delta): its origin from [`disk_before_scene`] and its weight
+/// L/(pdf_pos·pdf_dir). `None` where `pdf_dir` is not a positive finite density.
+pub(super) fn infinite_emission<C: Copy + std::ops::Div<f32, Output = C>>(
+    scene: &impl LightScene,
+    d: Vec3,
+    radiance: C,
+    pdf_dir: f32,
+    u_pos: Vec2,
+) -> Option<EmissionSample<C>> {
+    if !(pdf_dir > 0.0 && pdf_dir.is_finite()) {
+        return None;
+    }
+    let (o, pdf_pos) = disk_before_scene(scene, d, u_pos);
+    Some(EmissionSample {
+        ray: Ray::new(o, d),
+        p: o,
+        weight: radiance / (pdf_pos * pdf_dir),
+        pdf_pos,
+        pdf_dir,
+        n: Vec3::ZERO,
+    })
+}
+
+/// An infinite light's `pdf_le` for a direction it samples with density `pdf_dir`:
+/// (1/(π r²), `pdf_dir`), or (0, 0) where `pdf_dir` is not a positive finite density.
+pub(super) fn infinite_pdf_le(scene: &impl LightScene, pdf_dir: f32) -> (f32, f32) {
+    if !(pdf_dir > 0.0 && pdf_dir.is_finite()) {
+        return (0.0, 0.0);
+    }
+    (disk_pdf(scene), pdf_dir)
 }
 
 /// The density per unit area of the origins [`disk_before_scene`] draws, 1/(π r²): an

@@ -10,10 +10,9 @@
 //! `build/tests/it/chi2_lights.rs`).
 
 use super::LightScene;
-use super::select::{disk_before_scene, disk_pdf, scene_radius};
+use super::select::{infinite_emission, infinite_pdf_le, scene_radius};
 use super::sunsky_model::SunSkyModel;
 use super::{EmissionSample, LightModel, LightSample, Receiver, ShadowTarget};
-use crate::geometry::Ray;
 use crate::math::{Frame, Mat3, PI, Vec2, Vec3, luminance};
 use crate::sampling::distrib::Distribution2D;
 use crate::sampling::warp;
@@ -247,23 +246,11 @@ impl LightModel for SunSkyLight {
         m: &M,
     ) -> Option<EmissionSample<M::C>> {
         let (wi, local, pdf_dir) = self.sample(u_dir)?;
-        let (o, pdf_pos) = disk_before_scene(scene, -wi, u_pos);
-        Some(EmissionSample {
-            ray: Ray::new(o, -wi),
-            p: o,
-            weight: self.radiance(local, m) / (pdf_pos * pdf_dir),
-            pdf_pos,
-            pdf_dir,
-            n: Vec3::ZERO,
-        })
+        infinite_emission(scene, -wi, self.radiance(local, m), pdf_dir, u_pos)
     }
 
     fn pdf_le(&self, scene: &impl LightScene, _p: Vec3, _n: Vec3, d: Vec3) -> (f32, f32) {
-        let pdf_dir = self.pdf_world(-d);
-        if !(pdf_dir > 0.0 && pdf_dir.is_finite()) {
-            return (0.0, 0.0);
-        }
-        (disk_pdf(scene), pdf_dir)
+        infinite_pdf_le(scene, self.pdf_world(-d))
     }
 
     /// The power through a disk of the scene's bounding radius r: π r²·∫ L dω.
