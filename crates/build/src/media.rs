@@ -4,6 +4,9 @@
 use render::math::{Mat4, Vec3};
 use render::media::grid::VoxelGrid;
 use render::media::heterogeneous::Albedo;
+use std::sync::Arc;
+
+use render::media::phase::{BlendPhase, TabulatedPhase};
 use render::media::{
     Blackbody, Emission, EmissionSampler, Heterogeneous, Homogeneous, Medium, MediumKind, Phase,
 };
@@ -105,10 +108,12 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
             )))
         }
     };
-    let phase = match m.phase {
-        PhaseDesc::Isotropic => Phase::Isotropic,
-        PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
-    };
+    let phase = phase(&m.phase).ok_or_else(|| BuildError {
+        loc: m.loc.clone(),
+        message: "a tabulated phase function needs at least two non-negative values, not all \
+                  zero"
+            .into(),
+    })?;
     let emission = match &m.emission {
         None => None,
         Some(MediumEmission::Radiance(VolumeParam::Const(le))) => {
@@ -250,4 +255,19 @@ fn grid(v: &VolumeDesc) -> Result<(VoxelGrid, Mat4), BuildError> {
         ));
     }
     Ok((grid, to_world))
+}
+
+/// The renderer's phase function for `p`; `None` for a table that is not a density.
+fn phase(p: &PhaseDesc) -> Option<Phase> {
+    Some(match p {
+        PhaseDesc::Isotropic => Phase::Isotropic,
+        &PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
+        PhaseDesc::Rayleigh => Phase::Rayleigh,
+        PhaseDesc::Tabulated { values } => Phase::Tabulated(Arc::new(TabulatedPhase::new(values)?)),
+        PhaseDesc::Blend { weight, phases } => Phase::Blend(Arc::new(BlendPhase {
+            weight: weight.clamp(0.0, 1.0),
+            first: phase(&phases[0])?,
+            second: phase(&phases[1])?,
+        })),
+    })
 }

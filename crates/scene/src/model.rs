@@ -517,12 +517,25 @@ pub enum VolumeFormat {
 }
 
 /// How a medium scatters: the phase function.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum PhaseDesc {
     Isotropic,
     /// Henyey–Greenstein with mean cosine `g` ∈ (−1, 1) (forward scattering for g > 0).
     HenyeyGreenstein {
         g: f32,
+    },
+    /// Rayleigh scattering (unpolarised).
+    Rayleigh,
+    /// Values at scattering cosines spaced evenly over [−1, 1] (1 forward), linear between
+    /// them, normalised by the renderer (Mitsuba's `tabphase`): at least two, non-negative,
+    /// not all zero.
+    Tabulated {
+        values: Vec<f32>,
+    },
+    /// `(1 − weight)·first + weight·second`, weight in [0, 1] (Mitsuba's `blendphase`).
+    Blend {
+        weight: f32,
+        phases: Box<[PhaseDesc; 2]>,
     },
 }
 

@@ -1,21 +1,111 @@
-//! Phase functions: isotropic and Henyey–Greenstein, with Mitsuba 3's conventions.
+//! Phase functions: isotropic, Henyey–Greenstein, Rayleigh, tabulated (Mitsuba 3's
+//! `tabphase`) and blends of two (`blendphase`), with Mitsuba 3's conventions.
 //!
 //! Directions point away from the scattering point: `wo` towards where the path came from
 //! (Mitsuba's `mi.wi`), `wi` the new direction. The scattering angle θ is between the
 //! incident travel direction `-wo` and `wi`, so forward scattering (g > 0) favours `wi ≈ -wo`.
-//! Both functions are sampled exactly: `sample` returns a direction whose weight
-//! (value / pdf) is 1.
+//! Every one is sampled exactly: `sample` returns a direction whose weight (value / pdf)
+//! is 1. A blend picks its component with the first random number, rescaled for reuse.
 
-use crate::math::{Frame, INV_4PI, Vec2, Vec3, safe_sqrt, spherical_direction};
+use std::sync::Arc;
+
+use crate::math::{Frame, INV_2PI, INV_4PI, PI, Vec2, Vec3, safe_sqrt, spherical_direction};
 use crate::sampling::warp;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Phase {
     Isotropic,
     /// Henyey–Greenstein with mean cosine `g` ∈ (−1, 1).
     HenyeyGreenstein {
         g: f32,
     },
+    /// Rayleigh scattering, 3/(16π)·(1 + cos²θ) (unpolarised).
+    Rayleigh,
+    /// A table over the scattering cosine (Mitsuba's `tabphase`).
+    Tabulated(Arc<TabulatedPhase>),
+    /// `(1 − w)·first + w·second` (Mitsuba's `blendphase`).
+    Blend(Arc<BlendPhase>),
+}
+
+/// A phase function tabulated at cosines of the scattering angle spaced evenly over
+/// [−1, 1] (cos θ = 1 forward), linear in between and normalised, as Mitsuba 3's `tabphase`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TabulatedPhase {
+    /// The values, normalised to a density over cos θ (∫ = 1 over [−1, 1]).
+    pdf: Vec<f32>,
+    /// The mass of each interval's trapezoid, accumulated (`cdf[0] = 0`, last = 1).
+    cdf: Vec<f32>,
+}
+
+impl TabulatedPhase {
+    /// From at least two non-negative finite values with a positive integral; `None`
+    /// otherwise.
+    pub fn new(values: &[f32]) -> Option<TabulatedPhase> {
+        if values.len() < 2 || values.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+            return None;
+        }
+        let h = 2.0 / (values.len() - 1) as f64;
+        let mut cdf = Vec::with_capacity(values.len());
+        let mut sum = 0.0f64;
+        cdf.push(0.0);
+        for w in values.windows(2) {
+            sum += 0.5 * h * (w[0] as f64 + w[1] as f64);
+            cdf.push(sum);
+        }
+        if !(sum > 0.0 && sum.is_finite()) {
+            return None;
+        }
+        Some(TabulatedPhase {
+            pdf: values.iter().map(|&v| (v as f64 / sum) as f32).collect(),
+            cdf: cdf.into_iter().map(|c| (c / sum) as f32).collect(),
+        })
+    }
+
+    /// The density over cos θ at `c` (linear between the nodes).
+    fn pdf_cos(&self, c: f32) -> f32 {
+        let n = self.pdf.len() - 1;
+        let x = ((c.clamp(-1.0, 1.0) + 1.0) * 0.5 * n as f32).min(n as f32);
+        let i = (x as usize).min(n - 1);
+        let t = x - i as f32;
+        (1.0 - t) * self.pdf[i] + t * self.pdf[i + 1]
+    }
+
+    /// A cosine with density [`Self::pdf_cos`]: the interval by its mass, then the inverse of
+    /// the linear density's CDF within it.
+    fn sample_cos(&self, u: f32) -> f32 {
+        let n = self.pdf.len() - 1;
+        let i = self.cdf.partition_point(|&c| c <= u).clamp(1, n) - 1;
+        let mass = self.cdf[i + 1] - self.cdf[i];
+        let r = if mass > 0.0 {
+            ((u - self.cdf[i]) / mass).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let (a, b) = (self.pdf[i], self.pdf[i + 1]);
+        // Solve ((b − a)/2)·t² + a·t = r·(a + b)/2 for t in [0, 1], in the form that stays
+        // exact as b → a.
+        let t = if a + b > 0.0 {
+            r * (a + b) / (a + (a * a + r * (b * b - a * a)).max(0.0).sqrt())
+        } else {
+            r
+        };
+        let h = 2.0 / n as f32;
+        (-1.0 + (i as f32 + t.clamp(0.0, 1.0)) * h).clamp(-1.0, 1.0)
+    }
+}
+
+/// Two phase functions mixed with weight `weight` ∈ [0, 1] on the second.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlendPhase {
+    pub weight: f32,
+    pub first: Phase,
+    pub second: Phase,
+}
+
+/// The Rayleigh density of the scattering-angle cosine (per steradian).
+#[inline]
+fn rayleigh(cos_theta: f32) -> f32 {
+    3.0 / (16.0 * PI) * (1.0 + cos_theta * cos_theta)
 }
 
 /// The Henyey–Greenstein density of the scattering-angle cosine `cos_theta` (per steradian).
@@ -25,23 +115,35 @@ pub fn hg(cos_theta: f32, g: f32) -> f32 {
     INV_4PI * (1.0 - g * g) / (denom * safe_sqrt(denom))
 }
 
+/// The direction at angle θ (cosine `cos_theta`) from the unit `axis`, at azimuth 2π·`u`.
+fn around(axis: Vec3, cos_theta: f32, u: f32) -> Vec3 {
+    let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
+    let local = spherical_direction(sin_theta, cos_theta, 2.0 * PI * u);
+    Frame::from_normal(axis).to_world(local)
+}
+
 impl Phase {
     /// The phase function's value for scattering from `-wo` into `wi`; it is also the
     /// density `sample` gives `wi`.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match *self {
+        match self {
             Phase::Isotropic => INV_4PI,
-            Phase::HenyeyGreenstein { g } => hg(-wo.dot(wi), g),
+            &Phase::HenyeyGreenstein { g } => hg(-wo.dot(wi), g),
+            Phase::Rayleigh => rayleigh(wo.dot(wi)),
+            Phase::Tabulated(t) => t.pdf_cos(-wo.dot(wi)) * INV_2PI,
+            Phase::Blend(b) => {
+                (1.0 - b.weight) * b.first.eval(wo, wi) + b.weight * b.second.eval(wo, wi)
+            }
         }
     }
 
     /// A direction with density [`Phase::eval`], and that density.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: Vec2) -> (Vec3, f32) {
-        match *self {
+        match self {
             Phase::Isotropic => (warp::square_to_uniform_sphere(u), INV_4PI),
-            Phase::HenyeyGreenstein { g } => {
+            &Phase::HenyeyGreenstein { g } => {
                 // Inversion of the cosine's CDF (pbrt-v4's form, stable near g = 0).
                 let cos_theta = if g.abs() < 1e-3 {
                     1.0 - 2.0 * u.x
@@ -56,6 +158,30 @@ impl Phase {
                 let local = spherical_direction(sin_theta, cos_theta, phi);
                 let wi = Frame::from_normal(-wo).to_world(local);
                 (wi, hg(cos_theta, g))
+            }
+            Phase::Rayleigh => {
+                // The cosine's CDF (cos³ + 3 cos + 4)/8 inverted by Cardano's formula.
+                let z = 2.0 * (2.0 * u.x - 1.0);
+                let s = (z * z + 1.0).sqrt();
+                let cos_theta = ((z + s).cbrt() + (z - s).cbrt()).clamp(-1.0, 1.0);
+                let wi = around(-wo, cos_theta, u.y);
+                (wi, rayleigh(cos_theta))
+            }
+            Phase::Tabulated(t) => {
+                let cos_theta = t.sample_cos(u.x);
+                let wi = around(-wo, cos_theta, u.y);
+                (wi, t.pdf_cos(cos_theta) * INV_2PI)
+            }
+            Phase::Blend(b) => {
+                let w = b.weight;
+                // The component by u.x, and u.x rescaled to [0, 1) for it.
+                let (wi, _) = if u.x < w {
+                    b.second.sample(wo, Vec2::new(u.x / w, u.y))
+                } else {
+                    b.first
+                        .sample(wo, Vec2::new(((u.x - w) / (1.0 - w)).min(1.0), u.y))
+                };
+                (wi, self.eval(wo, wi))
             }
         }
     }
@@ -82,10 +208,49 @@ mod tests {
         }
     }
 
+    /// Mitsuba's table is in the physics convention: its last value is forward scattering
+    /// (`wi = −wo`), normalised so that 2π·∫ p d(cos θ) = 1; Rayleigh integrates to 1.
+    #[test]
+    fn tables_read_forward_last_and_integrate_to_one() {
+        let t = Phase::Tabulated(Arc::new(TabulatedPhase::new(&[1.0, 3.0]).unwrap()));
+        let wo = Vec3::Z;
+        // p(cos θ) ∝ 2 + cos θ: 1/(4π)·(2 + c)/2 per steradian.
+        assert!((t.eval(wo, -wo) - 3.0 / 2.0 * INV_4PI).abs() < 1e-6);
+        assert!((t.eval(wo, wo) - 1.0 / 2.0 * INV_4PI).abs() < 1e-6);
+        for phase in [t, Phase::Rayleigh] {
+            let n = 100_000;
+            let sum: f64 = (0..n)
+                .map(|i| {
+                    let c = -1.0 + 2.0 * (i as f32 + 0.5) / n as f32;
+                    let wi = Vec3::new(safe_sqrt(1.0 - c * c), 0.0, -c);
+                    phase.eval(wo, wi) as f64 * 2.0 * std::f64::consts::PI * 2.0 / n as f64
+                })
+                .sum();
+            assert!((sum - 1.0).abs() < 1e-4, "{phase:?}: {sum}");
+        }
+        assert!(TabulatedPhase::new(&[0.0, 0.0]).is_none());
+        assert!(TabulatedPhase::new(&[1.0]).is_none());
+        assert!(TabulatedPhase::new(&[1.0, -1.0]).is_none());
+    }
+
     #[test]
     fn samples_have_the_density_eval_reports() {
         let wo = Vec3::new(0.3, -0.5, 0.8).normalize();
-        for phase in [Phase::Isotropic, Phase::HenyeyGreenstein { g: 0.7 }] {
+        let table = Phase::Tabulated(Arc::new(
+            TabulatedPhase::new(&[0.0, 0.2, 1.0, 0.0, 4.0]).unwrap(),
+        ));
+        let blend = Phase::Blend(Arc::new(BlendPhase {
+            weight: 0.4,
+            first: Phase::Rayleigh,
+            second: table.clone(),
+        }));
+        for phase in [
+            Phase::Isotropic,
+            Phase::HenyeyGreenstein { g: 0.7 },
+            Phase::Rayleigh,
+            table,
+            blend,
+        ] {
             for u in [
                 Vec2::new(0.1, 0.2),
                 Vec2::new(0.9, 0.7),

@@ -1,6 +1,7 @@
 //! χ² goodness-of-fit of the media's sampling routines against their densities: the phase
-//! functions' directions (isotropic; Henyey–Greenstein for g ∈ {−0.9, −0.5, 0, 0.5, 0.9}, with
-//! a tilted `wo`), a homogeneous medium's free-flight distances (each hero channel), and
+//! functions' directions (isotropic; Henyey–Greenstein for g ∈ {−0.9, −0.5, 0, 0.5, 0.9};
+//! Rayleigh; tables with a forward peak, with zeros and of two nodes; blends of them; with a
+//! tilted `wo`), a homogeneous medium's free-flight distances (each hero channel), and
 //! equiangular distances towards a point light (the light before, beside and beyond the
 //! segment, near and far from its line), and points of an emission grid drawn by its radiance.
 //! α = 0.01, Šidák-corrected over the cases of each test; fixed seeds.
@@ -8,6 +9,9 @@
 use render::math::Mat4;
 use render::math::{Vec2, Vec3};
 use render::media::grid::VoxelGrid;
+use std::sync::Arc;
+
+use render::media::phase::{BlendPhase, TabulatedPhase};
 use render::media::{EmissionSampler, Flight, Homogeneous, Phase};
 use render::sampling::Equiangular;
 use render::stats::{Chi2Config, chi2_test, chi2_test_2d, sidak};
@@ -27,6 +31,24 @@ fn phase_function_sampling_matches_its_density() {
     let wo = Vec3::new(0.3, -0.4, 0.866).normalize();
     let mut phases = vec![Phase::Isotropic];
     phases.extend([-0.9f32, -0.5, 0.0, 0.5, 0.9].map(|g| Phase::HenyeyGreenstein { g }));
+    phases.push(Phase::Rayleigh);
+    let table = |v: &[f32]| Phase::Tabulated(Arc::new(TabulatedPhase::new(v).unwrap()));
+    let peaked = table(&[0.05, 0.1, 0.2, 0.4, 1.0, 3.0, 12.0]);
+    phases.extend([
+        peaked.clone(),
+        table(&[0.0, 0.0, 2.0, 0.5, 0.0, 1.0]),
+        table(&[3.0, 1.0]),
+    ]);
+    for (weight, first) in [
+        (0.3, Phase::HenyeyGreenstein { g: -0.6 }),
+        (0.8, Phase::Rayleigh),
+    ] {
+        phases.push(Phase::Blend(Arc::new(BlendPhase {
+            weight,
+            first,
+            second: peaked.clone(),
+        })));
+    }
     let a = sidak(0.01, phases.len());
     let failed: Vec<String> = phases
         .iter()

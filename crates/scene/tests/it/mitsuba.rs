@@ -995,6 +995,41 @@ fn media_on_shapes_sensors_and_emitters() {
     ));
 }
 
+/// `rayleigh`, `tabphase` (values as given; the renderer normalises) and `blendphase` (its
+/// two phase functions in document order, as Mitsuba 3.9.1 takes them; weight 0.5 by
+/// default, clamped to [0, 1]).
+#[test]
+fn phase_functions_map() {
+    let phase = |xml: &str| {
+        let s = scene_of(&format!(
+            r#"<scene version="3.0.0"><shape type="sphere"><medium type="homogeneous" name="interior">{xml}</medium></shape></scene>"#
+        ));
+        s.media[0].phase.clone()
+    };
+    assert_eq!(phase(r#"<phase type="rayleigh"/>"#), PhaseDesc::Rayleigh);
+    assert_eq!(
+        phase(r#"<phase type="tabphase"><string name="values" value="0.5, 1, 2"/></phase>"#),
+        PhaseDesc::Tabulated {
+            values: vec![0.5, 1.0, 2.0]
+        }
+    );
+    assert_eq!(
+        phase(
+            r#"<phase type="blendphase"><phase name="z" type="hg"><float name="g" value="0.2"/></phase><phase name="a" type="isotropic"/></phase>"#
+        ),
+        PhaseDesc::Blend {
+            weight: 0.5,
+            phases: Box::new([PhaseDesc::HenyeyGreenstein { g: 0.2 }, PhaseDesc::Isotropic]),
+        }
+    );
+    assert!(matches!(
+        phase(
+            r#"<phase type="blendphase"><float name="weight" value="1.5"/><phase type="rayleigh"/><phase type="isotropic"/></phase>"#
+        ),
+        PhaseDesc::Blend { weight: 1.0, .. }
+    ));
+}
+
 #[test]
 fn bad_media_are_errors_with_their_place() {
     let cases = [
@@ -1007,6 +1042,22 @@ fn bad_media_are_errors_with_their_place() {
             "-1 < g < 1",
         ),
         (r#"<medium type="homogeneous" name="inside"/>"#, "interior"),
+        (
+            r#"<medium type="homogeneous" name="interior"><phase type="tabphase"><string name="values" value="1"/></phase></medium>"#,
+            "at least two",
+        ),
+        (
+            r#"<medium type="homogeneous" name="interior"><phase type="tabphase"><string name="values" value="0, -1, 2"/></phase></medium>"#,
+            "non-negative",
+        ),
+        (
+            r#"<medium type="homogeneous" name="interior"><phase type="blendphase"><phase type="isotropic"/></phase></medium>"#,
+            "found 1",
+        ),
+        (
+            r#"<medium type="homogeneous" name="interior"><phase type="sggy"/></medium>"#,
+            "rayleigh, tabphase, blendphase",
+        ),
         (
             r#"<medium type="heterogeneous"><string name="filename" value="missing.vol"/></medium>"#,
             "missing.vol",

@@ -77,7 +77,7 @@ impl<M: PathMode> Bdpt<'_, M> {
                     let mut v = Vertex::new(Kind::Medium, p, beta);
                     v.medium = w.medium;
                     v.ratio = ratio;
-                    v.phase = med.phase;
+                    v.phase = med.phase.clone();
                     v.le = emitted;
                     v.terminated = m.terminated();
                     v.to_prev = -w.ray.d;

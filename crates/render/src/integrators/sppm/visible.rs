@@ -176,7 +176,7 @@ fn visible_point<M: PathMode>(
             wo,
         },
         Scatterer::Medium { phase, wo } => Scattering::Medium {
-            phase: *phase,
+            phase: phase.clone(),
             wo,
             medium: v.medium?,
         },

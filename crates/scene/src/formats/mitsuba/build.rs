@@ -836,7 +836,49 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
                 PhaseDesc::HenyeyGreenstein { g }
             }
-            _ => return Err(unknown_type(&pl, "isotropic, hg")),
+            "rayleigh" => PhaseDesc::Rayleigh,
+            "tabphase" => {
+                let values = float_list(&pl, "values")?;
+                if values.len() < 2
+                    || values.iter().any(|v| !(v.is_finite() && *v >= 0.0))
+                    || !values.iter().any(|&v| v > 0.0)
+                {
+                    return Err(err(
+                        pl.loc(),
+                        "phase 'tabphase' needs 'values': at least two non-negative numbers, not \
+                         all zero",
+                    ));
+                }
+                PhaseDesc::Tabulated { values }
+            }
+            "blendphase" => {
+                // Mitsuba 3.9.1 takes the nested phase functions in document order.
+                let nested: Vec<&Child<'s>> = pl.children_with(&["phase"]).collect();
+                let [first, second] = nested[..] else {
+                    return Err(err(
+                        pl.loc(),
+                        format!(
+                            "blendphase needs two nested phase functions, found {}",
+                            nested.len()
+                        ),
+                    ));
+                };
+                if pl.named_child("weight").is_some() {
+                    return Err(err(
+                        pl.loc(),
+                        "blendphase: only a constant 'weight' is supported, not a volume",
+                    ));
+                }
+                let weight = pl.props.float("weight", 0.5)?.clamp(0.0, 1.0);
+                let phases = Box::new([self.phase(first)?, self.phase(second)?]);
+                PhaseDesc::Blend { weight, phases }
+            }
+            _ => {
+                return Err(unknown_type(
+                    &pl,
+                    "isotropic, hg, rayleigh, tabphase, blendphase",
+                ));
+            }
         };
         self.ctx.finish(&pl);
         Ok(phase)
