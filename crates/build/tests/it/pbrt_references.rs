@@ -3,17 +3,27 @@
 //! parity): the pbrt loader's camera frame, units, light scale, roughness and media mapping
 //! end to end. Skipped, with a notice, when `../shared/references` is absent.
 //!
-//! `media-heterogeneous`: Mitsuba's gridvolume clamps at the border, pbrt-v4's `uniformgrid`
-//! falls to 0 over the outer half voxel; the grid is padded by one voxel of border copies and
-//! its box widened by one voxel (`scenes/pbrt/make_plume_grid.py` writes it inline, 5
-//! significant digits: the full-precision grid gives the same p_min), so that lookups inside
-//! the boundary box are Mitsuba's.
+//! Where pbrt-v4 has no direct counterpart of what the Mitsuba scene says, the pbrt file says
+//! it by other means (the generating scripts beside the scenes):
+//! - `media-heterogeneous`: Mitsuba's gridvolume clamps at the border, pbrt-v4's
+//!   `uniformgrid` falls to 0 over the outer half voxel. The grid is padded by one voxel of
+//!   border copies and its box widened by one voxel (`make_plume_grid.py`, inline, 5
+//!   significant digits: the full-precision grid gives the same p_min), so that lookups
+//!   inside the boundary box are Mitsuba's.
+//! - `lights`, `media-fog`: Mitsuba's spot falls off linearly in the angle, pbrt-v4's `spot`
+//!   as a smoothstep in the cosine: each spot is a `goniometric` light whose equal-area image
+//!   (1024², each pixel the falloff's mean over it; `make_spot_images.py`) is that falloff.
+//!   Mitsuba's surfaces are one-sided and pbrt-v4's reflect on both sides: where light
+//!   reaches a back face (the disk light's top, the fog room's floor and wall), a black copy
+//!   10⁻⁴ behind it gives Mitsuba's black back.
+//! - `media-fog`'s gold sphere is Mitsuba's default Beckmann distribution, which pbrt-v4 lacks:
+//!   GGX of the same α here, the one approximation left; the t-test does not see it (the
+//!   scene's noise is high: relMSE 0.165 at 256 spp).
 //!
-//! Not here, because pbrt-v4 cannot express them exactly: `veach-plates` and
-//! `envmap-materials` (Mitsuba's `plastic`/`roughplastic`; the latter also a lat-long
-//! environment map, where pbrt-v4 takes only equal-area squares), `lights` and `media-fog`
-//! (Mitsuba's spot falloff is linear in the angle, pbrt-v4's a smoothstep in the cosine) and
-//! `spectral-materials` (its textures and emitter spectra in Mitsuba's units).
+//! Not here, because pbrt-v4 cannot express them: `veach-plates` and `envmap-materials`
+//! (Mitsuba's `plastic`/`roughplastic` and Beckmann microfacets; the latter also a lat-long
+//! environment map, where pbrt-v4 takes only equal-area squares) and `spectral-materials`
+//! (its textures and emitter spectra in Mitsuba's units).
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -73,6 +83,41 @@ fn pbrt_media_heterogeneous() {
     };
     *rr_depth = 8;
     check_desc("media-heterogeneous", &desc, 0.0019, SPP, RenderMode::Rgb);
+}
+
+/// Mitsuba's spot (linear in the angle) as a goniometric light whose equal-area image is its
+/// falloff (`make_spot_images.py`); the one-sided disk light's black top a black disk above it.
+/// Open question: at 16 × 64 spp (uniform light selection, as the XML) this render is 0.45 %
+/// brighter than the XML scene's on the back wall under the disk light (≈ 9 standard errors;
+/// 0.15 % over the image), far below what the t-test sees; removing the black disk changes
+/// nothing there, and the excess has the colour of the light there, not the spot's or the
+/// disk's. Not found in the time given.
+#[test]
+fn pbrt_lights() {
+    check_file(
+        "lights",
+        &pbrt_scene("lights.pbrt"),
+        &[],
+        0.0027,
+        SPP,
+        RenderMode::Rgb,
+    );
+}
+
+/// Camera, goniometric spot and surfaces in one fog (`MediumInterface` before `Camera`);
+/// roulette from 8 scattering events, as the Mitsuba scene (see [`pbrt_media_homogeneous`]).
+#[test]
+fn pbrt_media_fog() {
+    let scene = pbrt_scene("media-fog.pbrt");
+    let Ok(scene::Document::Scene(mut desc)) = scene::load(&scene, &Default::default()) else {
+        panic!("the scene loads")
+    };
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let scene::IntegratorDesc::VolPath { rr_depth, .. } = &mut desc.integrator else {
+        panic!("volpath expected")
+    };
+    *rr_depth = 8;
+    check_desc("media-fog", &desc, 0.165, SPP, RenderMode::Rgb);
 }
 
 /// `scenes/pbrt/mitsuba-cbox.pbrt` copied beside `cbox-meshes.pbrt`, written from Mitsuba's
