@@ -14,8 +14,9 @@
 //!   as a smoothstep in the cosine: each spot is a `goniometric` light whose equal-area image
 //!   (1024², each pixel the falloff's mean over it; `make_spot_images.py`) is that falloff.
 //!   Mitsuba's surfaces are one-sided and pbrt-v4's reflect on both sides: where light
-//!   reaches a back face (the disk light's top, the fog room's floor and wall), a black copy
-//!   10⁻⁴ behind it gives Mitsuba's black back.
+//!   reaches a back face (the fog room's floor and wall, veach-plates' plates), a black copy
+//!   10⁻⁴ behind it gives Mitsuba's black back. Mitsuba's emitter shapes without a BSDF are
+//!   black (its default diffuse 0.5 is for shapes without an emitter): so are the pbrt files'.
 //! - `media-fog`'s gold sphere is Mitsuba's default Beckmann distribution, which pbrt-v4 lacks:
 //!   GGX of the same α here, the one approximation left; the t-test does not see it (the
 //!   scene's noise is high: relMSE 0.165 at 256 spp).
@@ -96,12 +97,9 @@ fn pbrt_media_heterogeneous() {
 }
 
 /// Mitsuba's spot (linear in the angle) as a goniometric light whose equal-area image is its
-/// falloff (`make_spot_images.py`); the one-sided disk light's black top a black disk above it.
-/// Open question: at 16 × 64 spp (uniform light selection, as the XML) this render is 0.45 %
-/// brighter than the XML scene's on the back wall under the disk light (≈ 9 standard errors;
-/// 0.15 % over the image), far below what the t-test sees; removing the black disk changes
-/// nothing there, and the excess has the colour of the light there, not the spot's or the
-/// disk's. Not found in the time given.
+/// falloff (`make_spot_images.py`). The disk light is black: Mitsuba gives a shape with an
+/// emitter and no BSDF a black diffuse one (with 0.5 there, the back wall under the disk
+/// came out 0.45 % too bright, ≈ 9 standard errors at 16 × 64 spp, below the t-test's reach).
 #[test]
 fn pbrt_lights() {
     check_file(
