@@ -3,13 +3,37 @@
 //! parity): the pbrt loader's camera frame, units, light scale, roughness and media mapping
 //! end to end. Skipped, with a notice, when `../shared/references` is absent.
 //!
-//! Not here, because pbrt-v4 cannot express them exactly: `veach-plates` and
-//! `envmap-materials` (Mitsuba's `plastic`/`roughplastic`; the latter also a lat-long
-//! environment map, where pbrt-v4 takes only equal-area squares), `lights` and `media-fog`
-//! (Mitsuba's spot falloff is linear in the angle, pbrt-v4's a smoothstep in the cosine),
-//! `media-heterogeneous` (its `.vol` grid is not 0 on the border voxels, where Mitsuba's
-//! lookup clamps and pbrt-v4's `uniformgrid` falls to 0 over the outer half voxel) and
-//! `spectral-materials` (its textures and emitter spectra in Mitsuba's units).
+//! Where pbrt-v4 has no direct counterpart of what the Mitsuba scene says, the pbrt file says
+//! it by other means (the generating scripts beside the scenes):
+//! - `media-heterogeneous`: Mitsuba's gridvolume clamps at the border, pbrt-v4's
+//!   `uniformgrid` falls to 0 over the outer half voxel. The grid is padded by one voxel of
+//!   border copies and its box widened by one voxel (`make_plume_grid.py`, inline, 5
+//!   significant digits: the full-precision grid gives the same p_min), so that lookups
+//!   inside the boundary box are Mitsuba's.
+//! - `lights`, `media-fog`: Mitsuba's spot falls off linearly in the angle, pbrt-v4's `spot`
+//!   as a smoothstep in the cosine: each spot is a `goniometric` light whose equal-area image
+//!   (1024², each pixel the falloff's mean over it; `make_spot_images.py`) is that falloff.
+//!   Mitsuba's surfaces are one-sided and pbrt-v4's reflect on both sides: where light
+//!   reaches a back face (the fog room's floor and wall, veach-plates' plates), a black copy
+//!   10⁻⁴ behind it gives Mitsuba's black back. Mitsuba's emitter shapes without a BSDF are
+//!   black (its default diffuse 0.5 is for shapes without an emitter): so are the pbrt files'.
+//! - `media-fog`'s gold sphere is Mitsuba's default Beckmann distribution, which pbrt-v4 lacks:
+//!   GGX of the same α here, the one approximation left; the t-test does not see it (the
+//!   scene's noise is high: relMSE 0.165 at 256 spp).
+//! - `veach-plates`, `envmap-materials`: Mitsuba's `plastic`/`roughplastic` have no pbrt-v4
+//!   model (its `coateddiffuse` is a different, stochastic layered BSDF), nor has Beckmann:
+//!   these scenes cannot match the shared references. They are tested instead against
+//!   Mitsuba 3.9.1 references of variants (`scenes/mitsuba/pbrt_*.xml`, `refs/pbrt_*`) where a
+//!   plastic is an equal blend of its diffuse base and a GGX lobe with its dielectric Fresnel
+//!   (a conductor of η = int_ior, k = 0; pbrt-v4's `mix`) and Beckmann is GGX; everything
+//!   else as the original. The smooth plastic's lobe has α = 0.02: Mitsuba's `blendbsdf`
+//!   weighs a sampled delta lobe with the other lobe's density beside its discrete
+//!   probability, which is not the blend's expectation (pbrt-v4's `mix` is; with a smooth
+//!   lobe the blue sphere failed, p 1e-32). envmap-materials' lat-long sky is pbrt-v4's
+//!   equal-area square (`make_equal_area_sky.py`: 1024², each pixel the mean of 8 × 8 of
+//!   Mitsuba's own envmap lookups); one-sided plates get black backs as above.
+//!
+//! Not here: `spectral-materials` (its textures and emitter spectra in Mitsuba's units).
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -17,6 +41,7 @@ use std::path::{Path, PathBuf};
 use scene::RenderMode;
 
 use crate::references::{SPP, check_desc, check_file, shared};
+use crate::repo_references::{check_repo_reference, check_repo_reference_with};
 
 fn pbrt_scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -52,6 +77,86 @@ fn pbrt_media_homogeneous() {
     };
     *rr_depth = 8;
     check_desc("media-homogeneous", &desc, 0.0244, SPP, RenderMode::Rgb);
+}
+
+/// The plume's grid padded by one voxel of border copies (`make_plume_grid.py`): pbrt-v4's
+/// uniformgrid then looks up inside the box as Mitsuba's clamping gridvolume. Roulette from 8
+/// scattering events, as the Mitsuba scene (see [`pbrt_media_homogeneous`]).
+#[test]
+fn pbrt_media_heterogeneous() {
+    let scene = pbrt_scene("media-heterogeneous.pbrt");
+    let Ok(scene::Document::Scene(mut desc)) = scene::load(&scene, &Default::default()) else {
+        panic!("the scene loads")
+    };
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let scene::IntegratorDesc::VolPath { rr_depth, .. } = &mut desc.integrator else {
+        panic!("volpath expected")
+    };
+    *rr_depth = 8;
+    check_desc("media-heterogeneous", &desc, 0.0019, SPP, RenderMode::Rgb);
+}
+
+/// Mitsuba's spot (linear in the angle) as a goniometric light whose equal-area image is its
+/// falloff (`make_spot_images.py`). The disk light is black: Mitsuba gives a shape with an
+/// emitter and no BSDF a black diffuse one (with 0.5 there, the back wall under the disk
+/// came out 0.45 % too bright, ≈ 9 standard errors at 16 × 64 spp, below the t-test's reach).
+#[test]
+fn pbrt_lights() {
+    check_file(
+        "lights",
+        &pbrt_scene("lights.pbrt"),
+        &[],
+        0.0027,
+        SPP,
+        RenderMode::Rgb,
+    );
+}
+
+/// Camera, goniometric spot and surfaces in one fog (`MediumInterface` before `Camera`);
+/// roulette from 8 scattering events, as the Mitsuba scene (see [`pbrt_media_homogeneous`]).
+#[test]
+fn pbrt_media_fog() {
+    let scene = pbrt_scene("media-fog.pbrt");
+    let Ok(scene::Document::Scene(mut desc)) = scene::load(&scene, &Default::default()) else {
+        panic!("the scene loads")
+    };
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let scene::IntegratorDesc::VolPath { rr_depth, .. } = &mut desc.integrator else {
+        panic!("volpath expected")
+    };
+    *rr_depth = 8;
+    check_desc("media-fog", &desc, 0.165, SPP, RenderMode::Rgb);
+}
+
+/// `veach-plates` with what pbrt-v4 cannot express (Mitsuba's plastics, Beckmann) replaced by
+/// what both renderers can, against its own Mitsuba reference (`scenes/mitsuba/refs/`).
+#[test]
+fn pbrt_veach_plates() {
+    check_repo_reference_with(
+        "pbrt_veach_plates",
+        Some(&pbrt_scene("veach-plates.pbrt")),
+        SPP,
+    );
+}
+
+/// The same Mitsuba scene read by our Mitsuba loader: the reference's own check.
+#[test]
+fn pbrt_veach_plates_xml() {
+    check_repo_reference("pbrt_veach_plates");
+}
+
+/// `envmap-materials` likewise, its lat-long sky as an equal-area square
+/// (`make_equal_area_sky.py`). Batches of 128 spp, as `references::envmap_materials` (the
+/// sun-lit contact shadows make 32-spp batch means too skewed for the t-test). The XML
+/// variant through our Mitsuba loader passes the t-test but not noise parity (relMSE 1.9×
+/// Mitsuba's at 256 spp), so it has no test here.
+#[test]
+fn pbrt_envmap_materials() {
+    check_repo_reference_with(
+        "pbrt_envmap_materials",
+        Some(&pbrt_scene("envmap-materials.pbrt")),
+        128,
+    );
 }
 
 /// `scenes/pbrt/mitsuba-cbox.pbrt` copied beside `cbox-meshes.pbrt`, written from Mitsuba's

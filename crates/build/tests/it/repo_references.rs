@@ -50,11 +50,19 @@ fn meta(name: &str) -> RefMeta {
 /// Renders the reference's scene (with its defines, in its variant's mode) as 16 × 32 spp
 /// and checks it against `scenes/mitsuba/refs/NAME`.
 pub(crate) fn check_repo_reference(name: &str) {
+    check_repo_reference_with(name, None, SPP)
+}
+
+/// [`check_repo_reference`] with another scene file than the reference's own (with the
+/// reference's defines and mode: e.g. the scene rewritten in pbrt-v4 syntax) and batches of
+/// `spp` samples.
+pub(crate) fn check_repo_reference_with(name: &str, scene_file: Option<&Path>, spp: u32) {
     let m = meta(name);
     let opts = LoadOptions {
         defines: m.defines.clone(),
     };
-    let Document::Scene(desc) = scene::load(&m.scene, &opts).expect("scene loads") else {
+    let scene_file = scene_file.unwrap_or(&m.scene);
+    let Document::Scene(desc) = scene::load(scene_file, &opts).expect("scene loads") else {
         panic!("not a scene")
     };
     assert!(
@@ -67,9 +75,9 @@ pub(crate) fn check_repo_reference(name: &str) {
     } else {
         RenderMode::Rgb
     };
-    let batches = render_desc_batches(&desc, SPP, mode);
+    let batches = render_desc_batches(&desc, spp, mode);
     let prefix = mitsuba_scenes().join("refs").join(name);
-    check_against(&prefix, name, batches, m.rel_mse_256, SPP)
+    check_against(&prefix, name, batches, m.rel_mse_256, spp)
 }
 
 /// Mitsuba's `lanczos` filter (2 lobes): its negative lobes ring at the checkerboard's edges.
