@@ -333,3 +333,13 @@ def test_help_is_useful():
     assert penumbra.SceneError.__doc__ and "file:line:col" in penumbra.SceneError.__doc__
     assert penumbra.Scene.__doc__
     assert penumbra.__version__
+
+
+def test_roughness_sweep_example_runs(tmp_path):
+    out = tmp_path / "sweep.png"
+    subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "roughness_sweep.py"), "--spp", "2", "--out", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    assert out.is_file() and out.stat().st_size > 1000
