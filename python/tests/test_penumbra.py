@@ -332,6 +332,7 @@ def test_help_is_useful():
     assert "KeyboardInterrupt" in penumbra.render.__doc__
     assert penumbra.SceneError.__doc__ and "file:line:col" in penumbra.SceneError.__doc__
     assert penumbra.Scene.__doc__
+    assert issubclass(penumbra.InternalError, RuntimeError) and penumbra.InternalError.__doc__
     assert penumbra.__version__
 
 
