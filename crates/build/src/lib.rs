@@ -14,6 +14,7 @@ mod materials;
 mod media;
 pub mod nori_tests;
 mod shapes;
+pub mod spec;
 mod textures;
 
 pub use materials::material_kind;

@@ -31,6 +31,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+use build::spec::parse_integrator;
 use build::{BuildOptions, build};
 use render::geometry::Ray;
 use render::integrators::Integrator;
@@ -46,7 +47,7 @@ use render::sampling::Sampler;
 use render::world::Scene;
 use scene::{Document, IntegratorDesc};
 
-use crate::{Failure, TransportArgs, load_scene, parse_define, parse_integrator, print_warnings};
+use crate::{Failure, TransportArgs, load_scene, parse_define, print_warnings};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

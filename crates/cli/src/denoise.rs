@@ -173,7 +173,7 @@ pub(crate) struct DenoiseCmd {
     /// The input was rendered with the one-pixel box filter: give the denoised image this
     /// reconstruction filter (box, tent, gaussian, mitchell, lanczos; Mitsuba's defaults), as
     /// `render --denoise` does for a scene with that filter.
-    #[arg(long, value_name = "KIND", value_parser = crate::parse_filter)]
+    #[arg(long, value_name = "KIND", value_parser = build::spec::parse_filter)]
     filter: Option<scene::FilterDesc>,
     /// Output image(s). May be repeated.
     #[arg(short, long = "output", value_name = "FILE", required = true)]

@@ -1,0 +1,668 @@
+//! `penumbra._penumbra`, the native half of the `penumbra` Python package (the other half,
+//! `python/penumbra/__init__.py`, turns its flat buffers into NumPy arrays and holds the
+//! documented signatures).
+//!
+//! Every function goes through the library code the `penumbra` command uses (`scene::load`,
+//! `build::build`, `render::render::render`, `Film::develop`, `render::image_io`,
+//! `render::compare`, `render::denoise`), so that a render here is the CLI's EXR bit for bit
+//! at the same seed and samples per pixel. Images cross the boundary as float32 buffers of
+//! `height × width × 3` values, row by row.
+//!
+//! Nothing Rust panics on reaches Python as a panic: every entry point runs under
+//! `catch_unwind` and a panic becomes `penumbra.InternalError`.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Duration;
+
+use pyo3::create_exception;
+use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyByteArray, PyDict};
+
+use build::BuildOptions;
+use render::compare::{CompareOptions, Comparison, Reference, TestImages};
+use render::film::Image;
+use render::math::Vec3;
+use render::render::{Progress, RenderObserver, RenderOptions};
+use scene::{Document, LoadError, LoadOptions, SceneDesc};
+
+create_exception!(
+    penumbra,
+    SceneError,
+    PyValueError,
+    "A scene file (or string) could not be loaded or built. The message starts with \
+     `file:line:col`; the attributes `file`, `line` and `col` hold them (line and col are 0 \
+     when the problem has no place in the file)."
+);
+create_exception!(
+    penumbra,
+    InternalError,
+    PyRuntimeError,
+    "A bug in penumbra: a Rust panic, caught before it reached Python. Please report it with \
+     the message."
+);
+
+/// Runs `f`, turning a panic into `InternalError`.
+fn guard<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|payload| Err(panic_error(payload)))
+}
+
+fn panic_error(payload: Box<dyn std::any::Any + Send>) -> PyErr {
+    let what = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "(no message)".into());
+    InternalError::new_err(format!("penumbra panicked: {what}"))
+}
+
+/// A `SceneError` from a message and its place (`file` as the user should read it).
+fn scene_error(py: Python<'_>, message: String, file: &str, line: u32, col: u32) -> PyErr {
+    let err = SceneError::new_err(message);
+    let value = err.value(py);
+    // Setting attributes on a fresh exception instance cannot fail but for memory.
+    let _ = value.setattr("file", file);
+    let _ = value.setattr("line", line);
+    let _ = value.setattr("col", col);
+    err
+}
+
+/// A load error as `SceneError`; `rename` replaces a temporary file's path (load_string) by
+/// the name the user knows.
+fn load_error(py: Python<'_>, e: &LoadError, rename: Option<(&Path, &str)>) -> PyErr {
+    let mut message = e.to_string();
+    let mut file = e.loc.file.display().to_string();
+    if let Some((tmp, name)) = rename {
+        let tmp = tmp.display().to_string();
+        message = message.replace(&tmp, name);
+        file = file.replace(&tmp, name);
+    }
+    scene_error(py, message, &file, e.loc.line, e.loc.col)
+}
+
+/// A loaded scene: the format-independent scene description (see `docs/architecture.md`).
+/// Made by `load_file` / `load_string`; rendered by `render`. Immutable: rendering it from
+/// several threads at once is safe.
+#[pyclass(frozen, module = "penumbra._penumbra")]
+struct Scene {
+    desc: Arc<SceneDesc>,
+    /// What it was loaded from (a path, or `<string>`).
+    source: String,
+}
+
+#[pymethods]
+impl Scene {
+    /// The file the scene was loaded from, or `<string>`.
+    #[getter]
+    fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// The loader's warnings (ignored parameters, substituted defaults), as the CLI prints them.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.desc.warnings.iter().map(|w| w.to_string()).collect()
+    }
+
+    /// The number of sensors (cameras) in the scene; `render(sensor=i)` picks one.
+    #[getter]
+    fn sensor_count(&self) -> usize {
+        self.desc.sensors.len()
+    }
+
+    /// The film size `(width, height)` of sensor `sensor`, as the scene declares it.
+    #[pyo3(signature = (sensor = 0))]
+    fn resolution(&self, sensor: usize) -> PyResult<(u32, u32)> {
+        let s =
+            self.desc.sensors.get(sensor).ok_or_else(|| {
+                PyValueError::new_err(format!("the scene has no sensor {sensor}"))
+            })?;
+        Ok((s.film.width, s.film.height))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<penumbra.Scene from {} ({} shapes, {} emitters, {} sensors)>",
+            self.source,
+            self.desc.shapes.len(),
+            self.desc.emitters.len(),
+            self.desc.sensors.len()
+        )
+    }
+}
+
+fn load_document(
+    py: Python<'_>,
+    path: &Path,
+    defines: Vec<(String, String)>,
+    rename: Option<(&Path, &str)>,
+) -> PyResult<Arc<SceneDesc>> {
+    let xml = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    // The CLI's rule (crates/cli: load_scene): `-D` sets Mitsuba/Nori <default>s only.
+    if !defines.is_empty() && (!xml || scene::formats::ceng795::is_ceng795_xml(path)) {
+        let shown = rename.map_or_else(|| path.display().to_string(), |(_, n)| n.to_string());
+        return Err(scene_error(
+            py,
+            format!(
+                "{shown}: parameters set Mitsuba/Nori XML <default>s; this scene format has none"
+            ),
+            &shown,
+            0,
+            0,
+        ));
+    }
+    let opts = LoadOptions { defines };
+    let doc = py
+        .detach(|| catch_unwind(|| scene::load(path, &opts)))
+        .map_err(panic_error)?
+        .map_err(|e| load_error(py, &e, rename))?;
+    match doc {
+        Document::Scene(desc) => Ok(Arc::new(*desc)),
+        Document::Test(_) => Err(scene_error(
+            py,
+            format!(
+                "{}: this is a Nori test file, not a scene (run it with `penumbra test`)",
+                path.display()
+            ),
+            &path.display().to_string(),
+            0,
+            0,
+        )),
+    }
+}
+
+/// load_file(path, defines) -> Scene
+#[pyfunction]
+#[pyo3(signature = (path, defines = Vec::new()))]
+fn load_file(py: Python<'_>, path: PathBuf, defines: Vec<(String, String)>) -> PyResult<Scene> {
+    guard(|| {
+        let desc = load_document(py, &path, defines, None)?;
+        Ok(Scene {
+            desc,
+            source: path.display().to_string(),
+        })
+    })
+}
+
+/// load_string(text, format, defines) -> Scene
+#[pyfunction]
+#[pyo3(signature = (text, format = "xml", defines = Vec::new()))]
+fn load_string(
+    py: Python<'_>,
+    text: &str,
+    format: &str,
+    defines: Vec<(String, String)>,
+) -> PyResult<Scene> {
+    guard(|| {
+        let ext = format.trim_start_matches('.').to_ascii_lowercase();
+        if !matches!(
+            ext.as_str(),
+            "xml" | "json" | "txt" | "obj" | "dae" | "pbrt"
+        ) {
+            return Err(PyValueError::new_err(format!(
+                "format must be one of xml, json, txt, obj, dae, pbrt (a file extension), \
+                 found '{format}'"
+            )));
+        }
+        // The loaders read files (relative references resolve beside them): the text goes
+        // to a file of its own in a fresh temporary folder, removed after loading.
+        static CALLS: AtomicU64 = AtomicU64::new(0);
+        let dir = std::env::temp_dir().join(format!(
+            "penumbra-py-{}-{}",
+            std::process::id(),
+            CALLS.fetch_add(1, Ordering::Relaxed)
+        ));
+        let path = dir.join(format!("string.{ext}"));
+        std::fs::create_dir_all(&dir)
+            .and_then(|()| std::fs::write(&path, text))
+            .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let result = load_document(py, &path, defines, Some((&path, "<string>")));
+        let _ = std::fs::remove_dir_all(&dir);
+        Ok(Scene {
+            desc: result?,
+            source: "<string>".into(),
+        })
+    })
+}
+
+/// The progress a render reports, read by the thread that holds the GIL.
+#[derive(Default)]
+struct Shared {
+    done: AtomicU64,
+    total: AtomicU64,
+}
+
+impl RenderObserver for Shared {
+    fn progress(&self, p: &Progress) {
+        self.done.fetch_max(p.samples_done, Ordering::Relaxed);
+        self.total.store(p.samples_total, Ordering::Relaxed);
+    }
+}
+
+/// What the render thread hands back.
+struct Rendered {
+    pixels: Vec<Vec3>,
+    width: u32,
+    height: u32,
+    spp: u32,
+    warnings: Vec<String>,
+}
+
+/// Why the render thread stopped without an image.
+enum RenderFailure {
+    /// Bad input (build error, unsupported integrator): `SceneError` / `ValueError`.
+    Scene(build::BuildError),
+    Value(String),
+}
+
+fn parse_mode(s: &str) -> PyResult<scene::RenderMode> {
+    match s {
+        "rgb" => Ok(scene::RenderMode::Rgb),
+        "spectral" => Ok(scene::RenderMode::Spectral),
+        v => scene::RenderMode::from_mitsuba_variant(v).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "mode: expected rgb, spectral or a Mitsuba variant ending in _rgb or _spectral \
+                 (scalar_rgb, llvm_ad_spectral, ...), found '{v}'"
+            ))
+        }),
+    }
+}
+
+/// How long one pass of the progressive loop lasts (the CLI's is 1 s). Cancellation
+/// (Ctrl-C) takes effect at the end of a pass, so this bounds how long KeyboardInterrupt
+/// waits; a shorter pass changes only the f64 association of the film's sums (see
+/// `render::film::accum`), far below the f32 of the image.
+const PASS_DURATION: Duration = Duration::from_millis(250);
+
+/// How often the waiting thread takes the GIL to check for signals and report progress.
+const POLL: Duration = Duration::from_millis(20);
+
+/// What `render` returns: the pixels, width, height, samples per pixel done, warnings.
+type Rendering<'py> = (Bound<'py, PyByteArray>, u32, u32, u32, Vec<String>);
+
+/// render(scene, spp, seed, resolution, integrator, threads, sensor, mode, progress)
+///   -> (bytearray, width, height, spp, warnings)
+#[pyfunction(name = "render")]
+#[pyo3(signature = (scene, spp = None, seed = None, resolution = None, integrator = None,
+                    threads = None, sensor = 0, mode = None, progress = None))]
+#[allow(clippy::too_many_arguments)]
+fn py_render<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    spp: Option<u32>,
+    seed: Option<u64>,
+    resolution: Option<(u32, u32)>,
+    integrator: Option<&str>,
+    threads: Option<usize>,
+    sensor: usize,
+    mode: Option<&str>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Rendering<'py>> {
+    guard(|| {
+        if spp == Some(0) {
+            return Err(PyValueError::new_err("spp must be at least 1"));
+        }
+        if let Some((w, h)) = resolution
+            && (w == 0 || h == 0 || w > 1 << 16 || h > 1 << 16)
+        {
+            return Err(PyValueError::new_err(format!(
+                "resolution must be between 1 and 65536 per axis, found ({w}, {h})"
+            )));
+        }
+        if sensor >= scene.desc.sensors.len() {
+            return Err(PyValueError::new_err(format!(
+                "the scene has no sensor {sensor} ({} sensors)",
+                scene.desc.sensors.len()
+            )));
+        }
+        let integrator = match integrator {
+            Some(s) => {
+                let mut i = build::spec::parse_integrator(s).map_err(PyValueError::new_err)?;
+                build::spec::keep_scene_max_depth(&scene.desc.integrator, &mut i);
+                Some(i)
+            }
+            None => None,
+        };
+        let opts = BuildOptions {
+            sensor,
+            spp,
+            resolution,
+            seed,
+            integrator,
+            light_selection: None,
+            flatten_instances: false,
+            mode: mode.map(parse_mode).transpose()?.unwrap_or_default(),
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
+            .build()
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let desc = scene.desc.clone();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let finished = AtomicBool::new(false);
+        let shared = Shared::default();
+
+        let work = || -> Result<Rendered, RenderFailure> {
+            let build::Built {
+                scene,
+                integrator,
+                spp,
+            } = build::build(&desc, &opts).map_err(RenderFailure::Scene)?;
+            if let Some(why) = integrator.unsupported(&scene) {
+                return Err(RenderFailure::Value(why.to_string()));
+            }
+            let ropts = RenderOptions {
+                spp,
+                cancel: cancel.clone(),
+                pass_duration: PASS_DURATION,
+                ..RenderOptions::default()
+            };
+            let outcome =
+                pool.install(|| render::render::render(&scene, &integrator, &ropts, &shared));
+            let image: Image = outcome.film.develop();
+            let mut warnings: Vec<String> = scene.warnings.iter().map(|w| w.to_string()).collect();
+            let bad = outcome.film.nonfinite_count();
+            if bad > 0 {
+                warnings.push(format!(
+                    "{bad} sample(s) were NaN or infinite and were discarded"
+                ));
+            }
+            Ok(Rendered {
+                width: image.width,
+                height: image.height,
+                pixels: image.pixels,
+                spp: outcome.spp,
+                warnings,
+            })
+        };
+
+        let mut interrupt: Option<PyErr> = None;
+        let result = std::thread::scope(|s| {
+            let worker = s.spawn(|| {
+                let r = catch_unwind(AssertUnwindSafe(work));
+                finished.store(true, Ordering::Release);
+                r
+            });
+            let mut reported = u64::MAX;
+            while !finished.load(Ordering::Acquire) {
+                py.detach(|| {
+                    let until = std::time::Instant::now() + POLL;
+                    while !finished.load(Ordering::Acquire) && std::time::Instant::now() < until {
+                        std::thread::sleep(Duration::from_millis(2));
+                    }
+                });
+                if interrupt.is_some() {
+                    continue;
+                }
+                // Ctrl-C (or any signal handler that raises) stops the render at the end of
+                // its pass; the exception is raised once the render thread has stopped.
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::Relaxed);
+                    interrupt = Some(e);
+                    continue;
+                }
+                if let Some(cb) = &progress {
+                    let (done, total) = (
+                        shared.done.load(Ordering::Relaxed),
+                        shared.total.load(Ordering::Relaxed),
+                    );
+                    if done != reported && total > 0 {
+                        reported = done;
+                        let fraction = (done as f64 / total as f64).min(1.0);
+                        if let Err(e) = cb.call1((fraction,)) {
+                            cancel.store(true, Ordering::Relaxed);
+                            interrupt = Some(e);
+                        }
+                    }
+                }
+            }
+            worker.join()
+        });
+        if let Some(e) = interrupt {
+            return Err(e);
+        }
+        let rendered = match result {
+            Ok(Ok(Ok(r))) => r,
+            Ok(Ok(Err(RenderFailure::Scene(e)))) => {
+                let file = e.loc.file.display().to_string();
+                return Err(scene_error(py, e.to_string(), &file, e.loc.line, e.loc.col));
+            }
+            Ok(Ok(Err(RenderFailure::Value(m)))) => return Err(PyValueError::new_err(m)),
+            Ok(Err(payload)) | Err(payload) => return Err(panic_error(payload)),
+        };
+        if let Some(cb) = &progress {
+            cb.call1((1.0f64,))?;
+        }
+        let bytes = PyByteArray::new(py, &pixel_bytes(&rendered.pixels));
+        Ok((
+            bytes,
+            rendered.width,
+            rendered.height,
+            rendered.spp,
+            rendered.warnings,
+        ))
+    })
+}
+
+/// Pixels as float32 RGB triples, native byte order (NumPy's `float32`).
+fn pixel_bytes(pixels: &[Vec3]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(pixels.len() * 12);
+    for p in pixels {
+        for c in [p.x, p.y, p.z] {
+            out.extend_from_slice(&c.to_ne_bytes());
+        }
+    }
+    out
+}
+
+/// An image from float32 RGB triples (what `pixel_bytes` makes).
+fn image_from_bytes(data: &[u8], width: u32, height: u32, what: &str) -> PyResult<Image> {
+    let n = width as usize * height as usize;
+    if data.len() != n * 12 {
+        return Err(PyValueError::new_err(format!(
+            "{what}: {} bytes for a {width}x{height} RGB float32 image (expected {})",
+            data.len(),
+            n * 12
+        )));
+    }
+    let pixels = data
+        .chunks_exact(12)
+        .map(|p| {
+            let c = |k: usize| f32::from_ne_bytes([p[k], p[k + 1], p[k + 2], p[k + 3]]);
+            Vec3::new(c(0), c(4), c(8))
+        })
+        .collect();
+    Image::from_pixels(width, height, pixels)
+        .ok_or_else(|| PyValueError::new_err(format!("{what}: bad image size {width}x{height}")))
+}
+
+/// write(path, data, width, height)
+#[pyfunction(name = "write")]
+fn py_write(py: Python<'_>, path: PathBuf, data: &[u8], width: u32, height: u32) -> PyResult<()> {
+    guard(|| {
+        let image = image_from_bytes(data, width, height, "image")?;
+        py.detach(|| render::image_io::write_image(&path, &image))
+            .map_err(|e| match e {
+                render::image_io::ImageError::Unsupported { .. } => {
+                    PyValueError::new_err(e.to_string())
+                }
+                _ => PyOSError::new_err(e.to_string()),
+            })
+    })
+}
+
+/// read(path, srgb) -> (bytearray, width, height)
+#[pyfunction(name = "read")]
+#[pyo3(signature = (path, srgb = true))]
+fn py_read<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    srgb: bool,
+) -> PyResult<(Bound<'py, PyByteArray>, u32, u32)> {
+    guard(|| {
+        use render::image_io::Decode;
+        let decode = if srgb { Decode::Srgb } else { Decode::Raw };
+        let image = py
+            .detach(|| render::image_io::read_image_with(&path, decode))
+            .map_err(|e| PyOSError::new_err(e.to_string()))?;
+        Ok((
+            PyByteArray::new(py, &pixel_bytes(&image.pixels)),
+            image.width,
+            image.height,
+        ))
+    })
+}
+
+/// compare(reference, batches, width, height, block, alpha) -> dict
+///
+/// `reference`: a path prefix (str) or a (mean, stderr) pair of buffers; `batches`: a list
+/// of K ≥ 2 buffers, or one (mean, stderr) pair in a one-element list with `stderr = True`.
+#[pyfunction(name = "compare")]
+#[pyo3(signature = (reference, batches, width, height, test_stderr = None, block = 8, alpha = 0.01))]
+#[allow(clippy::too_many_arguments)]
+fn py_compare<'py>(
+    py: Python<'py>,
+    reference: Bound<'py, PyAny>,
+    batches: Vec<Vec<u8>>,
+    width: u32,
+    height: u32,
+    test_stderr: Option<Vec<u8>>,
+    block: u32,
+    alpha: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        let compare_err = |e: render::compare::CompareError| PyValueError::new_err(e.to_string());
+        let reference = if let Ok(prefix) = reference.extract::<PathBuf>() {
+            render::compare::load_reference(&prefix).map_err(compare_err)?
+        } else {
+            let (mean, stderr): (Vec<u8>, Vec<u8>) = reference.extract()?;
+            Reference {
+                mean: image_from_bytes(&mean, width, height, "reference mean")?,
+                stderr: image_from_bytes(&stderr, width, height, "reference stderr")?,
+            }
+        };
+        let test = match test_stderr {
+            Some(se) => {
+                let [mean] = batches.as_slice() else {
+                    return Err(PyValueError::new_err(
+                        "a test stderr image goes with exactly one test image",
+                    ));
+                };
+                TestImages::MeanStderr {
+                    mean: image_from_bytes(mean, width, height, "test image")?,
+                    stderr: image_from_bytes(&se, width, height, "test stderr")?,
+                }
+            }
+            None => TestImages::Batches(
+                batches
+                    .iter()
+                    .enumerate()
+                    .map(|(i, b)| image_from_bytes(b, width, height, &format!("batch {i}")))
+                    .collect::<PyResult<_>>()?,
+            ),
+        };
+        let options = CompareOptions {
+            block,
+            alpha,
+            ..CompareOptions::default()
+        };
+        let c: Comparison = py
+            .detach(|| render::compare::compare_with(&reference, &test, &options))
+            .map_err(compare_err)?;
+        let d = PyDict::new(py);
+        d.set_item("passed", c.passed)?;
+        d.set_item("rel_mse", c.rel_mse)?;
+        d.set_item("mean_ratio", c.mean_ratio.to_vec())?;
+        d.set_item("min_p", c.min_p)?;
+        d.set_item("threshold", c.threshold)?;
+        d.set_item("block_channels", c.block_channels)?;
+        d.set_item("test_dof", c.test_dof)?;
+        let w = &c.worst;
+        d.set_item(
+            "worst",
+            (w.x, w.y, w.channel, w.test, w.reference, w.t, w.dof, w.p),
+        )?;
+        d.set_item("summary", c.to_string())?;
+        Ok(d)
+    })
+}
+
+/// denoise(color, width, height, albedo, normal, prefilter, filter) -> bytearray
+#[pyfunction(name = "denoise")]
+#[pyo3(signature = (color, width, height, albedo = None, normal = None, prefilter = true, filter = None))]
+#[allow(clippy::too_many_arguments)]
+fn py_denoise<'py>(
+    py: Python<'py>,
+    color: &[u8],
+    width: u32,
+    height: u32,
+    albedo: Option<Vec<u8>>,
+    normal: Option<Vec<u8>>,
+    prefilter: bool,
+    filter: Option<&str>,
+) -> PyResult<Bound<'py, PyByteArray>> {
+    guard(|| {
+        let color = image_from_bytes(color, width, height, "image")?;
+        let albedo = albedo
+            .map(|a| image_from_bytes(&a, width, height, "albedo"))
+            .transpose()?;
+        let normal = normal
+            .map(|n| image_from_bytes(&n, width, height, "normal"))
+            .transpose()?;
+        if normal.is_some() && albedo.is_none() {
+            return Err(PyValueError::new_err(
+                "a normal image needs an albedo image too (as in Open Image Denoise)",
+            ));
+        }
+        let filter = filter
+            .map(|f| build::spec::parse_filter(f).map_err(PyValueError::new_err))
+            .transpose()?;
+        let out = py.detach(|| -> Result<Image, String> {
+            let oidn = render::denoise::Oidn::load().map_err(|e| e.to_string())?;
+            let out = oidn
+                .denoise(
+                    &color,
+                    render::denoise::Aux {
+                        albedo: albedo.as_ref(),
+                        normal: normal.as_ref(),
+                        prefilter,
+                    },
+                )
+                .map_err(|e| e.to_string())?;
+            Ok(match filter {
+                Some(f) => render::film::Filter::new(&f).apply_to_box_image(&out),
+                None => out,
+            })
+        });
+        let out = out.map_err(PyRuntimeError::new_err)?;
+        Ok(PyByteArray::new(py, &pixel_bytes(&out.pixels)))
+    })
+}
+
+/// Whether Open Image Denoise can be loaded (`pip install pyoidn`, or PENUMBRA_OIDN).
+#[pyfunction]
+fn denoiser_available(py: Python<'_>) -> bool {
+    py.detach(|| render::denoise::Oidn::load().is_ok())
+}
+
+#[pymodule]
+fn _penumbra(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Scene>()?;
+    m.add("SceneError", m.py().get_type::<SceneError>())?;
+    m.add("InternalError", m.py().get_type::<InternalError>())?;
+    m.add_function(wrap_pyfunction!(load_file, m)?)?;
+    m.add_function(wrap_pyfunction!(load_string, m)?)?;
+    m.add_function(wrap_pyfunction!(py_render, m)?)?;
+    m.add_function(wrap_pyfunction!(py_write, m)?)?;
+    m.add_function(wrap_pyfunction!(py_read, m)?)?;
+    m.add_function(wrap_pyfunction!(py_compare, m)?)?;
+    m.add_function(wrap_pyfunction!(py_denoise, m)?)?;
+    m.add_function(wrap_pyfunction!(denoiser_available, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

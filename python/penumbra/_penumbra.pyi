@@ -1,0 +1,66 @@
+"""Type hints of the native module (crates/python/src/lib.rs); use the `penumbra` package's
+functions, which take and return NumPy arrays."""
+
+from typing import Callable, List, Optional, Sequence, Tuple, Union
+
+__version__: str
+
+class SceneError(ValueError):
+    """A scene could not be loaded or built: ``file:line:col: message``."""
+
+    file: str
+    line: int
+    col: int
+
+class InternalError(RuntimeError):
+    """A Rust panic inside penumbra, caught before it reached Python (a bug)."""
+
+class Scene:
+    """A loaded scene (immutable; safe to render from several threads at once)."""
+
+    @property
+    def source(self) -> str:
+        """The file the scene was loaded from, or ``<string>``."""
+    @property
+    def warnings(self) -> List[str]:
+        """The loader's warnings."""
+    @property
+    def sensor_count(self) -> int:
+        """The number of sensors (cameras)."""
+    def resolution(self, sensor: int = 0) -> Tuple[int, int]:
+        """The film size ``(width, height)`` of a sensor."""
+
+def load_file(path: str, defines: Sequence[Tuple[str, str]] = ...) -> Scene: ...
+def load_string(text: str, format: str = "xml", defines: Sequence[Tuple[str, str]] = ...) -> Scene: ...
+def render(
+    scene: Scene,
+    spp: Optional[int] = None,
+    seed: Optional[int] = None,
+    resolution: Optional[Tuple[int, int]] = None,
+    integrator: Optional[str] = None,
+    threads: Optional[int] = None,
+    sensor: int = 0,
+    mode: Optional[str] = None,
+    progress: Optional[Callable[[float], object]] = None,
+) -> Tuple[bytearray, int, int, int, List[str]]: ...
+def write(path: str, data: bytes, width: int, height: int) -> None: ...
+def read(path: str, srgb: bool = True) -> Tuple[bytearray, int, int]: ...
+def compare(
+    reference: Union[str, Tuple[bytes, bytes]],
+    batches: Sequence[bytes],
+    width: int,
+    height: int,
+    test_stderr: Optional[bytes] = None,
+    block: int = 8,
+    alpha: float = 0.01,
+) -> dict: ...
+def denoise(
+    color: bytes,
+    width: int,
+    height: int,
+    albedo: Optional[bytes] = None,
+    normal: Optional[bytes] = None,
+    prefilter: bool = True,
+    filter: Optional[str] = None,
+) -> bytearray: ...
+def denoiser_available() -> bool: ...
