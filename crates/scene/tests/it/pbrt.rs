@@ -126,6 +126,23 @@ fn defaults_of_an_empty_world() {
     assert_eq!(s.light_selection, LightSelection::Bvh);
 }
 
+/// pbrt-v4's graphics state starts with a "diffuse" material (reflectance 0.5): an area
+/// light given no Material reflects light as well as emitting it (the scene model's "no
+/// material" would make it black, Mitsuba's rule for emitters).
+#[test]
+fn area_lights_without_a_material_reflect() {
+    let s = scene(&format!(
+        "{CAMERA}AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ]\nShape \"sphere\"\nAttributeEnd\n"
+    ));
+    let shape = &s.shapes[0];
+    assert!(shape.emission.is_some());
+    let m = shape.material.expect("the default material");
+    assert!(matches!(
+        &s.materials[m.0 as usize].material,
+        Material::Diffuse { reflectance } if *reflectance == ColorParam::constant(0.5)
+    ));
+}
+
 /// pbrt's camera space has +x to the image's right; Mitsuba's (ours) to its left. `Scale -1
 /// 1 1` before pbrt's LookAt is therefore the same camera as Mitsuba's `lookat`.
 #[test]

@@ -133,8 +133,14 @@ impl Loader {
             }
         };
 
+        // pbrt-v4 starts with a "diffuse" material (reflectance 0.5) in the graphics state,
+        // so that an area light without a Material directive reflects too; the scene model's
+        // `None` would make an emitter black (Mitsuba's rule).
+        let mut material = match self.gs.material {
+            Some(m) => m,
+            None => self.default_material(loc),
+        };
         // Alpha: a constant or a float texture, as a mask around the material.
-        let mut material = self.gs.material;
         if let Some(t) = self.tex_param(p, "alpha", false, super::build::Usage::Unbounded)? {
             let opacity = match t {
                 TexVal::Const(c) if c.x >= 1.0 => None,
@@ -143,16 +149,15 @@ impl Loader {
                 TexVal::Tex(t) => Some(FloatParam::Texture(t)),
             };
             if let Some(opacity) = opacity {
-                let nested = match material {
-                    Some(m) => m,
-                    None => self.default_material(loc),
-                };
-                material = Some(self.scene.add_material(MaterialDesc {
-                    material: Material::Mask { nested, opacity },
+                material = self.scene.add_material(MaterialDesc {
+                    material: Material::Mask {
+                        nested: material,
+                        opacity,
+                    },
                     ambient: Rgb::ZERO,
                     name: None,
                     loc: loc.clone(),
-                }));
+                });
             }
         }
         let _ = p.get("emission", &[Ty::Rgb, Ty::Spectrum, Ty::Blackbody]);
@@ -161,7 +166,7 @@ impl Loader {
         let mut desc = ShapeDesc {
             shape,
             to_world,
-            material,
+            material: Some(material),
             emission: None,
             flip_normals: self.gs.reverse,
             media: MediumInterface {
