@@ -288,6 +288,10 @@ pub enum Shape {
     Disk,
     /// Mitsuba's cube: [-1,1]³ with outward normals.
     Cube,
+    /// Mitsuba's cylinder: the open unit cylinder x² + y² = 1, 0 ≤ z ≤ 1 (no caps), normals
+    /// outward, uv = (φ/2π with φ ∈ [0, 2π) from +x towards +y, z). The Mitsuba loader folds
+    /// `p0`, `p1` and `radius` into `to_world`.
+    Cylinder,
     /// An infinite plane through `point` with normal `normal` (object space).
     InfinitePlane { point: Vec3, normal: Vec3 },
 }
@@ -295,7 +299,7 @@ pub enum Shape {
 impl ShapeDesc {
     /// World-space bounds (`None` for an infinite plane). Spheres are bounded exactly, also
     /// as ellipsoids: the centre ± radius × the length of each row of the linear part.
-    /// Rectangles and disks by the corners of their square, cubes by theirs.
+    /// Rectangles and disks by the corners of their square, cubes and cylinders by their boxes'.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let m = &self.to_world;
         let corners = |z: [f32; 2]| {
@@ -332,6 +336,7 @@ impl ShapeDesc {
             }
             Shape::Rectangle | Shape::Disk => corners([0.0, 0.0]),
             Shape::Cube => corners([-1.0, 1.0]),
+            Shape::Cylinder => corners([0.0, 1.0]),
             Shape::InfinitePlane { .. } => return None,
         };
         (b.0.cmple(b.1).all() && b.0.is_finite() && b.1.is_finite()).then_some(b)
@@ -354,6 +359,7 @@ impl Shape {
             Shape::Rectangle => "rectangle",
             Shape::Disk => "disk",
             Shape::Cube => "cube",
+            Shape::Cylinder => "cylinder",
             Shape::InfinitePlane { .. } => "infinite plane",
         }
     }

@@ -20,6 +20,7 @@ mod mip_filtering;
 mod mitsuba_bsdfs;
 mod mitsuba_emitters;
 mod mitsuba_legacy;
+mod mitsuba_shapes;
 mod motion_blur;
 mod nori;
 mod nori_vdb_box;

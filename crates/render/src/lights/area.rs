@@ -3,7 +3,8 @@
 //! cone they subtend (solid angle), ellipsoids in the cone of their object sphere carried by
 //! the Jacobian of the map; meshes by area (triangle chosen in proportion to its area, then a
 //! uniform point; a two-triangle parallelogram, the usual quad light, in one step), disks by
-//! area; area densities are converted to solid angle. Under light selection by power or BVH
+//! area, cylinders uniformly in (φ, z) as Mitsuba does (by area under Mitsuba's transforms);
+//! area densities are converted to solid angle. Under light selection by power or BVH
 //! an emitting mesh becomes one light per triangle (`prim`), so that each triangle is chosen
 //! on its own.
 
@@ -15,8 +16,8 @@ use crate::geometry::Ray;
 use crate::math::{Frame, PI, Vec2, Vec3, rsqrt};
 use crate::sampling::warp;
 use crate::shapes::{
-    MeshSampling, ShapeGeom, SurfaceInteraction, disk_uv, ellipsoid, gamma, offset_ray_origin,
-    sphere, sphere_uv,
+    MeshSampling, ShapeGeom, SurfaceInteraction, cylinder_uv, disk_uv, ellipsoid, gamma,
+    offset_ray_origin, sphere, sphere_uv,
 };
 use crate::spectral::lanes::{Color, ColorMode};
 use crate::textures::{ColorRef, TexCoord, TexRef};
@@ -36,7 +37,8 @@ pub struct AreaLight {
 }
 
 impl AreaLight {
-    /// A point on an emitting mesh or disk, uniform by area: its position, error bound,
+    /// A point on an emitting mesh, disk or cylinder, uniform by area (a cylinder's in (φ, z),
+    /// see [`crate::shapes::Cylinder::sample`]): its position, error bound,
     /// emitting normal (`flip` applied, turned to the shading normal's side), uv (for a
     /// radiance texture, when `textured`) and area density. `None` for other shapes and
     /// degenerate meshes.
@@ -97,6 +99,12 @@ impl AreaLight {
                 let uv = if textured { disk_uv(d) } else { Vec2::ZERO };
                 (p, err, *normal * flip, uv, 1.0 / self.area)
             }
+            ShapeGeom::Cylinder(c) => {
+                let (q, pdf) = c.sample(u);
+                let (p, err) = c.point(q);
+                let uv = if textured { cylinder_uv(q) } else { Vec2::ZERO };
+                (p, err, c.normal(q) * flip, uv, pdf)
+            }
             _ => return None,
         })
     }
@@ -132,7 +140,7 @@ impl LightModel for AreaLight {
                     m,
                 );
             }
-            ShapeGeom::Mesh { .. } | ShapeGeom::Disk { .. } => {
+            ShapeGeom::Mesh { .. } | ShapeGeom::Disk { .. } | ShapeGeom::Cylinder(_) => {
                 self.sample_point(&info.geom, flip, textured, u)?
             }
             ShapeGeom::Ellipsoid(e) => {
@@ -202,6 +210,7 @@ impl LightModel for AreaLight {
         }
         match &info.geom {
             ShapeGeom::Ellipsoid(e) => ellipsoid::pdf(e, r.p, wi, si.p, cos_l.abs()),
+            ShapeGeom::Cylinder(c) => d2 * c.pdf_area(c.project(si.p)) / cos_l.abs(),
             _ => d2 / (cos_l.abs() * self.area),
         }
     }
@@ -306,6 +315,7 @@ impl LightModel for AreaLight {
                 let q = e.to_object.transform_point3a(p).normalize_or(Vec3::Z);
                 1.0 / (4.0 * PI * e.area_scale(q))
             }
+            ShapeGeom::Cylinder(c) => c.pdf_area(c.project(p)),
             ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => return (0.0, 0.0),
         };
         if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
@@ -343,6 +353,10 @@ impl LightModel for AreaLight {
             }
             ShapeGeom::Ellipsoid(e) => {
                 let (lo, hi) = crate::accel::ellipsoid_bounds(&e.to_world);
+                Some(any(lo, hi))
+            }
+            ShapeGeom::Cylinder(c) => {
+                let (lo, hi) = crate::accel::cylinder_bounds(&c.to_world);
                 Some(any(lo, hi))
             }
             ShapeGeom::Disk { to_world, normal } => {

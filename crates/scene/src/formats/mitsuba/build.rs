@@ -1314,6 +1314,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {}
         }
         let mut to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let mut cylinder_flip = false;
         let shape = match pl.ty.as_str() {
             "obj" | "ply" => {
                 let path = self.ctx.file_param(pl, "mesh")?;
@@ -1341,6 +1342,49 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "rectangle" => Shape::Rectangle,
             "disk" => Shape::Disk,
             "cube" => Shape::Cube,
+            "cylinder" => {
+                // Mitsuba folds the centre line and radius into to_world: translate(p0) ·
+                // to_frame(coordinate_system(d)) · scale(r, r, |d|); a negative radius flips
+                // the normals.
+                let p0 = pl.props.vector_opt("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = pl.props.vector_opt("p1")?.unwrap_or(Vec3::Z);
+                let radius = pl.props.float("radius", 1.0)?;
+                let d = p1 - p0;
+                let length = d.length();
+                if !(length > 0.0 && radius != 0.0) {
+                    return Err(err(
+                        pl.loc(),
+                        "cylinder with p0 = p1 or a zero radius (an empty surface)",
+                    ));
+                }
+                let (s, t) = coordinate_system(d / length);
+                let frame = Mat4::from_cols(
+                    s.extend(0.0),
+                    t.extend(0.0),
+                    (d / length).extend(0.0),
+                    p0.extend(1.0),
+                );
+                to_world = to_world
+                    * frame
+                    * Mat4::from_scale(Vec3::new(radius.abs(), radius.abs(), length));
+                cylinder_flip = radius < 0.0;
+                let l = Mat3::from_mat4(to_world);
+                let (cx, cy) = (l.x_axis, l.y_axis);
+                let tol = 1e-4 * cx.length_squared().max(cy.length_squared());
+                if (cx.length_squared() - cy.length_squared()).abs() > tol
+                    || cx.dot(cy).abs() > tol
+                    || cx.dot(l.z_axis).abs() > 1e-4 * cx.length() * l.z_axis.length()
+                    || cy.dot(l.z_axis).abs() > 1e-4 * cy.length() * l.z_axis.length()
+                {
+                    self.ctx.warn(
+                        pl.loc(),
+                        "cylinder with a shear or a non-uniform scale across its axis in \
+                         to_world (Mitsuba 3 warns and ignores them): rendered as the \
+                         elliptic or slanted cylinder it describes",
+                    );
+                }
+                Shape::Cylinder
+            }
             "serialized" => {
                 return Err(err(
                     pl.loc(),
@@ -1350,7 +1394,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "obj, ply, sphere, rectangle, disk, cube, shapegroup, instance",
+                    "obj, ply, sphere, rectangle, disk, cube, cylinder, shapegroup, instance",
                 ));
             }
         };
@@ -1364,7 +1408,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                  rendered as the ellipsoid it describes",
             );
         }
-        let flip_normals = pl.props.bool("flip_normals", false)?;
+        let flip_normals = pl.props.bool("flip_normals", false)? != cylinder_flip;
         let mut material = None;
         let mut emission = None;
         let mut media = MediumInterface::default();
@@ -2257,4 +2301,16 @@ pub fn float_list(pl: &Plugin<'_>, name: &str) -> Result<Vec<f32>> {
             _ => Err(err(&p.loc, format!("'{name}' should be a list of numbers"))),
         },
     }
+}
+
+/// Mitsuba's `coordinate_system(n)` (Duff et al. 2017): the tangents `s`, `t` of its
+/// `Frame3f(n)`, which fix where a cylinder's φ = 0 lies.
+fn coordinate_system(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
 }

@@ -29,6 +29,9 @@
 //! σ 0.5); dielectrics `int_ior` bk7 = 1.5046, `ext_ior` air = 1.000277; plastics `int_ior`
 //! polypropylene = 1.49; rough materials Beckmann with α = 0.1; conductor `material` "none"
 //! (η = 0, k = 1: a perfect mirror); diffuse reflectance 0.5 (also Nori's default bsdf).
+//! `cylinder`: `p0`, `p1` and `radius` are folded into `to_world` as Mitsuba does
+//! (`translate(p0)·to_frame(d)·scale(r, r, |d|)`, the frame of Mitsuba's
+//! `coordinate_system`, so that uv's φ = 0 lies where Mitsuba's does); open ends.
 //! Without a sensor, Mitsuba's default camera (45°, framing the scene's bounds from −z) is
 //! added with a warning.
 
