@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use render::image_io::{self, Decode};
 use render::lights::{
-    AreaLight, ConstantLight, DirectionalLight, EnvMap, ImagePointLight, ImageProfile, Light,
-    PointLight, SpotLight, SunSkyLight,
+    AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMap, ImagePointLight,
+    ImageProfile, Light, PointLight, SpotLight, SunSkyLight,
 };
 use render::shapes::ShapeInfo;
 use render::shapes::{MeshSampling, ShapeGeom};
@@ -44,17 +44,47 @@ pub(crate) fn lights(
             continue;
         };
         let two_sided = d.emission.as_ref().is_some_and(|e| e.two_sided);
+        if d.emission.as_ref().is_some_and(|e| e.directional) {
+            // Mitsuba's `directionalarea`: the whole shape, sampled by area (meshes by
+            // triangle area), emitting along its normal only.
+            let triangles = match &s.geom {
+                ShapeGeom::Mesh {
+                    positions, indices, ..
+                } => Some(MeshSampling::new(
+                    positions,
+                    indices,
+                    &triangle_areas(positions, indices),
+                )),
+                ShapeGeom::Plane { .. } => {
+                    return Err(BuildError {
+                        loc: d.loc.clone(),
+                        message: "an infinite plane cannot be an area light".into(),
+                    });
+                }
+                _ => None,
+            };
+            let area = s.geom.area();
+            if !(area > 0.0 && area.is_finite()) {
+                continue;
+            }
+            shape_light[i] = ShapeLights::Whole(lights.len() as u32);
+            lights.push(Light::DirectionalArea(Box::new(DirectionalAreaLight {
+                area: AreaLight {
+                    shape: i as u32,
+                    radiance: *radiance,
+                    two_sided: false,
+                    triangles,
+                    prim: None,
+                    area,
+                },
+            })));
+            continue;
+        }
         let triangles = match &s.geom {
             ShapeGeom::Mesh {
                 positions, indices, ..
             } => {
-                let areas: Vec<f32> = indices
-                    .iter()
-                    .map(|t| {
-                        let [a, b, c] = t.map(|i| positions[i as usize]);
-                        0.5 * (b - a).cross(c - a).length()
-                    })
-                    .collect();
+                let areas = triangle_areas(positions, indices);
                 if split {
                     // Degenerate triangles stay (so that triangle t is light first + t):
                     // they have no power and are never chosen.
@@ -103,6 +133,7 @@ pub(crate) fn lights(
         .iter()
         .map(|l| match l {
             Light::Area(a) => shapes[a.shape as usize].exterior,
+            Light::DirectionalArea(d) => shapes[d.area.shape as usize].exterior,
             _ => None,
         })
         .collect();
@@ -289,4 +320,15 @@ fn image_point(
         }
     }
     Ok(light)
+}
+
+/// The area of each triangle of a world-space mesh.
+fn triangle_areas(positions: &[render::math::Vec3], indices: &[[u32; 3]]) -> Vec<f32> {
+    indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .collect()
 }

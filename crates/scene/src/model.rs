@@ -406,6 +406,9 @@ pub struct AreaEmission {
     pub radiance: ColorParam,
     /// Emit on both sides (CS184 area lights are one-sided; some formats are two-sided).
     pub two_sided: bool,
+    /// Mitsuba 3's `directionalarea`: emit only along the normal (a delta in direction),
+    /// `radiance` being the flux per unit area; only light tracing renders its light.
+    pub directional: bool,
     pub loc: Loc,
 }
 

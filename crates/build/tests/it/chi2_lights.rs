@@ -60,6 +60,7 @@ fn emitting(shape: Shape, to_world: Mat4) -> SceneDesc {
         emission: Some(AreaEmission {
             radiance: ColorParam::constant(1.0),
             two_sided: false,
+            directional: false,
             loc: Default::default(),
         }),
         flip_normals: false,

@@ -1,4 +1,4 @@
-//! Mitsuba 3 emitters of issue 38 against Mitsuba 3.9.1's renders of the same files
+//! Mitsuba 3 emitters of issue 38 (`sunsky`, `directionalarea`) against Mitsuba 3.9.1's renders of the same files
 //! (`scenes/mitsuba/refs/`, the rule of `repo_references.rs`), and the χ² test of the
 //! `sunsky` emitter's sampling against its density.
 
@@ -27,6 +27,14 @@ fn sunsky_spectral() {
 #[test]
 fn sunsky_place() {
     check_repo_reference("sunsky_place");
+}
+
+/// `directionalarea` under the particle tracer: a tilted rectangle's collimated beam past a
+/// shadowing sphere, a disk's onto a tilted panel (the emitters themselves invisible, as in
+/// Mitsuba 3.9.1).
+#[test]
+fn directionalarea() {
+    check_repo_reference("directionalarea");
 }
 
 /// The Mitsuba 3 form of `v06/legacy_box.xml` (`mitsuba_legacy.rs`) against its reference.

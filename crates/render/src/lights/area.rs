@@ -43,7 +43,7 @@ impl AreaLight {
     /// radiance texture, when `textured`) and area density. `None` for other shapes and
     /// degenerate meshes.
     #[inline(always)]
-    fn sample_point(
+    pub(super) fn sample_point(
         &self,
         geom: &ShapeGeom,
         flip: f32,
@@ -106,6 +106,43 @@ impl AreaLight {
                 (p, err, c.normal(q) * flip, uv, pdf)
             }
             _ => return None,
+        })
+    }
+
+    /// A point of the emitting surface for an emitted ray (`sample_le`; the
+    /// `directionalarea` light too): uniform by area (an ellipsoid's uniform on its object
+    /// sphere, see `sample_le`): position, error bound, emitting normal, uv (when
+    /// `textured`) and area density.
+    #[inline]
+    pub(super) fn sample_position(
+        &self,
+        scene: &impl LightScene,
+        textured: bool,
+        u_pos: Vec2,
+    ) -> Option<(Vec3, Vec3, Vec3, Vec2, f32)> {
+        let info = scene.shape(self.shape);
+        let flip = if info.flip_normals { -1.0 } else { 1.0 };
+        Some(match &info.geom {
+            ShapeGeom::Sphere { center, radius } => {
+                let d = warp::square_to_uniform_sphere(u_pos);
+                let p = *center + d * *radius;
+                let uv = if textured { sphere_uv(d) } else { Vec2::ZERO };
+                let err = gamma(5) * (p.abs() + center.abs());
+                (p, err, d * flip, uv, 1.0 / self.area)
+            }
+            ShapeGeom::Ellipsoid(e) => {
+                let q = warp::square_to_uniform_sphere(u_pos);
+                let (p, err) = e.point(q);
+                let uv = if textured { sphere_uv(q) } else { Vec2::ZERO };
+                (
+                    p,
+                    err,
+                    e.normal(q) * flip,
+                    uv,
+                    1.0 / (4.0 * PI * e.area_scale(q)),
+                )
+            }
+            geom => self.sample_point(geom, flip, textured, u_pos)?,
         })
     }
 }
@@ -236,31 +273,8 @@ impl LightModel for AreaLight {
         u_dir: Vec2,
         m: &M,
     ) -> Option<EmissionSample<M::C>> {
-        let info = scene.shape(self.shape);
-        let flip = if info.flip_normals { -1.0 } else { 1.0 };
         let textured = matches!(self.radiance, TexRef::Texture(_));
-        let (p, p_error, n, uv, pdf_pos) = match &info.geom {
-            ShapeGeom::Sphere { center, radius } => {
-                let d = warp::square_to_uniform_sphere(u_pos);
-                let p = *center + d * *radius;
-                let uv = if textured { sphere_uv(d) } else { Vec2::ZERO };
-                let err = gamma(5) * (p.abs() + center.abs());
-                (p, err, d * flip, uv, 1.0 / self.area)
-            }
-            ShapeGeom::Ellipsoid(e) => {
-                let q = warp::square_to_uniform_sphere(u_pos);
-                let (p, err) = e.point(q);
-                let uv = if textured { sphere_uv(q) } else { Vec2::ZERO };
-                (
-                    p,
-                    err,
-                    e.normal(q) * flip,
-                    uv,
-                    1.0 / (4.0 * PI * e.area_scale(q)),
-                )
-            }
-            geom => self.sample_point(geom, flip, textured, u_pos)?,
-        };
+        let (p, p_error, n, uv, pdf_pos) = self.sample_position(scene, textured, u_pos)?;
         if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
             return None;
         }

@@ -1107,13 +1107,20 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     fn area_emission(&mut self, c: &Child<'s>) -> Result<AreaEmission> {
         let pl = self.ctx.plugin(c.elem)?;
-        if pl.ty != "area" {
+        if pl.ty != "area" && pl.ty != "directionalarea" {
             return Err(err(
                 &c.loc,
                 format!(
-                    "a shape can only carry an 'area' emitter, found '{}'",
+                    "a shape can only carry an 'area' or 'directionalarea' emitter, found '{}'",
                     pl.ty
                 ),
+            ));
+        }
+        if pl.ty == "directionalarea" && pl.props.has("to_world") {
+            // As Mitsuba: the emitter inherits its shape's placement.
+            return Err(err(
+                pl.loc(),
+                "a directionalarea emitter cannot have a to_world (it inherits its shape's)",
             ));
         }
         let radiance = self.color(&pl, "radiance", 1.0, true)?;
@@ -1121,6 +1128,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         Ok(AreaEmission {
             radiance,
             two_sided: false,
+            directional: pl.ty == "directionalarea",
             loc: pl.loc().clone(),
         })
     }
@@ -1128,7 +1136,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     fn emitter(&mut self, pl: &Plugin<'s>) -> Result<Option<Emitter>> {
         let to_world = pl.props.transform("to_world")?;
         let e = match pl.ty.as_str() {
-            "area" => {
+            "area" | "directionalarea" => {
                 if pl.elem.attr("id").is_none() {
                     return Err(err(
                         pl.loc(),

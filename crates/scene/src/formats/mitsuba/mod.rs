@@ -32,6 +32,8 @@
 //! `cylinder`: `p0`, `p1` and `radius` are folded into `to_world` as Mitsuba does
 //! (`translate(p0)·to_frame(d)·scale(r, r, |d|)`, the frame of Mitsuba's
 //! `coordinate_system`, so that uv's φ = 0 lies where Mitsuba's does); open ends.
+//! `directionalarea` (a shape's emitter, no `to_world` of its own, as Mitsuba) emits along
+//! the normal only: `AreaEmission::directional`.
 //! Without a sensor, Mitsuba's default camera (45°, framing the scene's bounds from −z) is
 //! added with a warning.
 
