@@ -6,10 +6,11 @@ use std::sync::Arc;
 use render::image_io::{self, Decode};
 use render::lights::{
     AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMap, ImagePointLight,
-    ImageProfile, Light, PointLight, SpotLight, SunSkyLight,
+    ImageProfile, Light, PointLight, ProjectorLight, SpotLight, SunSkyLight,
 };
 use render::shapes::ShapeInfo;
 use render::shapes::{MeshSampling, ShapeGeom};
+use render::textures::ColorRef;
 use render::world::ShapeLights;
 use scene::SceneDesc;
 
@@ -34,6 +35,7 @@ pub(crate) fn lights(
     shapes: &[ShapeInfo],
     split: bool,
     declared: &Declared,
+    projectors: &[Option<(ColorRef, f32)>],
 ) -> Result<BuiltLights, BuildError> {
     // In spectral mode, the spectrum a light's constant was declared as.
     let spectrum = |v: &scene::ColorValue| declared.value(v).map(Arc::new);
@@ -137,7 +139,7 @@ pub(crate) fn lights(
             _ => None,
         })
         .collect();
-    for e in &desc.emitters {
+    for (k, e) in desc.emitters.iter().enumerate() {
         if !matches!(e.emitter, scene::Emitter::Ambient { .. }) {
             media.push(e.medium.map(|m| m.0));
         }
@@ -190,6 +192,21 @@ pub(crate) fn lights(
                 to_world, path, *intensity, *profile, *power, &e.loc,
             )?)),
             scene::Emitter::SunSky(d) => Light::SunSky(Arc::new(sunsky(d))),
+            scene::Emitter::Projector {
+                to_world,
+                scale,
+                fov,
+                fov_axis,
+                ..
+            } => {
+                let Some((irradiance, aspect)) = projectors.get(k).copied().flatten() else {
+                    unreachable!("every projector's texture is resolved by `build`")
+                };
+                let fov_x = render::camera::fov_x_degrees(*fov, *fov_axis, aspect);
+                Light::Projector(Box::new(ProjectorLight::new(
+                    *to_world, irradiance, *scale, fov_x, aspect,
+                )))
+            }
             scene::Emitter::EnvMap {
                 path,
                 scale,

@@ -999,6 +999,18 @@ pub enum Emitter {
     },
     /// Uniform environment radiance.
     Constant { radiance: ColorValue },
+    /// Mitsuba 3's `projector`: a pinhole at `to_world`'s origin projecting the texture
+    /// `irradiance` (uv over the image plane at z = 1 of its frame, Mitsuba's perspective
+    /// mapping: u from +x to −x, v from +y to −y) times `scale`, normalised as Mitsuba so
+    /// that a plane at z = 1 receives irradiance π·scale·E(uv). The field of view is
+    /// resolved against the texture's aspect ratio at build time.
+    Projector {
+        to_world: Mat4,
+        irradiance: ColorParam,
+        scale: f32,
+        fov: f32,
+        fov_axis: FovAxis,
+    },
     /// The course ray tracers' ambient term: adds `ambient reflectance × radiance` at every
     /// hit of the Whitted integrator (CENG795 `AmbientLight`). Not a physical emitter: the
     /// path tracers ignore it (with a warning at build time).
@@ -1065,6 +1077,7 @@ impl Emitter {
             Emitter::Spot { .. } => "spot",
             Emitter::Directional { .. } => "directional",
             Emitter::Constant { .. } => "constant",
+            Emitter::Projector { .. } => "projector",
             Emitter::EnvMap { .. } => "envmap",
             Emitter::SunSky(_) => "sunsky",
             Emitter::Ambient { .. } => "ambient",

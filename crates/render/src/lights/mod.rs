@@ -2,7 +2,8 @@
 //! one enum, dispatched like `bsdf/` — [`AreaLight`] (an emitting shape), [`PointLight`],
 //! [`SpotLight`], [`DirectionalLight`], [`ConstantLight`], [`EnvMap`] and [`SunSkyLight`]
 //! (Mitsuba's `sunsky`, its model in [`sunsky_model`]) and [`DirectionalAreaLight`]
-//! (Mitsuba's `directionalarea`, a shape emitting only along its normal). Light selection
+//! (Mitsuba's `directionalarea`, a shape emitting only along its normal) and [`ProjectorLight`]
+//! (Mitsuba's `projector`). Light selection
 //! ([`select`]) and the light BVH ([`bvh`]) read each kind's power and bounds.
 //!
 //! Adding an emitter kind: a file here with its struct and its [`LightModel`] impl, a
@@ -16,6 +17,7 @@ mod directional_area;
 mod envmap;
 mod image_point;
 mod point;
+mod projector;
 pub mod select;
 mod spot;
 mod sunsky;
@@ -31,6 +33,7 @@ pub use directional_area::DirectionalAreaLight;
 pub use envmap::EnvMap;
 pub use image_point::{ImagePointLight, Profile as ImageProfile};
 pub use point::PointLight;
+pub use projector::ProjectorLight;
 pub use spot::SpotLight;
 pub use sunsky::SunSkyLight;
 
@@ -224,6 +227,7 @@ pub enum Light {
     ImagePoint(Arc<ImagePointLight>),
     SunSky(Arc<SunSkyLight>),
     DirectionalArea(Box<DirectionalAreaLight>),
+    Projector(Box<ProjectorLight>),
 }
 
 macro_rules! dispatch {
@@ -238,6 +242,7 @@ macro_rules! dispatch {
             Light::ImagePoint($l) => $e,
             Light::SunSky($l) => $e,
             Light::DirectionalArea($l) => $e,
+            Light::Projector($l) => $e,
         }
     };
 }

@@ -1198,6 +1198,19 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "constant" => Emitter::Constant {
                 radiance: self.color_value(pl, "radiance", Vec3::ONE, true)?,
             },
+            "projector" => {
+                let Some(irradiance) = self.color_opt(pl, "irradiance", true)? else {
+                    return Err(err(pl.loc(), "projector: 'irradiance' is required"));
+                };
+                let (fov, fov_axis) = self.fov(pl, false)?;
+                Emitter::Projector {
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    irradiance,
+                    scale: pl.props.float("scale", 1.0)?,
+                    fov,
+                    fov_axis,
+                }
+            }
             "envmap" => {
                 let path = self.ctx.file_param(pl, "envmap")?;
                 Emitter::EnvMap {

@@ -33,7 +33,9 @@
 //! (`translate(p0)·to_frame(d)·scale(r, r, |d|)`, the frame of Mitsuba's
 //! `coordinate_system`, so that uv's φ = 0 lies where Mitsuba's does); open ends.
 //! `directionalarea` (a shape's emitter, no `to_world` of its own, as Mitsuba) emits along
-//! the normal only: `AreaEmission::directional`.
+//! the normal only: `AreaEmission::directional`. `projector`'s field of view is kept as
+//! given (`fov`, `fov_axis` or `focal_length`) and resolved at build time against its
+//! texture's aspect ratio (a bitmap's; 1 for other textures, as Mitsuba).
 //! Without a sensor, Mitsuba's default camera (45°, framing the scene's bounds from −z) is
 //! added with a warning.
 
