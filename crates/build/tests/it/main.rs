@@ -21,6 +21,7 @@ mod mitsuba_bsdfs;
 mod mitsuba_emitters;
 mod mitsuba_legacy;
 mod mitsuba_shapes;
+mod mitsuba_spectra;
 mod motion_blur;
 mod nori;
 mod nori_vdb_box;

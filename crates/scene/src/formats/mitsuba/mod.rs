@@ -9,8 +9,11 @@
 //!    adds a search folder (a missing folder is a warning).
 //! 2. [`plugin`] / [`props`]: each object element is split into typed properties (float,
 //!    integer, boolean, string, point/vector, rgb/color, spectrum, transform) and child objects
-//!    (inline or `<ref id>`). Mitsuba 0.6 / Nori camelCase names (`toWorld`, `sampleCount`,
-//!    `intIOR`, `fovAxis`...) are mapped to Mitsuba 3's snake_case. Transforms compose in
+//!    (inline or `<ref id>`). Spectra: inline `wavelength:value` lists, files, and the
+//!    plugins `d65`, `blackbody`, `uniform`, `regular`, `irregular` (the last two sampled
+//!    spectra like the lists; Mitsuba 3.9.1's RGB variants cannot evaluate them, Penumbra
+//!    converts them as Mitsuba converts the lists). Mitsuba 0.6 / Nori camelCase names
+//!    (`toWorld`, `sampleCount`, `intIOR`, `fovAxis`...) are mapped to Mitsuba 3's snake_case. Transforms compose in
 //!    document order (each operation is left-multiplied); `lookat` is Mitsuba's
 //!    camera-to-world with columns (left, up, dir, origin).
 //! 3. [`build`]: plugins → [`SceneDesc`](crate::SceneDesc) with Mitsuba 3's defaults for
