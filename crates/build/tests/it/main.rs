@@ -20,6 +20,7 @@ mod mip_filtering;
 mod mitsuba_bsdfs;
 mod mitsuba_emitters;
 mod mitsuba_legacy;
+mod mitsuba_sensors;
 mod mitsuba_shapes;
 mod mitsuba_spectra;
 mod motion_blur;

@@ -1750,7 +1750,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     fn sensor(&mut self, pl: &Plugin<'s>) -> Result<()> {
         let nori = pl.elem.tag == "camera";
-        let to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let mut to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
         let (near_default, far_default) = if nori { (1e-4, 1e4) } else { (1e-2, 1e4) };
         let near_clip = pl.props.float("near_clip", near_default)?;
         let far_clip = pl.props.float("far_clip", far_default)?;
@@ -1779,7 +1779,39 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
             }
             "orthographic" => Projection::Orthographic,
-            _ => return Err(unknown_type(pl, "perspective, thinlens, orthographic")),
+            "radiancemeter" => {
+                // Mitsuba: `origin` and `direction`, or a to_world (not both).
+                let origin = pl.props.vector_opt("origin")?;
+                let direction = pl.props.vector_opt("direction")?;
+                if origin.is_some() || direction.is_some() {
+                    if pl.props.has("to_world") {
+                        return Err(err(
+                            pl.loc(),
+                            "radiancemeter: give either to_world or origin and direction",
+                        ));
+                    }
+                    let (Some(o), Some(d)) = (origin, direction) else {
+                        return Err(err(
+                            pl.loc(),
+                            "radiancemeter: 'origin' and 'direction' go together",
+                        ));
+                    };
+                    let d = d.normalize_or_zero();
+                    if d == Vec3::ZERO {
+                        return Err(err(pl.loc(), "radiancemeter: direction must be non-zero"));
+                    }
+                    let (s, t) = coordinate_system(d);
+                    to_world =
+                        Mat4::from_cols(s.extend(0.0), t.extend(0.0), d.extend(0.0), o.extend(1.0));
+                }
+                Projection::RadianceMeter
+            }
+            _ => {
+                return Err(unknown_type(
+                    pl,
+                    "perspective, thinlens, orthographic, radiancemeter",
+                ));
+            }
         };
         let mut film = None;
         let mut sampler = None;
@@ -1832,6 +1864,16 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 tonemap: None,
             },
         };
+        if matches!(projection, Projection::RadianceMeter) && (film.width, film.height) != (1, 1) {
+            // As Mitsuba: "This sensor only supports films of size 1x1 Pixels!".
+            return Err(err(
+                pl.loc(),
+                format!(
+                    "a radiancemeter takes a 1×1 film, found {}×{}",
+                    film.width, film.height
+                ),
+            ));
+        }
         self.ctx.finish(pl);
         self.sensor_has_sampler.push(sampler.is_some());
         self.scene.sensors.push(Sensor {
