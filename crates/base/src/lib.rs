@@ -160,6 +160,9 @@ pub enum Projection {
     /// Mitsuba's orthographic camera: the image covers [-1,1]² of the camera plane (scaled
     /// by `to_world`).
     Orthographic,
+    /// Mitsuba 3's `radiancemeter`: every sample is the one ray from the frame's origin along
+    /// its +z (no clipping); its film is 1×1.
+    RadianceMeter,
     /// A pinhole whose image is the window [left, right] × [bottom, top] of the plane one
     /// unit in front of the eye, in the image's own right/up coordinates (CENG795
     /// `NearPlane` / `NearDistance`): off-axis when the window is not centred, non-square

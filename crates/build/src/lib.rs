@@ -112,6 +112,27 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         .iter()
         .map(textures::load_texture)
         .collect::<Result<Vec<_>, _>>()?;
+    // Projectors' textures and their aspect ratios (Mitsuba's resolution: a bitmap's, 1×1
+    // for the others).
+    let projectors: Vec<Option<(render::textures::ColorRef, f32)>> = desc
+        .emitters
+        .iter()
+        .map(|e| match &e.emitter {
+            scene::Emitter::Projector { irradiance, .. } => {
+                let aspect = match irradiance {
+                    scene::ColorParam::Texture(t) => match &textures[t.0 as usize] {
+                        render::textures::Texture::Bitmap { image, .. } => {
+                            image.width as f32 / image.height as f32
+                        }
+                        _ => 1.0,
+                    },
+                    _ => 1.0,
+                };
+                Some((declared.color_ref(irradiance), aspect))
+            }
+            _ => None,
+        })
+        .collect();
     // Declared spectra's textures sit right after the scene's (`Declared` counts on it).
     textures.append(&mut declared.textures);
     textures::opacity_from_alpha(desc, &mut shapes, &mut textures)?;
@@ -122,7 +143,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         lights,
         shape_lights,
         media: light_media,
-    } = lights::lights(desc, &shapes, split, &declared)?;
+    } = lights::lights(desc, &shapes, split, &declared, &projectors)?;
     let infinite_lights = (0..lights.len() as u32)
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();

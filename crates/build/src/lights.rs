@@ -5,11 +5,12 @@ use std::sync::Arc;
 
 use render::image_io::{self, Decode};
 use render::lights::{
-    AreaLight, ConstantLight, DirectionalLight, EnvMap, ImagePointLight, ImageProfile, Light,
-    PointLight, SpotLight, SunSkyLight,
+    AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMap, ImagePointLight,
+    ImageProfile, Light, PointLight, ProjectorLight, SpotLight, SunSkyLight,
 };
 use render::shapes::ShapeInfo;
 use render::shapes::{MeshSampling, ShapeGeom};
+use render::textures::ColorRef;
 use render::world::ShapeLights;
 use scene::SceneDesc;
 
@@ -34,6 +35,7 @@ pub(crate) fn lights(
     shapes: &[ShapeInfo],
     split: bool,
     declared: &Declared,
+    projectors: &[Option<(ColorRef, f32)>],
 ) -> Result<BuiltLights, BuildError> {
     // In spectral mode, the spectrum a light's constant was declared as.
     let spectrum = |v: &scene::ColorValue| declared.value(v).map(Arc::new);
@@ -44,17 +46,47 @@ pub(crate) fn lights(
             continue;
         };
         let two_sided = d.emission.as_ref().is_some_and(|e| e.two_sided);
+        if d.emission.as_ref().is_some_and(|e| e.directional) {
+            // Mitsuba's `directionalarea`: the whole shape, sampled by area (meshes by
+            // triangle area), emitting along its normal only.
+            let triangles = match &s.geom {
+                ShapeGeom::Mesh {
+                    positions, indices, ..
+                } => Some(MeshSampling::new(
+                    positions,
+                    indices,
+                    &triangle_areas(positions, indices),
+                )),
+                ShapeGeom::Plane { .. } => {
+                    return Err(BuildError {
+                        loc: d.loc.clone(),
+                        message: "an infinite plane cannot be an area light".into(),
+                    });
+                }
+                _ => None,
+            };
+            let area = s.geom.area();
+            if !(area > 0.0 && area.is_finite()) {
+                continue;
+            }
+            shape_light[i] = ShapeLights::Whole(lights.len() as u32);
+            lights.push(Light::DirectionalArea(Box::new(DirectionalAreaLight {
+                area: AreaLight {
+                    shape: i as u32,
+                    radiance: *radiance,
+                    two_sided: false,
+                    triangles,
+                    prim: None,
+                    area,
+                },
+            })));
+            continue;
+        }
         let triangles = match &s.geom {
             ShapeGeom::Mesh {
                 positions, indices, ..
             } => {
-                let areas: Vec<f32> = indices
-                    .iter()
-                    .map(|t| {
-                        let [a, b, c] = t.map(|i| positions[i as usize]);
-                        0.5 * (b - a).cross(c - a).length()
-                    })
-                    .collect();
+                let areas = triangle_areas(positions, indices);
                 if split {
                     // Degenerate triangles stay (so that triangle t is light first + t):
                     // they have no power and are never chosen.
@@ -103,10 +135,11 @@ pub(crate) fn lights(
         .iter()
         .map(|l| match l {
             Light::Area(a) => shapes[a.shape as usize].exterior,
+            Light::DirectionalArea(d) => shapes[d.area.shape as usize].exterior,
             _ => None,
         })
         .collect();
-    for e in &desc.emitters {
+    for (k, e) in desc.emitters.iter().enumerate() {
         if !matches!(e.emitter, scene::Emitter::Ambient { .. }) {
             media.push(e.medium.map(|m| m.0));
         }
@@ -159,6 +192,21 @@ pub(crate) fn lights(
                 to_world, path, *intensity, *profile, *power, &e.loc,
             )?)),
             scene::Emitter::SunSky(d) => Light::SunSky(Arc::new(sunsky(d))),
+            scene::Emitter::Projector {
+                to_world,
+                scale,
+                fov,
+                fov_axis,
+                ..
+            } => {
+                let Some((irradiance, aspect)) = projectors.get(k).copied().flatten() else {
+                    unreachable!("every projector's texture is resolved by `build`")
+                };
+                let fov_x = render::camera::fov_x_degrees(*fov, *fov_axis, aspect);
+                Light::Projector(Box::new(ProjectorLight::new(
+                    *to_world, irradiance, *scale, fov_x, aspect,
+                )))
+            }
             scene::Emitter::EnvMap {
                 path,
                 scale,
@@ -289,4 +337,15 @@ fn image_point(
         }
     }
     Ok(light)
+}
+
+/// The area of each triangle of a world-space mesh.
+fn triangle_areas(positions: &[render::math::Vec3], indices: &[[u32; 3]]) -> Vec<f32> {
+    indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .collect()
 }

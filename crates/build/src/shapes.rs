@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use render::materials::RtMaterial;
 use render::math::{Mat3, Mat4, PVec3, Vec2, Vec3};
-use render::shapes::{Ellipsoid, Instance, Reads, ShapeGeom, ShapeInfo};
+use render::shapes::{Cylinder, Ellipsoid, Instance, Reads, ShapeGeom, ShapeInfo};
 
 use scene::{Material, SceneDesc, Shape, TriMesh};
 
@@ -117,6 +117,15 @@ pub(crate) fn shapes(
                     }
                 }
             }
+            (Shape::Cylinder, None) => match Cylinder::new(s.to_world) {
+                Some(c) => ShapeGeom::Cylinder(Box::new(c)),
+                None => {
+                    return Err(BuildError {
+                        loc: s.loc.clone(),
+                        message: "cylinder with a singular or non-finite transformation".into(),
+                    });
+                }
+            },
             (Shape::Disk, None) => {
                 let n = (Mat3::from_mat4(s.to_world).inverse().transpose() * Vec3::Z)
                     .normalize_or_zero();

@@ -183,7 +183,7 @@ pub(crate) fn apply(
                 _ => (t * a, t),
             }
         }
-        Projection::Orthographic | Projection::Window { .. } => {
+        Projection::Orthographic | Projection::Window { .. } | Projection::RadianceMeter => {
             return Err(Failure::input(
                 "only perspective cameras are supported by cs184",
             ));

@@ -297,6 +297,7 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
                 axis_name(fov_axis)
             ),
             Projection::Orthographic => "orthographic".into(),
+            Projection::RadianceMeter => "radiancemeter (one ray)".into(),
             Projection::Window {
                 left,
                 right,

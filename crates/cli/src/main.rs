@@ -470,6 +470,9 @@ impl ViewArgs {
                         "--fov does not apply to an orthographic camera",
                     ));
                 }
+                scene::Projection::RadianceMeter => {
+                    return Err(Failure::input("--fov does not apply to a radiancemeter"));
+                }
             }
         }
         Ok(())

@@ -48,6 +48,8 @@ enum Kind {
         focus_distance: f32,
     },
     Orthographic,
+    /// One ray: the origin along +z (Mitsuba's `radiancemeter`).
+    RadianceMeter,
 }
 
 /// A camera ray with its extent: valid for 0 < t < `t_max`.
@@ -132,6 +134,18 @@ impl Camera {
                 Some(fov_x_degrees(fov, fov_axis, aspect)),
             ),
             Projection::Orthographic => (Kind::Orthographic, None),
+            Projection::RadianceMeter => {
+                return Camera {
+                    kind: Kind::RadianceMeter,
+                    to_world,
+                    to_camera: to_world.inverse(),
+                    resolution: Vec2::new(width as f32, height as f32),
+                    half_extent: Vec2::ONE,
+                    centre: Vec2::ZERO,
+                    near_clip: 0.0,
+                    far_clip: f32::INFINITY,
+                };
+            }
             Projection::Window {
                 left,
                 right,
@@ -203,6 +217,7 @@ impl Camera {
                 let q = Vec3::new(p.x / self.half_extent.x, p.y / self.half_extent.x, 0.0);
                 (q, Vec3::Z)
             }
+            Kind::RadianceMeter => (Vec3::ZERO, Vec3::Z),
         };
         let o = self.to_world.transform_point3a(o_cam);
         let d_world = self.to_world.transform_vector3a(d_cam);
@@ -238,6 +253,9 @@ impl Camera {
             let dp = self.to_world.transform_vector3a(q - pc);
             if dp.is_finite() { dp } else { Vec3::ZERO }
         };
+        if matches!(self.kind, Kind::RadianceMeter) {
+            return (Vec3::ZERO, Vec3::ZERO);
+        }
         let [dx, dy] = offsets.map(|off| match self.kind {
             Kind::Orthographic => on_plane(
                 Vec3::new(pc.x, pc.y, 0.0) + off / self.half_extent.x,
@@ -278,7 +296,7 @@ impl Camera {
     /// Whether light paths can be connected to this camera ([`Self::sample_wi`]): every
     /// projection but the orthographic one (a delta in direction and position alike).
     pub fn supports_importance(&self) -> bool {
-        !matches!(self.kind, Kind::Orthographic)
+        !matches!(self.kind, Kind::Orthographic | Kind::RadianceMeter)
     }
 
     /// Connect the world point `p` to the lens (a point on the aperture from `u` for a thin
@@ -294,7 +312,7 @@ impl Camera {
                 let lens = square_to_uniform_disk_concentric(u) * aperture_radius;
                 Vec3::new(lens.x, lens.y, 0.0)
             }
-            Kind::Orthographic => return None,
+            Kind::Orthographic | Kind::RadianceMeter => return None,
         };
         let p_cam = self.to_camera.transform_point3a(p);
         if !(p_cam.z > self.near_clip && p_cam.z < self.far_clip) {
@@ -345,7 +363,7 @@ impl Camera {
             Kind::ThinLens {
                 aperture_radius, ..
             } => crate::math::PI * aperture_radius * aperture_radius,
-            Kind::Orthographic => return (0.0, 0.0),
+            Kind::Orthographic | Kind::RadianceMeter => return (0.0, 0.0),
         };
         let c = self.to_camera.transform_vector3a(d).normalize();
         if c.z <= 0.0 {

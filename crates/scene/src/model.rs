@@ -288,6 +288,10 @@ pub enum Shape {
     Disk,
     /// Mitsuba's cube: [-1,1]³ with outward normals.
     Cube,
+    /// Mitsuba's cylinder: the open unit cylinder x² + y² = 1, 0 ≤ z ≤ 1 (no caps), normals
+    /// outward, uv = (φ/2π with φ ∈ [0, 2π) from +x towards +y, z). The Mitsuba loader folds
+    /// `p0`, `p1` and `radius` into `to_world`.
+    Cylinder,
     /// An infinite plane through `point` with normal `normal` (object space).
     InfinitePlane { point: Vec3, normal: Vec3 },
 }
@@ -295,7 +299,7 @@ pub enum Shape {
 impl ShapeDesc {
     /// World-space bounds (`None` for an infinite plane). Spheres are bounded exactly, also
     /// as ellipsoids: the centre ± radius × the length of each row of the linear part.
-    /// Rectangles and disks by the corners of their square, cubes by theirs.
+    /// Rectangles and disks by the corners of their square, cubes and cylinders by their boxes'.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let m = &self.to_world;
         let corners = |z: [f32; 2]| {
@@ -332,6 +336,7 @@ impl ShapeDesc {
             }
             Shape::Rectangle | Shape::Disk => corners([0.0, 0.0]),
             Shape::Cube => corners([-1.0, 1.0]),
+            Shape::Cylinder => corners([0.0, 1.0]),
             Shape::InfinitePlane { .. } => return None,
         };
         (b.0.cmple(b.1).all() && b.0.is_finite() && b.1.is_finite()).then_some(b)
@@ -354,6 +359,7 @@ impl Shape {
             Shape::Rectangle => "rectangle",
             Shape::Disk => "disk",
             Shape::Cube => "cube",
+            Shape::Cylinder => "cylinder",
             Shape::InfinitePlane { .. } => "infinite plane",
         }
     }
@@ -400,6 +406,9 @@ pub struct AreaEmission {
     pub radiance: ColorParam,
     /// Emit on both sides (CS184 area lights are one-sided; some formats are two-sided).
     pub two_sided: bool,
+    /// Mitsuba 3's `directionalarea`: emit only along the normal (a delta in direction),
+    /// `radiance` being the flux per unit area; only light tracing renders its light.
+    pub directional: bool,
     pub loc: Loc,
 }
 
@@ -1003,6 +1012,18 @@ pub enum Emitter {
     },
     /// Uniform environment radiance.
     Constant { radiance: ColorValue },
+    /// Mitsuba 3's `projector`: a pinhole at `to_world`'s origin projecting the texture
+    /// `irradiance` (uv over the image plane at z = 1 of its frame, Mitsuba's perspective
+    /// mapping: u from +x to −x, v from +y to −y) times `scale`, normalised as Mitsuba so
+    /// that a plane at z = 1 receives irradiance π·scale·E(uv). The field of view is
+    /// resolved against the texture's aspect ratio at build time.
+    Projector {
+        to_world: Mat4,
+        irradiance: ColorParam,
+        scale: f32,
+        fov: f32,
+        fov_axis: FovAxis,
+    },
     /// The course ray tracers' ambient term: adds `ambient reflectance × radiance` at every
     /// hit of the Whitted integrator (CENG795 `AmbientLight`). Not a physical emitter: the
     /// path tracers ignore it (with a warning at build time).
@@ -1069,6 +1090,7 @@ impl Emitter {
             Emitter::Spot { .. } => "spot",
             Emitter::Directional { .. } => "directional",
             Emitter::Constant { .. } => "constant",
+            Emitter::Projector { .. } => "projector",
             Emitter::EnvMap { .. } => "envmap",
             Emitter::SunSky(_) => "sunsky",
             Emitter::Ambient { .. } => "ambient",

@@ -37,8 +37,8 @@ use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 
 use super::prim::{
-    Tri4, Tri8, WoopRay, WoopRay4, WoopRay8, intersect_disk, intersect_ellipsoid, intersect_sphere,
-    tri_any, tri_closest,
+    Tri4, Tri8, WoopRay, WoopRay4, WoopRay8, intersect_cylinder, intersect_disk,
+    intersect_ellipsoid, intersect_sphere, tri_any, tri_closest,
 };
 use super::stats;
 use crate::geometry::Ray;
@@ -90,6 +90,7 @@ pub(crate) enum Prim {
     Sphere { center: Vec3, radius: f32 },
     Disk { to_object: Mat4 },
     Ellipsoid { to_object: Mat4 },
+    Cylinder { to_object: Mat4 },
 }
 
 /// What a leaf holding an analytic shape stores: its triangles four at a time, the analytic
@@ -114,6 +115,7 @@ pub(crate) enum Packet {
 pub(crate) enum Unit {
     Disk,
     Sphere,
+    Cylinder,
 }
 
 /// Children per node.
@@ -516,6 +518,10 @@ impl WideBvh {
                     to_object,
                     kind: Unit::Sphere,
                 },
+                Prim::Cylinder { to_object } => Packet::Transformed {
+                    to_object,
+                    kind: Unit::Cylinder,
+                },
             };
             self.packets.push(packet);
             self.ids.push(one(ids[i]));
@@ -886,6 +892,7 @@ fn transformed_packet(
     match kind {
         Unit::Disk => intersect_disk(ray, to_object, t_max),
         Unit::Sphere => intersect_ellipsoid(ray, to_object, t_max).map(|t| (t, 0.0, 0.0)),
+        Unit::Cylinder => intersect_cylinder(ray, to_object, t_max).map(|t| (t, 0.0, 0.0)),
     }
 }
 

@@ -89,6 +89,11 @@ pub enum AccelShape {
     Ellipsoid {
         to_world: Mat4,
     },
+    /// The open unit cylinder x² + y² = 1, 0 ≤ z ≤ 1 of its object space, placed by an affine
+    /// `to_world`.
+    Cylinder {
+        to_world: Mat4,
+    },
     /// Infinite plane (not bounded: kept out of the BVH, tested separately).
     Plane {
         point: Vec3,
@@ -390,6 +395,15 @@ fn add_prims(
             let (lo, hi) = ellipsoid_bounds(&to_world);
             aabbs.push(Aabb::new(lo, hi));
         }
+        &AccelShape::Cylinder { to_world } => {
+            let Some(to_object) = invertible(&to_world) else {
+                return;
+            };
+            prims.push(Prim::Cylinder { to_object });
+            ids.push([s, 0]);
+            let (lo, hi) = cylinder_bounds(&to_world);
+            aabbs.push(Aabb::new(lo, hi));
+        }
         &AccelShape::Plane { point, normal } => {
             if normal.is_finite() && point.is_finite() && normal != Vec3::ZERO {
                 planes.push((point, normal, s));
@@ -418,6 +432,23 @@ pub fn ellipsoid_bounds(to_world: &Mat4) -> (Vec3, Vec3) {
     let c = Vec3::from_vec4(to_world.w_axis);
     let pad = c.abs() * (2.0 * f32::EPSILON);
     (c - half - pad, c + half + pad)
+}
+
+/// Conservative world bounds of the unit cylinder's box [-1, 1]² × [0, 1] under an affine
+/// `to_world`.
+pub fn cylinder_bounds(to_world: &Mat4) -> (Vec3, Vec3) {
+    let c0 = Vec3::from_vec4(to_world.w_axis);
+    let c1 = to_world.transform_point3a(Vec3::Z);
+    let (lo, hi) = (c0.min(c1), c0.max(c1));
+    // The circle's half-extent along each world axis is the length of that row of the xy
+    // columns; the padding covers the rounding of the transform.
+    let (x, y) = (
+        Vec3::from_vec4(to_world.x_axis),
+        Vec3::from_vec4(to_world.y_axis),
+    );
+    let r = (x * x + y * y).powf(0.5);
+    let pad = (lo.abs().max(hi.abs()) + r) * (4.0 * f32::EPSILON);
+    (lo - r - pad, hi + r + pad)
 }
 
 /// Traversal counters for the accelerator benchmark (`--features stats`): rays, inner nodes

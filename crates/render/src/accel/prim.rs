@@ -581,6 +581,44 @@ pub fn intersect_disk(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<(f32, f
     }
 }
 
+/// Ray–cylinder intersection: the open unit cylinder x² + y² = 1, 0 ≤ z ≤ 1 of the object
+/// space `to_object` maps into (Mitsuba's `cylinder`, no caps). The nearest `t` in
+/// `(0, t_max)` whose point lies between the ends. The discriminant is computed from the
+/// distance of the axis to the ray line, as in [`intersect_sphere`], against cancellation.
+#[inline]
+pub fn intersect_cylinder(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<f32> {
+    let o = to_object.transform_point3a(ray.o);
+    let d = to_object.transform_vector3a(ray.d);
+    let a = d.x * d.x + d.y * d.y;
+    if a.is_nan() || a <= 0.0 {
+        return None;
+    }
+    let b = 2.0 * (o.x * d.x + o.y * d.y);
+    let c = o.x * o.x + o.y * o.y - 1.0;
+    let h = b / (2.0 * a);
+    let (lx, ly) = (o.x - h * d.x, o.y - h * d.y);
+    let len = (lx * lx + ly * ly).sqrt();
+    let disc = 4.0 * a * (1.0 + len) * (1.0 - len);
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    let root = disc.sqrt();
+    let q = if b < 0.0 {
+        -0.5 * (b - root)
+    } else {
+        -0.5 * (b + root)
+    };
+    let mut t0 = q / a;
+    let mut t1 = if q != 0.0 { c / q } else { t0 };
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    [t0, t1].into_iter().find(|&t| {
+        let z = o.z + t * d.z;
+        t > 0.0 && t < t_max && (0.0..=1.0).contains(&z)
+    })
+}
+
 /// Ray–plane intersection (both sides).
 #[inline]
 pub fn intersect_plane(ray: &Ray, point: Vec3, normal: Vec3, t_max: f32) -> Option<f32> {

@@ -3,7 +3,8 @@
 //! cone they subtend (solid angle), ellipsoids in the cone of their object sphere carried by
 //! the Jacobian of the map; meshes by area (triangle chosen in proportion to its area, then a
 //! uniform point; a two-triangle parallelogram, the usual quad light, in one step), disks by
-//! area; area densities are converted to solid angle. Under light selection by power or BVH
+//! area, cylinders uniformly in (φ, z) as Mitsuba does (by area under Mitsuba's transforms);
+//! area densities are converted to solid angle. Under light selection by power or BVH
 //! an emitting mesh becomes one light per triangle (`prim`), so that each triangle is chosen
 //! on its own.
 
@@ -15,8 +16,8 @@ use crate::geometry::Ray;
 use crate::math::{Frame, PI, Vec2, Vec3, rsqrt};
 use crate::sampling::warp;
 use crate::shapes::{
-    MeshSampling, ShapeGeom, SurfaceInteraction, disk_uv, ellipsoid, gamma, offset_ray_origin,
-    sphere, sphere_uv,
+    MeshSampling, ShapeGeom, SurfaceInteraction, cylinder_uv, disk_uv, ellipsoid, gamma,
+    offset_ray_origin, sphere, sphere_uv,
 };
 use crate::spectral::lanes::{Color, ColorMode};
 use crate::textures::{ColorRef, TexCoord, TexRef};
@@ -36,12 +37,13 @@ pub struct AreaLight {
 }
 
 impl AreaLight {
-    /// A point on an emitting mesh or disk, uniform by area: its position, error bound,
+    /// A point on an emitting mesh, disk or cylinder, uniform by area (a cylinder's in (φ, z),
+    /// see [`crate::shapes::Cylinder::sample`]): its position, error bound,
     /// emitting normal (`flip` applied, turned to the shading normal's side), uv (for a
     /// radiance texture, when `textured`) and area density. `None` for other shapes and
     /// degenerate meshes.
     #[inline(always)]
-    fn sample_point(
+    pub(super) fn sample_point(
         &self,
         geom: &ShapeGeom,
         flip: f32,
@@ -97,7 +99,50 @@ impl AreaLight {
                 let uv = if textured { disk_uv(d) } else { Vec2::ZERO };
                 (p, err, *normal * flip, uv, 1.0 / self.area)
             }
+            ShapeGeom::Cylinder(c) => {
+                let (q, pdf) = c.sample(u);
+                let (p, err) = c.point(q);
+                let uv = if textured { cylinder_uv(q) } else { Vec2::ZERO };
+                (p, err, c.normal(q) * flip, uv, pdf)
+            }
             _ => return None,
+        })
+    }
+
+    /// A point of the emitting surface for an emitted ray (`sample_le`; the
+    /// `directionalarea` light too): uniform by area (an ellipsoid's uniform on its object
+    /// sphere, see `sample_le`): position, error bound, emitting normal, uv (when
+    /// `textured`) and area density.
+    #[inline]
+    pub(super) fn sample_position(
+        &self,
+        scene: &impl LightScene,
+        textured: bool,
+        u_pos: Vec2,
+    ) -> Option<(Vec3, Vec3, Vec3, Vec2, f32)> {
+        let info = scene.shape(self.shape);
+        let flip = if info.flip_normals { -1.0 } else { 1.0 };
+        Some(match &info.geom {
+            ShapeGeom::Sphere { center, radius } => {
+                let d = warp::square_to_uniform_sphere(u_pos);
+                let p = *center + d * *radius;
+                let uv = if textured { sphere_uv(d) } else { Vec2::ZERO };
+                let err = gamma(5) * (p.abs() + center.abs());
+                (p, err, d * flip, uv, 1.0 / self.area)
+            }
+            ShapeGeom::Ellipsoid(e) => {
+                let q = warp::square_to_uniform_sphere(u_pos);
+                let (p, err) = e.point(q);
+                let uv = if textured { sphere_uv(q) } else { Vec2::ZERO };
+                (
+                    p,
+                    err,
+                    e.normal(q) * flip,
+                    uv,
+                    1.0 / (4.0 * PI * e.area_scale(q)),
+                )
+            }
+            geom => self.sample_point(geom, flip, textured, u_pos)?,
         })
     }
 }
@@ -132,7 +177,7 @@ impl LightModel for AreaLight {
                     m,
                 );
             }
-            ShapeGeom::Mesh { .. } | ShapeGeom::Disk { .. } => {
+            ShapeGeom::Mesh { .. } | ShapeGeom::Disk { .. } | ShapeGeom::Cylinder(_) => {
                 self.sample_point(&info.geom, flip, textured, u)?
             }
             ShapeGeom::Ellipsoid(e) => {
@@ -202,6 +247,7 @@ impl LightModel for AreaLight {
         }
         match &info.geom {
             ShapeGeom::Ellipsoid(e) => ellipsoid::pdf(e, r.p, wi, si.p, cos_l.abs()),
+            ShapeGeom::Cylinder(c) => d2 * c.pdf_area(c.project(si.p)) / cos_l.abs(),
             _ => d2 / (cos_l.abs() * self.area),
         }
     }
@@ -227,31 +273,8 @@ impl LightModel for AreaLight {
         u_dir: Vec2,
         m: &M,
     ) -> Option<EmissionSample<M::C>> {
-        let info = scene.shape(self.shape);
-        let flip = if info.flip_normals { -1.0 } else { 1.0 };
         let textured = matches!(self.radiance, TexRef::Texture(_));
-        let (p, p_error, n, uv, pdf_pos) = match &info.geom {
-            ShapeGeom::Sphere { center, radius } => {
-                let d = warp::square_to_uniform_sphere(u_pos);
-                let p = *center + d * *radius;
-                let uv = if textured { sphere_uv(d) } else { Vec2::ZERO };
-                let err = gamma(5) * (p.abs() + center.abs());
-                (p, err, d * flip, uv, 1.0 / self.area)
-            }
-            ShapeGeom::Ellipsoid(e) => {
-                let q = warp::square_to_uniform_sphere(u_pos);
-                let (p, err) = e.point(q);
-                let uv = if textured { sphere_uv(q) } else { Vec2::ZERO };
-                (
-                    p,
-                    err,
-                    e.normal(q) * flip,
-                    uv,
-                    1.0 / (4.0 * PI * e.area_scale(q)),
-                )
-            }
-            geom => self.sample_point(geom, flip, textured, u_pos)?,
-        };
+        let (p, p_error, n, uv, pdf_pos) = self.sample_position(scene, textured, u_pos)?;
         if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
             return None;
         }
@@ -306,6 +329,7 @@ impl LightModel for AreaLight {
                 let q = e.to_object.transform_point3a(p).normalize_or(Vec3::Z);
                 1.0 / (4.0 * PI * e.area_scale(q))
             }
+            ShapeGeom::Cylinder(c) => c.pdf_area(c.project(p)),
             ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => return (0.0, 0.0),
         };
         if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
@@ -343,6 +367,10 @@ impl LightModel for AreaLight {
             }
             ShapeGeom::Ellipsoid(e) => {
                 let (lo, hi) = crate::accel::ellipsoid_bounds(&e.to_world);
+                Some(any(lo, hi))
+            }
+            ShapeGeom::Cylinder(c) => {
+                let (lo, hi) = crate::accel::cylinder_bounds(&c.to_world);
                 Some(any(lo, hi))
             }
             ShapeGeom::Disk { to_world, normal } => {

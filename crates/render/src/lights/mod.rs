@@ -1,7 +1,9 @@
 //! Emitters and their sampling, following Mitsuba 3's definitions: a file per kind behind
 //! one enum, dispatched like `bsdf/` — [`AreaLight`] (an emitting shape), [`PointLight`],
 //! [`SpotLight`], [`DirectionalLight`], [`ConstantLight`], [`EnvMap`] and [`SunSkyLight`]
-//! (Mitsuba's `sunsky`, its model in [`sunsky_model`]). Light selection
+//! (Mitsuba's `sunsky`, its model in [`sunsky_model`]) and [`DirectionalAreaLight`]
+//! (Mitsuba's `directionalarea`, a shape emitting only along its normal) and [`ProjectorLight`]
+//! (Mitsuba's `projector`). Light selection
 //! ([`select`]) and the light BVH ([`bvh`]) read each kind's power and bounds.
 //!
 //! Adding an emitter kind: a file here with its struct and its [`LightModel`] impl, a
@@ -11,9 +13,11 @@ mod area;
 pub mod bvh;
 mod constant;
 mod directional;
+mod directional_area;
 mod envmap;
 mod image_point;
 mod point;
+mod projector;
 pub mod select;
 mod spot;
 mod sunsky;
@@ -25,9 +29,11 @@ pub use area::AreaLight;
 pub use bvh::LightBounds;
 pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
+pub use directional_area::DirectionalAreaLight;
 pub use envmap::EnvMap;
 pub use image_point::{ImagePointLight, Profile as ImageProfile};
 pub use point::PointLight;
+pub use projector::ProjectorLight;
 pub use spot::SpotLight;
 pub use sunsky::SunSkyLight;
 
@@ -220,6 +226,8 @@ pub enum Light {
     EnvMap(Arc<EnvMap>),
     ImagePoint(Arc<ImagePointLight>),
     SunSky(Arc<SunSkyLight>),
+    DirectionalArea(Box<DirectionalAreaLight>),
+    Projector(Box<ProjectorLight>),
 }
 
 macro_rules! dispatch {
@@ -233,6 +241,8 @@ macro_rules! dispatch {
             Light::EnvMap($l) => $e,
             Light::ImagePoint($l) => $e,
             Light::SunSky($l) => $e,
+            Light::DirectionalArea($l) => $e,
+            Light::Projector($l) => $e,
         }
     };
 }

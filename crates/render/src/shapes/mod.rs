@@ -6,15 +6,16 @@
 //!
 //! - `mesh.rs` — triangle meshes: interaction (smooth or flat), area, area sampling
 //!   ([`MeshSampling`], [`Parallelogram`]).
-//! - `sphere.rs`, `ellipsoid.rs`, `disk.rs`, `plane.rs` — the analytic shapes (rectangles and
-//!   cubes are meshed at build time, as Mitsuba does); spheres and ellipsoids carry their
-//!   solid-angle sampling.
+//! - `sphere.rs`, `ellipsoid.rs`, `disk.rs`, `cylinder.rs`, `plane.rs` — the analytic shapes
+//!   (rectangles and cubes are meshed at build time, as Mitsuba does); spheres and ellipsoids
+//!   carry their solid-angle sampling, cylinders their (φ, z) area sampling.
 //! - `instance.rs` — a prototype mesh seen through a placement, or a moving shape.
 //! - `interaction.rs` — [`SurfaceInteraction`] and robust spawning (pbrt-v4 §6.8): every hit
 //!   point carries a conservative bound `p_error` of its rounding error; rays leave along the
 //!   geometric normal by exactly that bound (rounded away from the surface), so there is
 //!   neither self-intersection nor a light leak, whatever the scene scale.
 
+pub mod cylinder;
 pub mod disk;
 pub mod ellipsoid;
 pub mod instance;
@@ -25,6 +26,7 @@ pub mod sphere;
 
 use std::sync::Arc;
 
+pub use cylinder::{Cylinder, cylinder_uv};
 pub use disk::disk_uv;
 pub use ellipsoid::Ellipsoid;
 pub use instance::Instance;
@@ -65,6 +67,8 @@ pub enum ShapeGeom {
     /// non-uniform scale or a shear (CENG795 spheres with transformations). Hits are found in
     /// object space; normals go to world space by the inverse transpose.
     Ellipsoid(Box<Ellipsoid>),
+    /// Mitsuba's open cylinder: the unit cylinder x² + y² = 1, 0 ≤ z ≤ 1 of its `to_world`.
+    Cylinder(Box<Cylinder>),
     Plane {
         point: Vec3,
         normal: Vec3,
@@ -121,6 +125,9 @@ impl ShapeGeom {
             ShapeGeom::Ellipsoid(e) => AccelShape::Ellipsoid {
                 to_world: e.to_world,
             },
+            ShapeGeom::Cylinder(c) => AccelShape::Cylinder {
+                to_world: c.to_world,
+            },
             ShapeGeom::Plane { point, normal } => AccelShape::Plane {
                 point: *point,
                 normal: *normal,
@@ -151,6 +158,7 @@ impl ShapeGeom {
             // The unit disk lies in the unit sphere: its image's bounds hold it.
             ShapeGeom::Disk { to_world, .. } => Some(crate::accel::ellipsoid_bounds(to_world)),
             ShapeGeom::Ellipsoid(e) => Some(crate::accel::ellipsoid_bounds(&e.to_world)),
+            ShapeGeom::Cylinder(c) => Some(crate::accel::cylinder_bounds(&c.to_world)),
             ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => None,
         }
     }
@@ -164,6 +172,7 @@ impl ShapeGeom {
             ShapeGeom::Sphere { radius, .. } => 4.0 * PI * radius * radius,
             ShapeGeom::Disk { to_world, .. } => disk::area(to_world),
             ShapeGeom::Ellipsoid(e) => e.area,
+            ShapeGeom::Cylinder(c) => c.area,
             ShapeGeom::Plane { .. } => f32::INFINITY,
             ShapeGeom::Instance(i) => match &i.base {
                 ShapeGeom::Mesh {
@@ -242,6 +251,7 @@ pub fn interaction(
         }
         ShapeGeom::Disk { to_world, normal } => disk::interaction(to_world, *normal, hit, reads),
         ShapeGeom::Ellipsoid(e) => e.interaction(hit, ray, reads),
+        ShapeGeom::Cylinder(c) => c.interaction(hit, ray, reads),
         ShapeGeom::Plane { point, normal } => plane::interaction(*point, *normal, hit, ray),
         ShapeGeom::Instance(i) => return i.interaction(hit, ray, flip, reads),
     };

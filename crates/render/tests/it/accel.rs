@@ -4,7 +4,8 @@
 use std::sync::Arc;
 
 use render::accel::prim::{
-    intersect_disk, intersect_ellipsoid, intersect_plane, intersect_sphere, intersect_triangle,
+    intersect_cylinder, intersect_disk, intersect_ellipsoid, intersect_plane, intersect_sphere,
+    intersect_triangle,
 };
 use render::accel::{Accel, AccelShape, Hit};
 use render::geometry::Ray;
@@ -491,6 +492,40 @@ fn disk_analytic() {
     assert!(lo.x <= 5.0 && hi.x >= 5.0 && lo.z <= -2.0 && hi.z >= 2.0 && hi.y >= 11.0);
 }
 
+/// Mitsuba's open cylinder (radius 2, z from 1 to 4 here): the near wall from outside, the
+/// far wall from inside and through an open end, nothing along the axis or past the ends.
+#[test]
+fn cylinder_analytic() {
+    let to_world = Mat4::from_translation(glam::Vec3::new(0.0, 0.0, 1.0))
+        * Mat4::from_scale(glam::Vec3::new(2.0, 2.0, 3.0));
+    let to_object = to_world.inverse();
+    let hit = |o: Vec3, d: Vec3, t_max| intersect_cylinder(&Ray::new(o, d), &to_object, t_max);
+    // From outside across the middle: the near wall at x = -2.
+    let t = hit(Vec3::new(-5.0, 0.0, 2.0), Vec3::X, f32::INFINITY).unwrap();
+    assert!(close(t, 3.0, 1e-6), "{t}");
+    assert!(hit(Vec3::new(-5.0, 0.0, 2.0), Vec3::X, 2.9).is_none());
+    // From inside: the wall ahead.
+    let t = hit(Vec3::new(0.5, 0.0, 2.0), Vec3::X, f32::INFINITY).unwrap();
+    assert!(close(t, 1.5, 1e-6), "{t}");
+    // Down through the open top end onto the far wall: enters at z = 4 inside.
+    let d = Vec3::new(1.0, 0.0, -1.0);
+    let t = hit(Vec3::new(-1.0, 0.0, 5.0), d, f32::INFINITY).unwrap();
+    assert!(close(t, 3.0, 1e-5), "{t}");
+    // Along the axis, and past the ends: no caps.
+    assert!(hit(Vec3::new(0.0, 0.0, -1.0), Vec3::Z, f32::INFINITY).is_none());
+    assert!(hit(Vec3::new(-5.0, 0.0, 4.5), Vec3::X, f32::INFINITY).is_none());
+    assert!(hit(Vec3::new(-5.0, 0.0, 0.5), Vec3::X, f32::INFINITY).is_none());
+    // The BVH finds it and bounds it.
+    let accel = Accel::build(vec![AccelShape::Cylinder { to_world }]);
+    let h = accel
+        .intersect(&Ray::new(Vec3::new(-5.0, 0.0, 2.0), Vec3::X), f32::INFINITY)
+        .unwrap();
+    assert!(close(h.t, 3.0, 1e-6));
+    let (lo, hi) = accel.bounds();
+    assert!(lo.cmple(Vec3::new(-2.0, -2.0, 1.0)).all() && hi.cmpge(Vec3::new(2.0, 2.0, 4.0)).all());
+    assert!((hi - lo - Vec3::new(4.0, 4.0, 3.0)).abs().max_element() < 1e-4);
+}
+
 #[test]
 fn plane_analytic() {
     let (p, n) = (Vec3::new(0.0, -1.0, 0.0), Vec3::new(0.0, 2.0, 0.0));
@@ -643,6 +678,18 @@ fn brute(shapes: &[AccelShape], ray: &Ray, mut t_max: f32) -> Option<Hit> {
                     });
                 }
             }
+            AccelShape::Cylinder { to_world } => {
+                if let Some(t) = intersect_cylinder(ray, &to_world.inverse(), t_max) {
+                    t_max = t;
+                    best = Some(Hit {
+                        t,
+                        shape: s,
+                        prim: 0,
+                        u: 0.0,
+                        v: 0.0,
+                    });
+                }
+            }
             AccelShape::Instance { .. } => unreachable!("brute force takes flattened shapes"),
             &AccelShape::Plane { point, normal } => {
                 if let Some(t) = intersect_plane(ray, point, normal, t_max) {
@@ -708,10 +755,25 @@ fn random_scene(rng: &mut Rng, n_shapes: usize, tris_per_mesh: usize) -> Vec<Acc
                     ),
             },
             _ => {
-                if rng.u32().is_multiple_of(4) {
+                let k = rng.u32() % 4;
+                if k == 0 {
                     AccelShape::Plane {
                         point: rng.vec(-8.0, 8.0),
                         normal: rng.dir(),
+                    }
+                } else if k == 1 {
+                    // Mitsuba's open cylinder, sometimes elliptic.
+                    AccelShape::Cylinder {
+                        to_world: Mat4::from_translation(rng.vec(-5.0, 5.0).into())
+                            * Mat4::from_axis_angle(rng.dir().into(), rng.range(0.0, 6.0))
+                            * Mat4::from_scale(
+                                Vec3::new(
+                                    rng.range(0.1, 1.5),
+                                    rng.range(0.1, 1.5),
+                                    rng.range(0.2, 3.0),
+                                )
+                                .into(),
+                            ),
                     }
                 } else {
                     AccelShape::Sphere {
@@ -781,6 +843,9 @@ fn placed(proto: &AccelShape, m: Mat4) -> AccelShape {
             to_world: m * to_world,
         },
         &AccelShape::Disk { to_world } => AccelShape::Disk {
+            to_world: m * to_world,
+        },
+        &AccelShape::Cylinder { to_world } => AccelShape::Cylinder {
             to_world: m * to_world,
         },
         other => other.clone(),

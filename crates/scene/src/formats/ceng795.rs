@@ -1121,6 +1121,7 @@ impl Builder {
                         emission: Some(AreaEmission {
                             radiance: ColorParam::Const(radiance),
                             two_sided: false,
+                            directional: false,
                             loc: loc.clone(),
                         }),
                         flip_normals: false,
@@ -1251,6 +1252,7 @@ impl Builder {
         Ok(Some(AreaEmission {
             radiance: ColorParam::Const(r),
             two_sided: false,
+            directional: false,
             loc: self.ctx.loc(n),
         }))
     }

@@ -440,6 +440,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
             emission: mat.and_then(|m| m.emission).map(|r| AreaEmission {
                 radiance: ColorParam::Const(r),
                 two_sided: false,
+                directional: false,
                 loc: loc.clone(),
             }),
             flip_normals: false,
@@ -1025,6 +1026,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     emission: Some(AreaEmission {
                         radiance: ColorParam::Const(color),
                         two_sided: false,
+                        directional: false,
                         loc: loc.clone(),
                     }),
                     flip_normals: false,

@@ -446,6 +446,7 @@ impl Parser<'_> {
             .map(|&radiance| AreaEmission {
                 radiance: ColorParam::Const(radiance),
                 two_sided,
+                directional: false,
                 loc: l.loc(0),
             });
         self.desc.shapes.push(ShapeDesc {
@@ -733,6 +734,7 @@ impl Parser<'_> {
             emission: Some(AreaEmission {
                 radiance: ColorParam::Const(radiance),
                 two_sided: false,
+                directional: false,
                 loc: l.loc(l.toks[0].col),
             }),
             flip_normals: false,

@@ -303,6 +303,7 @@ pub fn square_light(
         emission: Some(AreaEmission {
             radiance: ColorParam::Const(emission),
             two_sided: false,
+            directional: false,
             loc: loc.clone(),
         }),
         flip_normals: false,
@@ -450,6 +451,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Document> {
             emission: emission.map(|radiance| AreaEmission {
                 radiance,
                 two_sided: true,
+                directional: false,
                 loc: loc.clone(),
             }),
             flip_normals: false,

@@ -1149,13 +1149,20 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     fn area_emission(&mut self, c: &Child<'s>) -> Result<AreaEmission> {
         let pl = self.ctx.plugin(c.elem)?;
-        if pl.ty != "area" {
+        if pl.ty != "area" && pl.ty != "directionalarea" {
             return Err(err(
                 &c.loc,
                 format!(
-                    "a shape can only carry an 'area' emitter, found '{}'",
+                    "a shape can only carry an 'area' or 'directionalarea' emitter, found '{}'",
                     pl.ty
                 ),
+            ));
+        }
+        if pl.ty == "directionalarea" && pl.props.has("to_world") {
+            // As Mitsuba: the emitter inherits its shape's placement.
+            return Err(err(
+                pl.loc(),
+                "a directionalarea emitter cannot have a to_world (it inherits its shape's)",
             ));
         }
         let radiance = self.color(&pl, "radiance", 1.0, true)?;
@@ -1163,6 +1170,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         Ok(AreaEmission {
             radiance,
             two_sided: false,
+            directional: pl.ty == "directionalarea",
             loc: pl.loc().clone(),
         })
     }
@@ -1170,7 +1178,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     fn emitter(&mut self, pl: &Plugin<'s>) -> Result<Option<Emitter>> {
         let to_world = pl.props.transform("to_world")?;
         let e = match pl.ty.as_str() {
-            "area" => {
+            "area" | "directionalarea" => {
                 if pl.elem.attr("id").is_none() {
                     return Err(err(
                         pl.loc(),
@@ -1232,6 +1240,19 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "constant" => Emitter::Constant {
                 radiance: self.color_value(pl, "radiance", Vec3::ONE, true)?,
             },
+            "projector" => {
+                let Some(irradiance) = self.color_opt(pl, "irradiance", true)? else {
+                    return Err(err(pl.loc(), "projector: 'irradiance' is required"));
+                };
+                let (fov, fov_axis) = self.fov(pl, false)?;
+                Emitter::Projector {
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    irradiance,
+                    scale: pl.props.float("scale", 1.0)?,
+                    fov,
+                    fov_axis,
+                }
+            }
             "envmap" => {
                 let path = self.ctx.file_param(pl, "envmap")?;
                 Emitter::EnvMap {
@@ -1356,6 +1377,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {}
         }
         let mut to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let mut cylinder_flip = false;
         let shape = match pl.ty.as_str() {
             "obj" | "ply" => {
                 let path = self.ctx.file_param(pl, "mesh")?;
@@ -1383,6 +1405,49 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "rectangle" => Shape::Rectangle,
             "disk" => Shape::Disk,
             "cube" => Shape::Cube,
+            "cylinder" => {
+                // Mitsuba folds the centre line and radius into to_world: translate(p0) ·
+                // to_frame(coordinate_system(d)) · scale(r, r, |d|); a negative radius flips
+                // the normals.
+                let p0 = pl.props.vector_opt("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = pl.props.vector_opt("p1")?.unwrap_or(Vec3::Z);
+                let radius = pl.props.float("radius", 1.0)?;
+                let d = p1 - p0;
+                let length = d.length();
+                if !(length > 0.0 && radius != 0.0) {
+                    return Err(err(
+                        pl.loc(),
+                        "cylinder with p0 = p1 or a zero radius (an empty surface)",
+                    ));
+                }
+                let (s, t) = coordinate_system(d / length);
+                let frame = Mat4::from_cols(
+                    s.extend(0.0),
+                    t.extend(0.0),
+                    (d / length).extend(0.0),
+                    p0.extend(1.0),
+                );
+                to_world = to_world
+                    * frame
+                    * Mat4::from_scale(Vec3::new(radius.abs(), radius.abs(), length));
+                cylinder_flip = radius < 0.0;
+                let l = Mat3::from_mat4(to_world);
+                let (cx, cy) = (l.x_axis, l.y_axis);
+                let tol = 1e-4 * cx.length_squared().max(cy.length_squared());
+                if (cx.length_squared() - cy.length_squared()).abs() > tol
+                    || cx.dot(cy).abs() > tol
+                    || cx.dot(l.z_axis).abs() > 1e-4 * cx.length() * l.z_axis.length()
+                    || cy.dot(l.z_axis).abs() > 1e-4 * cy.length() * l.z_axis.length()
+                {
+                    self.ctx.warn(
+                        pl.loc(),
+                        "cylinder with a shear or a non-uniform scale across its axis in \
+                         to_world (Mitsuba 3 warns and ignores them): rendered as the \
+                         elliptic or slanted cylinder it describes",
+                    );
+                }
+                Shape::Cylinder
+            }
             "serialized" => {
                 return Err(err(
                     pl.loc(),
@@ -1392,7 +1457,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "obj, ply, sphere, rectangle, disk, cube, shapegroup, instance",
+                    "obj, ply, sphere, rectangle, disk, cube, cylinder, shapegroup, instance",
                 ));
             }
         };
@@ -1406,7 +1471,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                  rendered as the ellipsoid it describes",
             );
         }
-        let flip_normals = pl.props.bool("flip_normals", false)?;
+        let flip_normals = pl.props.bool("flip_normals", false)? != cylinder_flip;
         let mut material = None;
         let mut emission = None;
         let mut media = MediumInterface::default();
@@ -1727,7 +1792,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
 
     fn sensor(&mut self, pl: &Plugin<'s>) -> Result<()> {
         let nori = pl.elem.tag == "camera";
-        let to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let mut to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
         let (near_default, far_default) = if nori { (1e-4, 1e4) } else { (1e-2, 1e4) };
         let near_clip = pl.props.float("near_clip", near_default)?;
         let far_clip = pl.props.float("far_clip", far_default)?;
@@ -1756,7 +1821,39 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
             }
             "orthographic" => Projection::Orthographic,
-            _ => return Err(unknown_type(pl, "perspective, thinlens, orthographic")),
+            "radiancemeter" => {
+                // Mitsuba: `origin` and `direction`, or a to_world (not both).
+                let origin = pl.props.vector_opt("origin")?;
+                let direction = pl.props.vector_opt("direction")?;
+                if origin.is_some() || direction.is_some() {
+                    if pl.props.has("to_world") {
+                        return Err(err(
+                            pl.loc(),
+                            "radiancemeter: give either to_world or origin and direction",
+                        ));
+                    }
+                    let (Some(o), Some(d)) = (origin, direction) else {
+                        return Err(err(
+                            pl.loc(),
+                            "radiancemeter: 'origin' and 'direction' go together",
+                        ));
+                    };
+                    let d = d.normalize_or_zero();
+                    if d == Vec3::ZERO {
+                        return Err(err(pl.loc(), "radiancemeter: direction must be non-zero"));
+                    }
+                    let (s, t) = coordinate_system(d);
+                    to_world =
+                        Mat4::from_cols(s.extend(0.0), t.extend(0.0), d.extend(0.0), o.extend(1.0));
+                }
+                Projection::RadianceMeter
+            }
+            _ => {
+                return Err(unknown_type(
+                    pl,
+                    "perspective, thinlens, orthographic, radiancemeter",
+                ));
+            }
         };
         let mut film = None;
         let mut sampler = None;
@@ -1809,6 +1906,16 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 tonemap: None,
             },
         };
+        if matches!(projection, Projection::RadianceMeter) && (film.width, film.height) != (1, 1) {
+            // As Mitsuba: "This sensor only supports films of size 1x1 Pixels!".
+            return Err(err(
+                pl.loc(),
+                format!(
+                    "a radiancemeter takes a 1×1 film, found {}×{}",
+                    film.width, film.height
+                ),
+            ));
+        }
         self.ctx.finish(pl);
         self.sensor_has_sampler.push(sampler.is_some());
         self.scene.sensors.push(Sensor {
@@ -2299,4 +2406,16 @@ pub fn float_list(pl: &Plugin<'_>, name: &str) -> Result<Vec<f32>> {
             _ => Err(err(&p.loc, format!("'{name}' should be a list of numbers"))),
         },
     }
+}
+
+/// Mitsuba's `coordinate_system(n)` (Duff et al. 2017): the tangents `s`, `t` of its
+/// `Frame3f(n)`, which fix where a cylinder's φ = 0 lies.
+fn coordinate_system(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
 }

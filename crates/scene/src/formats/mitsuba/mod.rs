@@ -9,8 +9,11 @@
 //!    adds a search folder (a missing folder is a warning).
 //! 2. [`plugin`] / [`props`]: each object element is split into typed properties (float,
 //!    integer, boolean, string, point/vector, rgb/color, spectrum, transform) and child objects
-//!    (inline or `<ref id>`). Mitsuba 0.6 / Nori camelCase names (`toWorld`, `sampleCount`,
-//!    `intIOR`, `fovAxis`...) are mapped to Mitsuba 3's snake_case. Transforms compose in
+//!    (inline or `<ref id>`). Spectra: inline `wavelength:value` lists, files, and the
+//!    plugins `d65`, `blackbody`, `uniform`, `regular`, `irregular` (the last two sampled
+//!    spectra like the lists; Mitsuba 3.9.1's RGB variants cannot evaluate them, Penumbra
+//!    converts them as Mitsuba converts the lists). Mitsuba 0.6 / Nori camelCase names
+//!    (`toWorld`, `sampleCount`, `intIOR`, `fovAxis`...) are mapped to Mitsuba 3's snake_case. Transforms compose in
 //!    document order (each operation is left-multiplied); `lookat` is Mitsuba's
 //!    camera-to-world with columns (left, up, dir, origin).
 //! 3. [`build`]: plugins → [`SceneDesc`](crate::SceneDesc) with Mitsuba 3's defaults for
@@ -29,6 +32,13 @@
 //! σ 0.5); dielectrics `int_ior` bk7 = 1.5046, `ext_ior` air = 1.000277; plastics `int_ior`
 //! polypropylene = 1.49; rough materials Beckmann with α = 0.1; conductor `material` "none"
 //! (η = 0, k = 1: a perfect mirror); diffuse reflectance 0.5 (also Nori's default bsdf).
+//! `cylinder`: `p0`, `p1` and `radius` are folded into `to_world` as Mitsuba does
+//! (`translate(p0)·to_frame(d)·scale(r, r, |d|)`, the frame of Mitsuba's
+//! `coordinate_system`, so that uv's φ = 0 lies where Mitsuba's does); open ends.
+//! `directionalarea` (a shape's emitter, no `to_world` of its own, as Mitsuba) emits along
+//! the normal only: `AreaEmission::directional`. `projector`'s field of view is kept as
+//! given (`fov`, `fov_axis` or `focal_length`) and resolved at build time against its
+//! texture's aspect ratio (a bitmap's; 1 for other textures, as Mitsuba).
 //! Without a sensor, Mitsuba's default camera (45°, framing the scene's bounds from −z) is
 //! added with a warning.
 

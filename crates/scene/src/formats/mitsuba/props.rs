@@ -362,12 +362,17 @@ pub fn parse_property(e: &Elem, warnings: &mut Vec<crate::Warning>) -> Result<Op
     }))
 }
 
-/// Mitsuba 3's spectrum plugins `<spectrum type="d65|blackbody|uniform">` with their `<float>`
-/// parameters (Mitsuba's units: `blackbody` is Planck's spectral radiance in W/(m²·sr·nm),
-/// `d65` has unit luminance). The RGB conversion tabulates them at 1 nm over the visible
-/// range ([`ColorSpec::sampled`]) and treats them as any sampled spectrum.
+/// Mitsuba 3's spectrum plugins `<spectrum type="d65|blackbody|uniform|regular|irregular">`
+/// with their `<float>` (and, for the lists, `<string>`) parameters (Mitsuba's units:
+/// `blackbody` is Planck's spectral radiance in W/(m²·sr·nm), `d65` has unit luminance).
+/// `regular` (`wavelength_min`, `wavelength_max`, `values` evenly spaced between them) and
+/// `irregular` (`wavelengths`, `values`) are sampled spectra like the inline
+/// `wavelength:value` lists: linear in between, zero outside. The RGB conversion tabulates
+/// the analytic ones at 1 nm over the visible range ([`ColorSpec::sampled`]) and treats them
+/// as any sampled spectrum.
 fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
     let mut params: Vec<(&str, f64, &Loc)> = Vec::new();
+    let mut lists: Vec<(&str, Vec<f64>, &Loc)> = Vec::new();
     for c in &e.children {
         let (Some(name), Some(value)) = (c.attr("name"), c.attr("value")) else {
             return Err(err(
@@ -375,19 +380,26 @@ fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
                 "expected <float name=\"...\" value=\"...\"/> inside a spectrum plugin",
             ));
         };
-        if c.tag != "float" {
-            return Err(err(&c.loc, format!("expected <float>, found <{}>", c.tag)));
+        match c.tag.as_str() {
+            "float" | "integer" => {
+                params.push((&name.value, parse_float(&value.value, &value.loc)?, &c.loc))
+            }
+            "string" => lists.push((&name.value, parse_floats(&value.value, &value.loc)?, &c.loc)),
+            other => return Err(err(&c.loc, format!("expected <float>, found <{other}>"))),
         }
-        params.push((&name.value, parse_float(&value.value, &value.loc)?, &c.loc));
     }
-    let known: &[&str] = match ty.value.as_str() {
-        "d65" => &["scale"],
-        "blackbody" => &["temperature", "scale"],
-        "uniform" => &["value"],
+    let (known, known_lists): (&[&str], &[&str]) = match ty.value.as_str() {
+        "d65" => (&["scale"], &[]),
+        "blackbody" => (&["temperature", "scale"], &[]),
+        "uniform" => (&["value"], &[]),
+        "regular" => (&["wavelength_min", "wavelength_max"], &["values"]),
+        "irregular" => (&[], &["wavelengths", "values"]),
         other => {
             return Err(err(
                 &ty.loc,
-                format!("unknown spectrum type '{other}' (d65, blackbody, uniform)"),
+                format!(
+                    "unknown spectrum type '{other}' (d65, blackbody, uniform, regular, irregular)"
+                ),
             ));
         }
     };
@@ -397,10 +409,51 @@ fn parse_spectrum_plugin(e: &Elem, ty: &Attr) -> Result<ColorSpec> {
             format!("unknown parameter '{n}' of spectrum '{}'", ty.value),
         ));
     }
+    if let Some((n, _, l)) = lists.iter().find(|(n, _, _)| !known_lists.contains(n)) {
+        return Err(err(
+            l,
+            format!("unknown parameter '{n}' of spectrum '{}'", ty.value),
+        ));
+    }
     let get = |n: &str| params.iter().find(|p| p.0 == n).map(|p| p.1);
+    let list = |n: &str| {
+        lists
+            .iter()
+            .find(|p| p.0 == n)
+            .map(|p| p.1.clone())
+            .ok_or_else(|| err(&e.loc, format!("a {} spectrum needs '{n}'", ty.value)))
+    };
     let scale = get("scale").unwrap_or(1.0);
     match ty.value.as_str() {
         "uniform" => Ok(ColorSpec::Uniform(get("value").unwrap_or(1.0))),
+        "regular" => {
+            let values = list("values")?;
+            let (Some(lo), Some(hi)) = (get("wavelength_min"), get("wavelength_max")) else {
+                return Err(err(
+                    &e.loc,
+                    "a regular spectrum needs 'wavelength_min' and 'wavelength_max'",
+                ));
+            };
+            let n = values.len();
+            let wavelengths = (0..n)
+                .map(|i| lo + (hi - lo) * i as f64 / (n.max(2) - 1) as f64)
+                .collect();
+            checked_sampled(wavelengths, values, &e.loc)
+        }
+        "irregular" => {
+            let (wavelengths, values) = (list("wavelengths")?, list("values")?);
+            if wavelengths.len() != values.len() {
+                return Err(err(
+                    &e.loc,
+                    format!(
+                        "an irregular spectrum needs as many wavelengths as values ({} and {})",
+                        wavelengths.len(),
+                        values.len()
+                    ),
+                ));
+            }
+            checked_sampled(wavelengths, values, &e.loc)
+        }
         "d65" => Ok(ColorSpec::D65 { scale }),
         _ => {
             let t = get("temperature")
@@ -467,17 +520,20 @@ fn parse_spectrum(e: &Elem) -> Result<ColorSpec> {
             ));
         }
     };
+    checked_sampled(wavelengths, values, &loc)
+}
+
+/// A sampled spectrum after the checks Mitsuba makes: two nodes or more, wavelengths
+/// strictly increasing.
+fn checked_sampled(wavelengths: Vec<f64>, values: Vec<f64>, loc: &Loc) -> Result<ColorSpec> {
     if wavelengths.len() < 2 {
         return Err(err(
-            &loc,
+            loc,
             "a sampled spectrum needs at least two wavelength:value pairs",
         ));
     }
     if wavelengths.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(err(
-            &loc,
-            "spectrum wavelengths must be strictly increasing",
-        ));
+        return Err(err(loc, "spectrum wavelengths must be strictly increasing"));
     }
     Ok(ColorSpec::Sampled(wavelengths, values))
 }

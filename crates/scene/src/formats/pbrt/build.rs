@@ -1652,6 +1652,7 @@ impl Loader {
         Ok(AreaEmission {
             radiance: v.into(),
             two_sided,
+            directional: false,
             loc: loc.clone(),
         })
     }
