@@ -46,48 +46,15 @@ pub(crate) fn lights(
             continue;
         };
         let two_sided = d.emission.as_ref().is_some_and(|e| e.two_sided);
-        if d.emission.as_ref().is_some_and(|e| e.directional) {
-            // Mitsuba's `directionalarea`: the whole shape, sampled by area (meshes by
-            // triangle area), emitting along its normal only.
-            let triangles = match &s.geom {
-                ShapeGeom::Mesh {
-                    positions, indices, ..
-                } => Some(MeshSampling::new(
-                    positions,
-                    indices,
-                    &triangle_areas(positions, indices),
-                )),
-                ShapeGeom::Plane { .. } => {
-                    return Err(BuildError {
-                        loc: d.loc.clone(),
-                        message: "an infinite plane cannot be an area light".into(),
-                    });
-                }
-                _ => None,
-            };
-            let area = s.geom.area();
-            if !(area > 0.0 && area.is_finite()) {
-                continue;
-            }
-            shape_light[i] = ShapeLights::Whole(lights.len() as u32);
-            lights.push(Light::DirectionalArea(Box::new(DirectionalAreaLight {
-                area: AreaLight {
-                    shape: i as u32,
-                    radiance: *radiance,
-                    two_sided: false,
-                    triangles,
-                    prim: None,
-                    area,
-                },
-            })));
-            continue;
-        }
+        // Mitsuba's `directionalarea` emits along its normal only: the whole shape, sampled
+        // by area (meshes by triangle area), never split per triangle.
+        let directional = d.emission.as_ref().is_some_and(|e| e.directional);
         let triangles = match &s.geom {
             ShapeGeom::Mesh {
                 positions, indices, ..
             } => {
                 let areas = triangle_areas(positions, indices);
-                if split {
+                if split && !directional {
                     // Degenerate triangles stay (so that triangle t is light first + t):
                     // they have no power and are never chosen.
                     shape_light[i] = ShapeLights::PerTriangle {
@@ -121,14 +88,19 @@ pub(crate) fn lights(
             continue;
         }
         shape_light[i] = ShapeLights::Whole(lights.len() as u32);
-        lights.push(Light::Area(AreaLight {
+        let light = AreaLight {
             shape: i as u32,
             radiance: *radiance,
-            two_sided,
+            two_sided: two_sided && !directional,
             triangles,
             prim: None,
             area,
-        }));
+        };
+        lights.push(if directional {
+            Light::DirectionalArea(Box::new(DirectionalAreaLight { area: light }))
+        } else {
+            Light::Area(light)
+        });
     }
     // Area lights emit into their shape's exterior.
     let mut media: Vec<Option<u32>> = lights

@@ -523,20 +523,7 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
     let l = f - (b / (2.0 * a)) * ray.d;
     let len = l.length();
     let disc = 4.0 * a * (radius + len) * (radius - len);
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let root = disc.sqrt();
-    let q = if b < 0.0 {
-        -0.5 * (b - root)
-    } else {
-        -0.5 * (b + root)
-    };
-    let mut t0 = q / a;
-    let mut t1 = if q != 0.0 { c / q } else { t0 };
-    if t0 > t1 {
-        std::mem::swap(&mut t0, &mut t1);
-    }
+    let (t0, t1) = quadratic_roots(a, b, c, disc)?;
     if t0 > 0.0 && t0 < t_max {
         Some(t0)
     } else if t1 > 0.0 && t1 < t_max {
@@ -599,20 +586,7 @@ pub fn intersect_cylinder(ray: &Ray, to_object: &Mat4, t_max: f32) -> Option<f32
     let (lx, ly) = (o.x - h * d.x, o.y - h * d.y);
     let len = (lx * lx + ly * ly).sqrt();
     let disc = 4.0 * a * (1.0 + len) * (1.0 - len);
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let root = disc.sqrt();
-    let q = if b < 0.0 {
-        -0.5 * (b - root)
-    } else {
-        -0.5 * (b + root)
-    };
-    let mut t0 = q / a;
-    let mut t1 = if q != 0.0 { c / q } else { t0 };
-    if t0 > t1 {
-        std::mem::swap(&mut t0, &mut t1);
-    }
+    let (t0, t1) = quadratic_roots(a, b, c, disc)?;
     [t0, t1].into_iter().find(|&t| {
         let z = o.z + t * d.z;
         t > 0.0 && t < t_max && (0.0..=1.0).contains(&z)
@@ -628,6 +602,25 @@ pub fn intersect_plane(ray: &Ray, point: Vec3, normal: Vec3, t_max: f32) -> Opti
     }
     let t = (point - ray.o).dot(normal) / denom;
     if t > 0.0 && t < t_max { Some(t) } else { None }
+}
+
+/// The roots t0 ≤ t1 of a·t² + b·t + c = 0 (a > 0) from its discriminant `disc`, which the
+/// caller computes in a cancellation-free form (pbrt-v4's); `None` when it is negative or
+/// NaN. The larger-magnitude root first, the other as c/q (no cancellation).
+#[inline]
+fn quadratic_roots(a: f32, b: f32, c: f32, disc: f32) -> Option<(f32, f32)> {
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    let root = disc.sqrt();
+    let q = if b < 0.0 {
+        -0.5 * (b - root)
+    } else {
+        -0.5 * (b + root)
+    };
+    let t0 = q / a;
+    let t1 = if q != 0.0 { c / q } else { t0 };
+    Some(if t0 > t1 { (t1, t0) } else { (t0, t1) })
 }
 
 #[cfg(test)]
