@@ -107,8 +107,8 @@ fn first_non_delta(scene: &Scene, cray: &CameraRay, sampler: &mut Sampler, norma
         if bsdf.has_smooth() {
             // An emitter seen directly is "no surface" to the denoiser (albedo and normal 0),
             // which sets it apart from the surface around it: a luminaire in a ceiling has the
-            // ceiling's normal and often its reflectance (the alternatives measured are in
-            // bench/README.md, "Denoising").
+            // ceiling's normal and often its reflectance (bench/README.md, "Denoising",
+            // compares this with the emitter's reflectance or colour as its albedo).
             if emitter_hit(scene, &si, &RgbMode).is_some() {
                 return Vec3::ZERO;
             }
