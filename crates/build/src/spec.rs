@@ -1,7 +1,8 @@
 //! The command line's spellings of scene overrides, shared by the `penumbra` command and the
 //! Python package so that both turn the same words into the same scene: `--integrator`'s
-//! `NAME[:ARGS]` ([`parse_integrator`]), `--filter KIND` ([`parse_filter`]) and the rule that a replacement integrator keeps the
-//! scene's path length ([`keep_scene_max_depth`]).
+//! `NAME[:ARGS]` ([`parse_integrator`]), `--filter KIND` ([`parse_filter`]), `--mode`
+//! ([`parse_mode`]) and the rule that a replacement integrator keeps the scene's path length
+//! ([`keep_scene_max_depth`]).
 
 use scene::IntegratorDesc;
 
@@ -198,6 +199,20 @@ pub fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             ));
         }
     })
+}
+
+/// `--mode`: `rgb`, `spectral` or a Mitsuba 3 variant name, which selects its colour part.
+pub fn parse_mode(s: &str) -> Result<scene::RenderMode, String> {
+    match s {
+        "rgb" => Ok(scene::RenderMode::Rgb),
+        "spectral" => Ok(scene::RenderMode::Spectral),
+        v => scene::RenderMode::from_mitsuba_variant(v).ok_or_else(|| {
+            format!(
+                "expected rgb, spectral or a Mitsuba variant ending in _rgb or _spectral \
+                 (scalar_rgb, llvm_ad_spectral, ...), found '{v}'"
+            )
+        }),
+    }
 }
 
 /// `--filter KIND`: a reconstruction filter with Mitsuba's defaults.

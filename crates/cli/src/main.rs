@@ -15,7 +15,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use build::spec::{parse_filter, parse_integrator};
+use build::spec::{parse_filter, parse_integrator, parse_mode};
 use build::{BuildOptions, build};
 use clap::{Parser, Subcommand};
 use render::adaptive::AdaptiveSettings;
@@ -487,19 +487,6 @@ pub(crate) fn parse_define(s: &str) -> Result<(String, String), String> {
         return Err(format!("expected NAME=VALUE, found '{s}'"));
     }
     Ok((k.to_string(), v.to_string()))
-}
-
-fn parse_mode(s: &str) -> Result<scene::RenderMode, String> {
-    match s {
-        "rgb" => Ok(scene::RenderMode::Rgb),
-        "spectral" => Ok(scene::RenderMode::Spectral),
-        v => scene::RenderMode::from_mitsuba_variant(v).ok_or_else(|| {
-            format!(
-                "expected rgb, spectral or a Mitsuba variant ending in _rgb or _spectral \
-                 (scalar_rgb, llvm_ad_spectral, ...), found '{v}'"
-            )
-        }),
-    }
 }
 
 fn parse_light_sampler(s: &str) -> Result<scene::LightSelection, String> {

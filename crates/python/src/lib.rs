@@ -260,19 +260,6 @@ enum RenderFailure {
     Value(String),
 }
 
-fn parse_mode(s: &str) -> PyResult<scene::RenderMode> {
-    match s {
-        "rgb" => Ok(scene::RenderMode::Rgb),
-        "spectral" => Ok(scene::RenderMode::Spectral),
-        v => scene::RenderMode::from_mitsuba_variant(v).ok_or_else(|| {
-            PyValueError::new_err(format!(
-                "mode: expected rgb, spectral or a Mitsuba variant ending in _rgb or _spectral \
-                 (scalar_rgb, llvm_ad_spectral, ...), found '{v}'"
-            ))
-        }),
-    }
-}
-
 /// How long one pass of the progressive loop lasts (the CLI's is 1 s). Cancellation
 /// (Ctrl-C) takes effect at the end of a pass, so this bounds how long KeyboardInterrupt
 /// waits; a shorter pass changes only the f64 association of the film's sums (see
@@ -336,7 +323,13 @@ fn py_render<'py>(
             integrator,
             light_selection: None,
             flatten_instances: false,
-            mode: mode.map(parse_mode).transpose()?.unwrap_or_default(),
+            mode: mode
+                .map(|m| {
+                    build::spec::parse_mode(m)
+                        .map_err(|e| PyValueError::new_err(format!("mode: {e}")))
+                })
+                .transpose()?
+                .unwrap_or_default(),
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.unwrap_or(0))
