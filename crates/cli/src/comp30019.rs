@@ -311,6 +311,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         adaptive: None,
         denoise: None,
         display_server: None,
+        split: Default::default(),
     };
     if !args.layers {
         return render_scene_with(

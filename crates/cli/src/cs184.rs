@@ -138,6 +138,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         adaptive,
         denoise: None,
         display_server: None,
+        split: Default::default(),
     };
     crate::render_scene(&desc, &job)
 }

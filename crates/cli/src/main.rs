@@ -8,6 +8,7 @@ mod denoise;
 mod info;
 mod memory;
 mod progress;
+mod split;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -77,6 +78,20 @@ enum Command {
     /// Denoise an existing image with Intel Open Image Denoise (`pip install pyoidn`), with
     /// optional albedo and normal images (as `render --denoise --keep-noisy` writes them).
     Denoise(denoise::DenoiseCmd),
+    /// Join the film states of a render's shards (`render --shard I/K -o PART.state`) into
+    /// its images: bit for bit the single-process render. Refuses states of other renders
+    /// and says which items are missing or doubled.
+    Merge {
+        /// The states, in any order.
+        #[arg(required = true)]
+        states: Vec<PathBuf>,
+        /// Output image(s): .exr, .png, .pfm, .hdr, or .state (the merged state).
+        #[arg(short, long = "output", value_name = "FILE", required = true)]
+        output: Vec<PathBuf>,
+        /// Also write the per-pixel standard error of the image.
+        #[arg(long, value_name = "FILE")]
+        stderr: Option<PathBuf>,
+    },
     /// Compare renders with a reference (relMSE, mean ratio, block t-test of
     /// ../shared/references/README.md). Exit code 1 when the t-test fails.
     Compare {
@@ -162,6 +177,28 @@ struct RenderArgs {
     /// the cap. Also writes the samples-per-pixel heat map OUTPUT_rate.png.
     #[arg(long, value_name = "TOL[,BATCH]", value_parser = parse_adaptive)]
     adaptive: Option<AdaptiveSettings>,
+    /// Render part of the work: shard I of K (0-based; auto/K takes I from
+    /// SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX or PENUMBRA_SHARD), written as a film state
+    /// with -o PART.state. `penumbra merge` joins the parts into the image the single
+    /// process renders, bit for bit (path, volpath, direct, aov and bdpt).
+    #[arg(long, value_name = "I/K|auto/K", value_parser = split::parse_shard)]
+    shard: Option<split::Shard>,
+    /// Save the film state to FILE after passes (at most every --checkpoint-interval
+    /// seconds) and when interrupted; continue with --resume FILE.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints (0: after every pass).
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
+    checkpoint_interval: f64,
+    /// Continue the render saved in FILE (by --checkpoint or a shard's -o PART.state) with
+    /// the same scene and options (refused otherwise): the result is the uninterrupted
+    /// render's, bit for bit.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+    /// Target seconds per pass (default 1; 0: one chunk of samples a pass). For tests of
+    /// checkpoints, which are written between passes.
+    #[arg(long, value_name = "SECONDS", hide = true)]
+    pass_seconds: Option<f64>,
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
@@ -629,9 +666,10 @@ pub(crate) fn check_outputs(outputs: &[PathBuf]) -> Result<(), Failure> {
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .unwrap_or_default();
-        if !matches!(ext.as_str(), "exr" | "png" | "pfm" | "hdr") {
+        if !matches!(ext.as_str(), "exr" | "png" | "pfm" | "hdr" | "state") {
             return Err(Failure::input(format!(
-                "{}: unsupported output format '.{ext}' (expected .exr, .png, .pfm or .hdr)",
+                "{}: unsupported output format '.{ext}' (expected .exr, .png, .pfm, .hdr or \
+                 .state)",
                 o.display()
             )));
         }
@@ -741,7 +779,24 @@ fn render_job(
         adaptive: args.adaptive,
         denoise,
         display_server: args.display_server.clone(),
+        split: Split {
+            shard: args.shard,
+            checkpoint: args.checkpoint.clone(),
+            checkpoint_interval: args.checkpoint_interval,
+            resume: args.resume.clone(),
+            pass_seconds: args.pass_seconds,
+        },
     }
+}
+
+/// Shards, checkpoints and resumed renders (see `split.rs`).
+#[derive(Default)]
+pub(crate) struct Split {
+    pub shard: Option<split::Shard>,
+    pub checkpoint: Option<PathBuf>,
+    pub checkpoint_interval: f64,
+    pub resume: Option<PathBuf>,
+    pub pass_seconds: Option<f64>,
 }
 
 /// Everything `render_scene` needs besides the scene: the shared back end of `render` and
@@ -761,6 +816,7 @@ pub(crate) struct RenderJob {
     pub denoise: Option<Arc<denoise::Denoising>>,
     /// Live view: a tev at this address.
     pub display_server: Option<String>,
+    pub split: Split,
 }
 
 /// What the course-compatible commands add to [`render_scene`].
@@ -860,7 +916,7 @@ pub(crate) fn render_scene_with(
             eprintln!("\ninterrupted: finishing the current pass, then writing the image");
         });
     }
-    let ropts = RenderOptions {
+    let mut ropts = RenderOptions {
         // A time budget without --spp: as many passes as fit.
         spp: if job.time.is_some() && job.build.spp.is_none() {
             u32::MAX / 2
@@ -872,6 +928,12 @@ pub(crate) fn render_scene_with(
         // Progressive output: one sample per pixel a pass, the image rewritten after each.
         pass_duration: if extras.progressive {
             Duration::ZERO
+        } else if let Some(s) = job
+            .split
+            .pass_seconds
+            .filter(|s| *s >= 0.0 && s.is_finite())
+        {
+            Duration::from_secs_f64(s)
         } else {
             RenderOptions::default().pass_duration
         },
@@ -888,6 +950,9 @@ pub(crate) fn render_scene_with(
         .num_threads(job.threads.unwrap_or(0))
         .build()
         .map_err(Failure::other)?;
+    let (images, states): (Vec<PathBuf>, Vec<PathBuf>) =
+        job.outputs.iter().cloned().partition(|o| !is_state(o));
+    let saver = split_render(desc, job, &scene, &integrator, &mut ropts, &images, &states)?;
     let reporter = progress::Reporter::new(job.quiet);
     let display = match &job.display_server {
         Some(server) => {
@@ -902,7 +967,7 @@ pub(crate) fn render_scene_with(
     };
     let progressive = Progressive {
         inner: &reporter,
-        outputs: &job.outputs,
+        outputs: &images,
         develop: extras.develop,
     };
     let base: &dyn RenderObserver = if extras.progressive {
@@ -917,6 +982,14 @@ pub(crate) fn render_scene_with(
     let observer: &dyn RenderObserver = match &live {
         Some(l) => l,
         None => base,
+    };
+    let checkpointing = saver.as_ref().map(|saver| split::Checkpointing {
+        inner: observer,
+        saver,
+    });
+    let observer: &dyn RenderObserver = match &checkpointing {
+        Some(c) => c,
+        None => observer,
     };
     let outcome = match &job.adaptive {
         None => pool.install(|| render(&scene, &integrator, &ropts, observer)),
@@ -936,6 +1009,7 @@ pub(crate) fn render_scene_with(
                 elapsed: a.elapsed,
                 cancelled: a.cancelled,
                 extra: Vec::new(),
+                items: 0..0,
                 film: a.film,
             };
             reporter.finish_adaptive(&outcome, a.total_samples, mean_spp);
@@ -952,6 +1026,24 @@ pub(crate) fn render_scene_with(
     };
     if job.adaptive.is_none() {
         reporter.finish(&outcome);
+    }
+    if let Some(saver) = &saver {
+        for e in saver.errors() {
+            eprintln!("warning: {e}");
+        }
+        let cp = job.split.checkpoint.iter();
+        for path in states.iter().chain(cp) {
+            saver.write(path, &outcome.film, outcome.items.clone())?;
+            if !job.quiet {
+                eprintln!(
+                    "wrote {} (items {}..{} of {})",
+                    path.display(),
+                    outcome.items.start,
+                    outcome.items.end,
+                    saver.items_total
+                );
+            }
+        }
     }
 
     let mut image = outcome.film.develop();
@@ -991,7 +1083,7 @@ pub(crate) fn render_scene_with(
         }
         (scaled, far)
     });
-    for o in &job.outputs {
+    for o in &images {
         let is_png = o.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
         if let (true, Some((scaled, far))) = (is_png, &depth_png) {
             write_image(o, scaled).map_err(Failure::other)?;
@@ -1008,7 +1100,7 @@ pub(crate) fn render_scene_with(
             eprintln!("wrote {}", o.display());
         }
     }
-    if let Some(first) = job.outputs.first() {
+    if let Some(first) = images.first() {
         let stem = first.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
         for (name, film) in &outcome.extra {
             let path = first.with_file_name(format!("{stem}_{name}.exr"));
@@ -1039,6 +1131,103 @@ pub(crate) fn render_scene_with(
         )));
     }
     Ok(())
+}
+
+fn is_state(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("state"))
+}
+
+/// Sets a shard's items or a resumed film in `ropts`; returns what writes the render's
+/// states (checkpoints, `-o PART.state`), or `None` when the render writes none.
+fn split_render(
+    desc: &SceneDesc,
+    job: &RenderJob,
+    scene: &render::world::Scene,
+    integrator: &render::integrators::Integrator,
+    ropts: &mut RenderOptions,
+    images: &[PathBuf],
+    states: &[PathBuf],
+) -> Result<Option<split::Saver>, Failure> {
+    let s = &job.split;
+    if s.shard.is_none() && s.checkpoint.is_none() && s.resume.is_none() && states.is_empty() {
+        return Ok(None);
+    }
+    if job.adaptive.is_some() {
+        return Err(Failure::input(
+            "adaptive sampling cannot be split into shards, checkpointed or written as a state",
+        ));
+    }
+    if let Some(shard) = &s.shard {
+        if job.time.is_some() {
+            return Err(Failure::input(
+                "--shard and --time do not combine: a shard renders its whole part",
+            ));
+        }
+        if states.is_empty() || !images.is_empty() {
+            return Err(Failure::input(format!(
+                "a shard writes its film state, not images: give -o PART.state (shard \
+                 {}/{}), then join the parts with `penumbra merge PART... -o IMAGE.exr`",
+                shard.index.map_or("auto".into(), |i| i.to_string()),
+                shard.count
+            )));
+        }
+    }
+    if !(s.checkpoint_interval >= 0.0 && s.checkpoint_interval.is_finite()) {
+        return Err(Failure::input(format!(
+            "--checkpoint-interval expects seconds ≥ 0, found {}",
+            s.checkpoint_interval
+        )));
+    }
+    let n = integrator
+        .work_items(scene, ropts)
+        .map_err(Failure::input)?;
+    let identity = split::identity(desc, &(&job.build, ropts.spp), ropts.tile_size);
+    let range = match &s.shard {
+        Some(shard) => {
+            let i = shard.resolve()?;
+            let r = split::Shard::items(i, shard.count, n);
+            ropts.items = Some(r.clone());
+            r
+        }
+        None => 0..n,
+    };
+    if let Some(path) = &s.resume {
+        let st = split::read_resume(path, identity)?;
+        if st.items.start != range.start || st.items.end > range.end {
+            return Err(Failure::input(format!(
+                "--resume {}: it holds items {}..{}, which do not start this render's {}..{} \
+                 (another shard?)",
+                path.display(),
+                st.items.start,
+                st.items.end,
+                range.start,
+                range.end
+            )));
+        }
+        ropts.resume = Some(Arc::new(render::drive::Resume {
+            film: st.film,
+            items: st.items,
+        }));
+    }
+    let (w, h) = (scene.film.width, scene.film.height);
+    let description = format!(
+        "{} ({}, {w}x{h}, {} spp, seed {})",
+        desc.source.display(),
+        integrator.name(),
+        ropts.spp,
+        scene.sampler.seed
+    );
+    Ok(Some(split::Saver::new(
+        identity,
+        description,
+        n,
+        ropts.spp,
+        scene.film.tonemap.clone(),
+        s.checkpoint
+            .clone()
+            .map(|p| (p, Duration::from_secs_f64(s.checkpoint_interval))),
+    )))
 }
 
 fn cmd_test(files: &[PathBuf], seed: u64) -> Result<(), Failure> {
@@ -1126,6 +1315,11 @@ fn main() -> ExitCode {
     memory::set_limit(cli.memory_limit);
     let result = match cli.command {
         Command::Render(args) => cmd_render(*args),
+        Command::Merge {
+            states,
+            output,
+            stderr,
+        } => split::cmd_merge(&states, &output, stderr.as_deref()),
         Command::Info { scene, define } => {
             load_scene(&scene, &define).and_then(|doc| info::print(&scene, &doc))
         }

@@ -30,10 +30,19 @@ pub fn in_mode<T: InMode>(mode: RenderMode, task: T) -> T::Out {
     }
 }
 
-/// Peak bytes of the film state a render allocates for `scene` (see [`Film::memory_needed`]).
+/// Peak bytes of the film state a render on the current rayon pool allocates for `scene`
+/// (see [`Film::memory_needed`]).
 pub fn memory_needed(scene: &Scene, opts: &RenderOptions) -> u64 {
     let f = &scene.film;
-    Film::memory_needed(f.width, f.height, f.crop, &f.filter, opts.tile_size)
+    let workers = rayon::current_num_threads();
+    Film::memory_needed(
+        f.width,
+        f.height,
+        f.crop,
+        &f.filter,
+        opts.tile_size,
+        workers,
+    )
 }
 
 /// Render `scene` with `integrator` on the current rayon pool, in the scene's colour mode.

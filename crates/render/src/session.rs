@@ -4,6 +4,7 @@
 //! ([`camera_sample`]). Here rather than in `render.rs` so that integrators that drive a
 //! render themselves do not import the driver that imports them.
 
+use std::ops::Range;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -25,6 +26,12 @@ pub struct RenderOptions {
     pub cancel: Arc<AtomicBool>,
     /// Target duration of one pass.
     pub pass_duration: Duration,
+    /// The work items to render (`None`: all): a shard's range (see `drive/work.rs` and
+    /// `Integrator::work_items`).
+    pub items: Option<Range<u64>>,
+    /// A checkpoint to continue from (its items' range must start where this render's
+    /// does); ignored by integrators whose work has no items.
+    pub resume: Option<Arc<Resume>>,
 }
 
 impl Default for RenderOptions {
@@ -35,7 +42,24 @@ impl Default for RenderOptions {
             tile_size: 16,
             cancel: Arc::new(AtomicBool::new(false)),
             pass_duration: Duration::from_secs(1),
+            items: None,
+            resume: None,
         }
+    }
+}
+
+/// A render to continue: the film after the items `items` (a checkpoint's).
+#[derive(Clone)]
+pub struct Resume {
+    pub film: Film,
+    /// The items already in `film`: `items.start` is where the render's range starts,
+    /// `items.end` the next item to render.
+    pub items: Range<u64>,
+}
+
+impl std::fmt::Debug for Resume {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Resume {{ items: {:?} }}", self.items)
     }
 }
 
@@ -59,6 +83,8 @@ pub struct RenderOutcome {
     pub cancelled: bool,
     /// Images besides the film, by name (BDPT's per-strategy images), written beside it.
     pub extra: Vec<(String, Film)>,
+    /// The work items in the film (for integrators with items; else empty).
+    pub items: Range<u64>,
 }
 
 /// A render as the integrators and the loops receive it: the scene, what is asked, and who
@@ -90,6 +116,7 @@ impl RenderOutcome {
             elapsed: start.elapsed(),
             cancelled,
             extra: Vec::new(),
+            items: 0..0,
         }
     }
 }
@@ -100,6 +127,9 @@ pub trait RenderObserver: Sync {
     fn progress(&self, _p: &Progress) {}
     /// Called after every pass with the film so far (e.g. progressive output).
     fn pass_done(&self, _film: &Film, _spp: u32) {}
+    /// Called after every pass of a render split into work items with the film and the
+    /// items in it (what a checkpoint saves).
+    fn checkpoint(&self, _film: &Film, _items: Range<u64>) {}
 }
 
 /// An observer that ignores everything.

@@ -13,3 +13,4 @@ mod fuzz;
 mod hardening;
 mod objmtl_cli;
 mod readme;
+mod shards;

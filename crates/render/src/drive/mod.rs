@@ -12,16 +12,20 @@
 //!   film's rows with their tiles and splats merged in row order;
 //! - `adaptive.rs`: CS184's adaptive sampling, rounds of batches over the pixels that have
 //!   not converged (a per-sample estimator);
-//! - `chains.rs`: [`run_chains`], Markov chains (MLT) in blocks merged in chain order.
+//! - `chains.rs`: [`run_chains`], Markov chains (MLT) in blocks merged in chain order;
+//! - `work.rs`: work items, the fixed units shards, passes and resumed renders split a
+//!   render into ([`Resume`], the pass loop over items).
 
 pub mod adaptive;
 mod chains;
 mod passes;
 mod tiles;
+pub mod work;
 
 pub use chains::run_chains;
 pub use passes::{rows, run_passes};
-pub use tiles::render_tiles;
+pub use tiles::{CHUNK_SPP, TileWork, render_tiles};
+pub use work::Resume;
 
 use crate::camera::CameraRay;
 use crate::math::Vec3;

@@ -1,6 +1,7 @@
 //! The pass loop of the integrators that render a whole pass themselves (SPPM's iterations,
 //! light tracing, BDPT) and one such pass over the film's rows.
 
+use std::ops::Range;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -45,16 +46,17 @@ pub fn run_passes(
     (done, false)
 }
 
-/// One pass over `film`'s pixel rows in parallel: `row(y, tile)` renders row `y` into a film
-/// tile of its own and returns whatever else it made; then, in row order, each tile is merged
-/// into the film and `merge` is handed the rest (light-tracing splats, say).
+/// One pass over `film`'s pixel rows `ys` in parallel: `row(y, tile)` renders row `y` into a
+/// film tile of its own and returns whatever else it made; then, in row order, each tile is
+/// merged into the film and `merge` is handed the rest (light-tracing splats, say).
 pub fn rows<T: Send>(
     film: &mut Film,
+    ys: Range<u32>,
     row: impl Fn(u32, &mut FilmTile) -> T + Sync,
     mut merge: impl FnMut(&mut Film, T),
 ) {
     let (pmin, pmax) = film.pixel_bounds();
-    let done: Vec<(FilmTile, T)> = (pmin.y..pmax.y)
+    let done: Vec<(FilmTile, T)> = ys
         .into_par_iter()
         .map(|y| {
             let mut tile = film.tile(UVec2::new(pmin.x, y), UVec2::new(pmax.x, y + 1));

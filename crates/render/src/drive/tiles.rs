@@ -1,26 +1,104 @@
-//! The progressive loop of per-sample estimators: tiles × passes on the current rayon pool.
+//! The progressive loop of per-sample estimators: work items (a tile × a chunk of sample
+//! indices, see `work.rs`) in passes on the current rayon pool.
 //!
-//! A pass adds samples `[s0, s1)` to every pixel. Tiles of a pass run in parallel and are
-//! merged into the film after the pass in a fixed order, so the image is bit-identical for any
-//! thread count (a different split into passes changes only the f64 rounding of the sums).
-//! Passes are sized from the measured speed (about a second each), so a time budget, Ctrl-C
+//! Item `i` renders the samples `[c·K, (c+1)·K)` (`K` = [`CHUNK_SPP`], `c = ⌊i / T⌋`) of the
+//! pixels of tile `i mod T` (the film's fixed `tile_size²` tiling) into a film tile, whose
+//! f64 sums are then rounded to the film's exact fixed point. A pass runs its items tile by
+//! tile (the tiles in parallel, a tile's chunks one after the other, each rounded into the
+//! tile's fixed-point sums, the tile merged into the film once); integer sums do not care
+//! about that order, so the image is the same bit for bit for any thread count, pass sizes
+//! (measured speed, about a second a pass), shard split or resumed run. Passes end on whole chunks,
+//! so that between passes every pixel has the same sample count; a time budget, Ctrl-C
 //! (the `cancel` flag) or a progressive writer stops at a pass boundary with a consistent
 //! image.
 
+use std::ops::Range;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::Estimator;
+use super::{Estimator, work};
 use crate::film::FilmTile;
+use crate::film::accum::tile_bounds;
 use crate::math::UVec2;
 use crate::sampling::Sampler;
-use crate::session::{Job, Progress, RenderOutcome, camera_sample};
+use crate::session::{Job, Progress, RenderOptions, RenderOutcome, camera_sample};
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
-/// Render sample indices `[s0, s1)` of every pixel of one tile (positions uniform in each
+/// Sample indices per chunk: an item's f64 sums cover this many samples of each of its
+/// tile's pixels before they are rounded into the film (rounding more often costs more;
+/// longer chunks make coarser passes and shards).
+pub const CHUNK_SPP: u32 = 4;
+
+/// A tile's bounds, `[min, max)`.
+type TileBounds = (UVec2, UVec2);
+
+/// The work of a tile render: the tiling and the chunks of sample indices.
+pub struct TileWork {
+    tiles: Vec<TileBounds>,
+    spp: u32,
+}
+
+impl TileWork {
+    /// The work of rendering `scene`'s film (its tiling by `opts.tile_size`) at `opts.spp`.
+    pub fn new(scene: &Scene, opts: &RenderOptions) -> TileWork {
+        let (min, max) = scene.film.pixel_bounds();
+        TileWork {
+            tiles: tile_bounds(min, max, opts.tile_size.max(1)),
+            spp: opts.spp.max(1),
+        }
+    }
+
+    /// Items per chunk (the tiles).
+    pub fn per_chunk(&self) -> u64 {
+        self.tiles.len() as u64
+    }
+
+    /// The number of items.
+    pub fn len(&self) -> u64 {
+        self.per_chunk() * self.spp.div_ceil(CHUNK_SPP) as u64
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Item `i`: its tile's bounds and its sample indices.
+    pub fn item(&self, i: u64) -> (TileBounds, Range<u32>) {
+        let t = self.per_chunk();
+        let c = (i / t) as u32;
+        let s0 = c * CHUNK_SPP;
+        (
+            self.tiles[(i % t) as usize],
+            s0..(s0 + CHUNK_SPP).min(self.spp),
+        )
+    }
+
+    /// The items of `items` grouped by tile: each tile's bounds and the sample ranges of its
+    /// chunks in `items`, in order.
+    pub fn by_tile(&self, items: Range<u64>) -> Vec<(TileBounds, Vec<Range<u32>>)> {
+        let t = self.per_chunk();
+        let mut out: Vec<_> = self.tiles.iter().map(|&b| (b, Vec::new())).collect();
+        for i in items {
+            let (_, samples) = self.item(i);
+            out[(i % t) as usize].1.push(samples);
+        }
+        out.retain(|(_, chunks)| !chunks.is_empty());
+        out
+    }
+
+    /// Samples per pixel in the chunks before item `end` that are complete from item 0.
+    pub fn spp_before(&self, end: u64) -> u32 {
+        ((end / self.per_chunk().max(1)) as u32)
+            .saturating_mul(CHUNK_SPP)
+            .min(self.spp)
+    }
+}
+
+/// Render sample indices `samples` of every pixel of one tile (positions uniform in each
 /// pixel, splatted by the film's filter).
 fn render_tile<M: PathMode, E: Estimator<M>>(
     scene: &Scene,
@@ -28,101 +106,80 @@ fn render_tile<M: PathMode, E: Estimator<M>>(
     template: &Sampler,
     tile: &mut FilmTile,
     (lo, hi): (UVec2, UVec2),
-    s0: u32,
-    s1: u32,
+    samples: Range<u32>,
 ) {
-    let mut samples = (lo.y..hi.y)
+    let mut stream = (lo.y..hi.y)
         .flat_map(|y| (lo.x..hi.x).map(move |x| UVec2::new(x, y)))
-        .flat_map(|pixel| (s0..s1).map(move |index| (pixel, index)));
+        .flat_map(|pixel| samples.clone().map(move |index| (pixel, index)));
     Estimator::<M>::li_stream(
         integrator,
         scene,
         template,
         |sampler| {
-            let (pixel, index) = samples.next()?;
+            let (pixel, index) = stream.next()?;
             Some(camera_sample(scene, sampler, pixel, index))
         },
         |p_film, l| tile.add_sample(p_film, l),
     );
 }
 
-/// Render `scene` with the per-sample estimator `integrator` in colour mode `M`: passes of
-/// whole samples per pixel, tiles in parallel (each tile's samples handed to the estimator as
-/// one stream of camera rays), film tiles allocated once and cleared each pass.
+/// Render `scene` with the per-sample estimator `integrator` in colour mode `M`: the
+/// options' items (all, a shard's range, or what a checkpoint left) in passes of whole
+/// chunks, items in parallel, each tile reused by its worker from item to item.
 pub fn render_tiles<M: PathMode, E: Estimator<M>>(job: &Job, integrator: &E) -> RenderOutcome {
     let start = Instant::now();
     let (scene, opts, observer) = (job.scene, job.opts, job.observer);
-    let (mut film, template) = job.film_and_sampler();
-    let tile_list = film.tile_bounds(opts.tile_size.max(1));
-    // One tile per region for the whole render, cleared before each pass.
-    let mut tiles: Vec<FilmTile> = tile_list
-        .iter()
-        .map(|&(lo, hi)| film.tile(lo, hi))
-        .collect();
-    let (pmin, pmax) = film.pixel_bounds();
-    let pixels = (pmax - pmin).as_u64vec2();
-    let pixels = pixels.x * pixels.y;
-    let target = opts.spp.max(1);
-
+    let (blank, template) = job.film_and_sampler();
+    let layout = blank.layout();
+    let plan = TileWork::new(scene, opts);
+    let (range, mut film, next) = work::start(opts, plan.len(), blank);
+    let pixels = film.pixel_count();
+    let samples_total =
+        pixels * opts.spp.max(1) as u64 * (range.end - range.start) / plan.len().max(1);
     let done = AtomicU64::new(0);
-    let mut spp_done = 0u32;
     let mut passes = 0u32;
-    let mut pass_spp = 1u32;
-    let mut cancelled = false;
-    while spp_done < target {
-        if opts.cancel.load(Ordering::Relaxed) {
-            cancelled = true;
-            break;
-        }
-        let s0 = spp_done;
-        let s1 = (s0 + pass_spp).min(target);
-        let pass_start = Instant::now();
-        let samples_total = pixels * target as u64;
-        tile_list
-            .par_iter()
-            .zip(tiles.par_iter_mut())
-            .for_each(|(&bounds, tile)| {
-                tile.clear();
-                render_tile::<M, E>(scene, integrator, &template, tile, bounds, s0, s1);
-                let n = (bounds.1 - bounds.0).as_u64vec2();
-                let d = done.fetch_add(n.x * n.y * (s1 - s0) as u64, Ordering::Relaxed)
-                    + n.x * n.y * (s1 - s0) as u64;
-                observer.progress(&Progress {
-                    samples_done: d,
-                    samples_total,
-                    elapsed: start.elapsed(),
-                    spp_done: s0,
-                });
-            });
-        for t in &tiles {
-            film.merge(t);
-        }
-        spp_done = s1;
-        passes += 1;
-        observer.pass_done(&film, spp_done);
-
-        // Size the next pass from the measured speed.
-        let per_spp = pass_start.elapsed().as_secs_f64() / (s1 - s0) as f64;
-        let mut next = (opts.pass_duration.as_secs_f64() / per_spp.max(1e-9)).floor();
-        if let Some(budget) = opts.time_budget {
-            let left = budget.as_secs_f64() - start.elapsed().as_secs_f64();
-            if left <= 0.0 {
-                break;
-            }
-            next = next.min((left / per_spp.max(1e-9)).floor());
-            if next < 1.0 {
-                // Not even one more sample per pixel fits in the budget.
-                break;
-            }
-        }
-        pass_spp = next.clamp(1.0, (1u32 << 20) as f64) as u32;
-    }
+    let (next, cancelled) = work::run(
+        job,
+        start,
+        &mut film,
+        range.clone(),
+        next,
+        plan.per_chunk(),
+        true,
+        |film, items| {
+            let shared = Mutex::new(&mut *film);
+            let first = items.start;
+            plan.by_tile(items.clone()).into_par_iter().for_each_init(
+                FilmTile::default,
+                |tile, (bounds, chunks)| {
+                    layout.reset_tile(tile, bounds.0, bounds.1);
+                    let n = (bounds.1 - bounds.0).as_u64vec2();
+                    for samples in chunks {
+                        let count = n.x * n.y * samples.len() as u64;
+                        render_tile::<M, E>(scene, integrator, &template, tile, bounds, samples);
+                        tile.finish_unit();
+                        let d = done.fetch_add(count, Ordering::Relaxed) + count;
+                        observer.progress(&Progress {
+                            samples_done: d,
+                            samples_total,
+                            elapsed: start.elapsed(),
+                            spp_done: plan.spp_before(first),
+                        });
+                    }
+                    shared.lock().expect("a worker panicked").merge(tile);
+                },
+            );
+            passes += 1;
+            observer.pass_done(film, plan.spp_before(items.end));
+        },
+    );
     RenderOutcome {
         film,
-        spp: spp_done,
+        spp: plan.spp_before(next),
         passes,
         elapsed: start.elapsed(),
         cancelled,
         extra: Vec::new(),
+        items: range.start..next,
     }
 }

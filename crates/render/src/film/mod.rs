@@ -12,9 +12,10 @@
 pub mod accum;
 pub mod filter;
 pub mod image;
+pub mod state;
 pub mod tonemap;
 
-pub use accum::{Film, FilmTile, PixelSums};
+pub use accum::{Film, FilmLayout, FilmTile, FixedSums, PixelSums};
 pub use filter::Filter;
 pub use image::Image;
 
@@ -33,5 +34,11 @@ impl FilmSettings {
     /// An empty film of this size, crop window and filter.
     pub fn film(&self) -> Film {
         Film::new(self.width, self.height, self.crop, self.filter)
+    }
+
+    /// `[min, max)` of the pixels the film stores (where samples are taken), without
+    /// allocating it.
+    pub fn pixel_bounds(&self) -> (crate::math::UVec2, crate::math::UVec2) {
+        accum::pixel_bounds(self.width, self.height, self.crop)
     }
 }

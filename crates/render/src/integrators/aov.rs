@@ -7,7 +7,7 @@ use crate::drive::{self, Estimator};
 use crate::math::{Frame, Vec3};
 use crate::sampling::Sampler;
 use crate::sampling::warp::square_to_cosine_hemisphere;
-use crate::session::{Job, RenderOutcome};
+use crate::session::{Job, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
@@ -65,6 +65,10 @@ impl IntegratorModel for Aov {
 
     fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
         drive::render_tiles::<M, Self>(job, self)
+    }
+
+    fn work_items(&self, scene: &Scene, opts: &RenderOptions) -> Result<u64, String> {
+        Ok(drive::TileWork::new(scene, opts).len())
     }
 }
 

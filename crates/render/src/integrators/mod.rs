@@ -31,7 +31,7 @@ use crate::camera::CameraRay;
 use crate::drive::{self, Estimator, adaptive};
 use crate::math::Vec3;
 use crate::sampling::Sampler;
-use crate::session::{Job, RenderOutcome};
+use crate::session::{Job, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
@@ -53,6 +53,16 @@ pub trait IntegratorModel: Sync {
 
     /// Render `scene`, its paths in the colour mode `M`.
     fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome;
+
+    /// The number of work items of a render of `scene` with `opts` (`drive/work.rs`: what
+    /// shards and checkpoints split it at), or why it cannot be split.
+    fn work_items(&self, _scene: &Scene, _opts: &RenderOptions) -> Result<u64, String> {
+        Err(format!(
+            "the {} integrator cannot be split into shards or resumed from a checkpoint \
+             (its passes build on each other's state); render it in one process",
+            self.name()
+        ))
+    }
 }
 
 /// The integrators this build can run.
@@ -112,6 +122,11 @@ impl Integrator {
     /// See [`IntegratorModel::unsupported`].
     pub fn unsupported(&self, scene: &Scene) -> Option<String> {
         dispatch!(self, i => i.unsupported(scene))
+    }
+
+    /// See [`IntegratorModel::work_items`].
+    pub fn work_items(&self, scene: &Scene, opts: &RenderOptions) -> Result<u64, String> {
+        dispatch!(self, i => i.work_items(scene, opts))
     }
 
     /// See [`IntegratorModel::memory`].
@@ -174,6 +189,10 @@ macro_rules! per_sample_model {
 
             fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
                 drive::render_tiles::<M, Self>(job, self)
+            }
+
+            fn work_items(&self, scene: &Scene, opts: &RenderOptions) -> Result<u64, String> {
+                Ok(drive::TileWork::new(scene, opts).len())
             }
         }
     };

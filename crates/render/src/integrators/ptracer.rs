@@ -92,6 +92,7 @@ fn render_in<M: PathMode>(job: &Job, cfg: &PtracerConfig) -> RenderOutcome {
         // row order.
         drive::rows(
             &mut film,
+            pmin.y..pmax.y,
             |y, tile| {
                 let mut sampler = template.clone();
                 for x in pmin.x..pmax.x {

@@ -90,7 +90,7 @@ use crate::camera::CameraRay;
 use crate::math::{Vec2, Vec3};
 use crate::media::MediumKind;
 use crate::sampling::{Distribution1D, Samples};
-use crate::session::{Job, RenderOutcome};
+use crate::session::{Job, RenderOptions, RenderOutcome};
 use crate::spectral::lanes::{Color, PathMode, RgbMode};
 use crate::world::Scene;
 
@@ -203,6 +203,18 @@ impl IntegratorModel for BdptConfig {
     fn memory(&self, scene: &Scene) -> Option<(&'static str, u64)> {
         self.strategy_images
             .map(|_| ("keeping one image per strategy", memory_needed(scene, self)))
+    }
+
+    /// Rows of passes (see `render.rs`); not with per-strategy images.
+    fn work_items(&self, scene: &Scene, opts: &RenderOptions) -> Result<u64, String> {
+        match self.strategy_images {
+            None => Ok(render::work_items(scene, opts.spp)),
+            Some(_) => Err(
+                "bdpt with per-strategy images cannot be split into shards or \
+                            resumed from a checkpoint; render it in one process"
+                    .into(),
+            ),
+        }
     }
 
     /// `opts.spp` passes of one sample per pixel (see `render.rs`).

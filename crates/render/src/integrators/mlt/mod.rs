@@ -161,6 +161,7 @@ impl IntegratorModel for MltConfig {
         film.set_splat_scale(1.0);
         observer.pass_done(&film, opts.spp);
         RenderOutcome {
+            items: 0..0,
             film,
             spp: (done as f64 / pixels.max(1) as f64).round() as u32,
             passes: 1,

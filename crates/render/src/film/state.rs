@@ -1,0 +1,538 @@
+//! Film state files: a film's exact sums with what they belong to, for shards, merges and
+//! checkpoints (`penumbra render --shard`, `--checkpoint`, `--resume`, `penumbra merge`).
+//!
+//! A state names its render by an identity hash (the caller's: scene, options, version) and
+//! a description for messages, and says which of the render's work items its film holds
+//! (`drive/work.rs`). Because the film's sums are exact integers ([`super::accum`]), states of
+//! disjoint item ranges add up to the film of their union bit for bit, and [`merge`] checks
+//! that they cover the render once.
+//!
+//! Layout (little-endian), version 1:
+//! ```text
+//! "PENUMBRA-STATE\n"  version u32  identity u64  description (u32 length, UTF-8)
+//! items_total u64  items.start u64  items.end u64  spp u32
+//! width u32  height u32  min.x min.y max.x max.y u32  filter (u8 tag, 3 × f32)
+//! tonemap (u8 tag, 4 × f32)  splat_scale f64  samples u64  nonfinite u64
+//! pixels: per stored pixel 11 sums (zigzag LEB128 of i128) and the count (LEB128)
+//! splats: u8 0 | 1, then 3 sums per pixel
+//! checksum u64 (FNV-1a of everything before)
+//! ```
+//! Sums are mostly far below 2¹²⁷, so the variable-length integers take about half of the
+//! 16 bytes each; the checksum catches a truncated or damaged file. Files are written to a
+//! temporary name beside the target and renamed, so a state on disk is always whole.
+
+use std::io::Write;
+use std::ops::Range;
+use std::path::Path;
+
+use super::accum::FixedSums;
+use super::{Film, Filter};
+use base::{CropWindow, Tonemap};
+
+const MAGIC: &[u8] = b"PENUMBRA-STATE\n";
+/// The version of the layout this program writes and reads.
+pub const FORMAT: u32 = 1;
+
+/// A film with the part of a render it holds.
+#[derive(Clone, Debug)]
+pub struct FilmState {
+    /// Identifies the render (scene, options, program version): states of different renders
+    /// are not merged or resumed.
+    pub identity: u64,
+    /// The render in words (scene file, samples, seed), for messages.
+    pub description: String,
+    /// Work items of the whole render.
+    pub items_total: u64,
+    /// The items the film holds.
+    pub items: Range<u64>,
+    /// Samples per pixel of the whole render.
+    pub spp: u32,
+    /// How 8-bit outputs of the image are tone mapped.
+    pub tonemap: Option<Tonemap>,
+    pub film: Film,
+}
+
+/// 64-bit FNV-1a, a stable hash (the same on every machine and build) for identities and
+/// checksums; `std::fmt::Write` so that `Debug` output can be hashed without a string.
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv(pub u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    pub fn update(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x100_0000_01b3);
+        }
+    }
+}
+
+impl std::fmt::Write for Fnv {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.update(s.as_bytes());
+        Ok(())
+    }
+}
+
+fn put_uleb(out: &mut Vec<u8>, mut v: u128) {
+    loop {
+        let b = (v & 0x7f) as u8;
+        v >>= 7;
+        if v == 0 {
+            out.push(b);
+            return;
+        }
+        out.push(b | 0x80);
+    }
+}
+
+fn put_sleb(out: &mut Vec<u8>, v: i128) {
+    put_uleb(out, ((v << 1) ^ (v >> 127)) as u128);
+}
+
+/// Reads what [`FilmState::to_bytes`] wrote, with clear errors on a short or odd file.
+struct Reader<'a> {
+    data: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Result<&[u8], String> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.data.len());
+        let end = end.ok_or("the file ends early (truncated?)")?;
+        let s = &self.data[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+    fn u8(&mut self) -> Result<u8, String> {
+        Ok(self.take(1)?[0])
+    }
+    fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
+    }
+    fn u64(&mut self) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    fn f32(&mut self) -> Result<f32, String> {
+        Ok(f32::from_bits(self.u32()?))
+    }
+    fn f64(&mut self) -> Result<f64, String> {
+        Ok(f64::from_bits(self.u64()?))
+    }
+    fn uleb(&mut self) -> Result<u128, String> {
+        let mut v = 0u128;
+        for shift in (0..133).step_by(7) {
+            let b = self.u8()?;
+            if shift > 126 && b > 0x03 {
+                return Err("a number in the file is out of range (damaged file?)".into());
+            }
+            v |= ((b & 0x7f) as u128) << shift;
+            if b & 0x80 == 0 {
+                return Ok(v);
+            }
+        }
+        Err("a number in the file is out of range (damaged file?)".into())
+    }
+    fn sleb(&mut self) -> Result<i128, String> {
+        let u = self.uleb()?;
+        Ok((u >> 1) as i128 ^ -((u & 1) as i128))
+    }
+}
+
+fn filter_fields(f: &Filter) -> (u8, [f32; 3]) {
+    match *f {
+        Filter::Box { radius } => (0, [radius, 0.0, 0.0]),
+        Filter::Tent { radius } => (1, [radius, 0.0, 0.0]),
+        Filter::Gaussian { stddev, radius } => (2, [stddev, radius, 0.0]),
+        Filter::Mitchell { b, c, radius } => (3, [b, c, radius]),
+        Filter::Lanczos { radius, tau } => (4, [radius, tau, 0.0]),
+    }
+}
+
+fn filter_from(tag: u8, v: [f32; 3]) -> Result<Filter, String> {
+    Ok(match tag {
+        0 => Filter::Box { radius: v[0] },
+        1 => Filter::Tent { radius: v[0] },
+        2 => Filter::Gaussian {
+            stddev: v[0],
+            radius: v[1],
+        },
+        3 => Filter::Mitchell {
+            b: v[0],
+            c: v[1],
+            radius: v[2],
+        },
+        4 => Filter::Lanczos {
+            radius: v[0],
+            tau: v[1],
+        },
+        t => return Err(format!("unknown filter tag {t} (damaged file?)")),
+    })
+}
+
+impl FilmState {
+    /// The file's bytes (see the module docs).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let f = &self.film;
+        let (pixels, splats) = f.fixed_sums();
+        let mut out = Vec::with_capacity(128 + pixels.len() * 100);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&FORMAT.to_le_bytes());
+        out.extend_from_slice(&self.identity.to_le_bytes());
+        out.extend_from_slice(&(self.description.len() as u32).to_le_bytes());
+        out.extend_from_slice(self.description.as_bytes());
+        for v in [self.items_total, self.items.start, self.items.end] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&self.spp.to_le_bytes());
+        let full = f.full_resolution();
+        let (min, max) = f.pixel_bounds();
+        for v in [full.x, full.y, min.x, min.y, max.x, max.y] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        let (tag, v) = filter_fields(f.filter());
+        out.push(tag);
+        v.iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        let (tag, v) = match self.tonemap {
+            None => (0u8, [0.0f32; 4]),
+            Some(Tonemap::Photographic {
+                key,
+                burn_percent,
+                saturation,
+                gamma,
+            }) => (1, [key, burn_percent, saturation, gamma]),
+            Some(Tonemap::DisplayUnits) => (2, [0.0; 4]),
+        };
+        out.push(tag);
+        v.iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        out.extend_from_slice(&f.splat_scale().to_le_bytes());
+        out.extend_from_slice(&f.sample_count().to_le_bytes());
+        out.extend_from_slice(&f.nonfinite_count().to_le_bytes());
+        for p in pixels {
+            for &v in &p.v {
+                put_sleb(&mut out, v);
+            }
+            put_uleb(&mut out, p.count as u128);
+        }
+        out.push(!splats.is_empty() as u8);
+        for s in splats {
+            for &v in s {
+                put_sleb(&mut out, v);
+            }
+        }
+        let mut h = Fnv::default();
+        h.update(&out);
+        out.extend_from_slice(&h.0.to_le_bytes());
+        out
+    }
+
+    /// Parses a state file's bytes.
+    pub fn from_bytes(data: &[u8]) -> Result<FilmState, String> {
+        if !data.starts_with(MAGIC) {
+            return Err("not a penumbra film state (the file does not start with \
+                        PENUMBRA-STATE)"
+                .into());
+        }
+        if data.len() < MAGIC.len() + 12 {
+            return Err("the file ends early (truncated?)".into());
+        }
+        let (body, sum) = data.split_at(data.len() - 8);
+        let mut h = Fnv::default();
+        h.update(body);
+        let mut r = Reader {
+            data: body,
+            at: MAGIC.len(),
+        };
+        let version = r.u32()?;
+        if version != FORMAT {
+            return Err(format!(
+                "film state version {version}; this penumbra reads version {FORMAT}"
+            ));
+        }
+        if h.0.to_le_bytes() != sum {
+            return Err("the checksum does not match: the file is truncated or damaged".into());
+        }
+        let identity = r.u64()?;
+        let len = r.u32()? as usize;
+        let description = String::from_utf8_lossy(r.take(len)?).into_owned();
+        let (items_total, start, end) = (r.u64()?, r.u64()?, r.u64()?);
+        let spp = r.u32()?;
+        let [w, hgt, x0, y0, x1, y1] = [r.u32()?, r.u32()?, r.u32()?, r.u32()?, r.u32()?, r.u32()?];
+        if !(x0 <= x1 && x1 <= w && y0 <= y1 && y1 <= hgt && start <= end && end <= items_total) {
+            return Err("inconsistent film bounds or item range (damaged file?)".into());
+        }
+        let tag = r.u8()?;
+        let filter = filter_from(tag, [r.f32()?, r.f32()?, r.f32()?])?;
+        let tag = r.u8()?;
+        let t = [r.f32()?, r.f32()?, r.f32()?, r.f32()?];
+        let tonemap = match tag {
+            0 => None,
+            1 => Some(Tonemap::Photographic {
+                key: t[0],
+                burn_percent: t[1],
+                saturation: t[2],
+                gamma: t[3],
+            }),
+            2 => Some(Tonemap::DisplayUnits),
+            t => return Err(format!("unknown tone mapping tag {t} (damaged file?)")),
+        };
+        let splat_scale = r.f64()?;
+        let (samples, nonfinite) = (r.u64()?, r.u64()?);
+        let crop = CropWindow {
+            offset_x: x0,
+            offset_y: y0,
+            width: x1 - x0,
+            height: y1 - y0,
+        };
+        let n = (x1 - x0) as usize * (y1 - y0) as usize;
+        // Each pixel takes at least 12 bytes: refuse sizes the file cannot hold before
+        // allocating for them.
+        if n > body.len() / 12 {
+            return Err("the film is larger than the file holds (damaged file?)".into());
+        }
+        let mut pixels = Vec::with_capacity(n);
+        for _ in 0..n {
+            let mut p = FixedSums::default();
+            for v in &mut p.v {
+                *v = r.sleb()?;
+            }
+            p.count = u64::try_from(r.uleb()?).map_err(|_| "a sample count is out of range")?;
+            pixels.push(p);
+        }
+        let mut splats = Vec::new();
+        if r.u8()? == 1 {
+            splats.reserve(n);
+            for _ in 0..n {
+                splats.push([r.sleb()?, r.sleb()?, r.sleb()?]);
+            }
+        }
+        if r.at != body.len() {
+            return Err("unexpected bytes after the film (damaged file?)".into());
+        }
+        let mut film = Film::new(w, hgt, Some(crop), filter)
+            .with_fixed_sums(pixels, splats, samples, nonfinite)
+            .ok_or("inconsistent film size (damaged file?)")?;
+        film.set_splat_scale(splat_scale);
+        Ok(FilmState {
+            identity,
+            description,
+            items_total,
+            items: start..end,
+            spp,
+            tonemap,
+            film,
+        })
+    }
+
+    /// Writes the state to `path` atomically (a temporary file beside it, then renamed).
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        let tmp = path.with_file_name(format!(
+            ".{}.{}.tmp",
+            name.unwrap_or_else(|| "state".into()),
+            std::process::id()
+        ));
+        let result = (|| {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(&self.to_bytes())?;
+            f.sync_all()?;
+            std::fs::rename(&tmp, path)
+        })();
+        if result.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        result
+    }
+
+    /// Reads a state file; errors name the file.
+    pub fn read(path: &Path) -> Result<FilmState, String> {
+        let data =
+            std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        FilmState::from_bytes(&data).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Whether this state can continue (or be merged with) a render of `identity`.
+    pub fn check_identity(&self, identity: u64, what: &str) -> Result<(), String> {
+        if self.identity == identity {
+            Ok(())
+        } else {
+            Err(format!(
+                "{what} belongs to another render ({}); the scene, its options or the \
+                 program differ",
+                self.description
+            ))
+        }
+    }
+}
+
+/// Adds states of one render that cover its items once into the state of the whole (named
+/// states: errors say which file misses or doubles what).
+pub fn merge(states: Vec<(String, FilmState)>) -> Result<FilmState, String> {
+    let Some((first_name, first)) = states.first() else {
+        return Err("no states to merge".into());
+    };
+    for (name, s) in &states[1..] {
+        if s.identity != first.identity || s.items_total != first.items_total {
+            return Err(format!(
+                "{name} belongs to another render than {first_name}: {} vs {}",
+                s.description, first.description
+            ));
+        }
+    }
+    let total = first.items_total;
+    let mut order: Vec<usize> = (0..states.len()).collect();
+    order.sort_by_key(|&i| (states[i].1.items.start, states[i].1.items.end));
+    let mut at = 0u64;
+    let mut last = None::<usize>;
+    let mut problems = Vec::new();
+    for &i in &order {
+        let r = &states[i].1.items;
+        if r.is_empty() {
+            continue;
+        }
+        if r.start > at {
+            problems.push(format!("items {at}..{} are in no state", r.start));
+        } else if r.start < at {
+            let prev = last.map_or("?", |j| states[j].0.as_str());
+            problems.push(format!(
+                "items {}..{} are in both {prev} and {}",
+                r.start,
+                at.min(r.end),
+                states[i].0
+            ));
+        }
+        if r.end > at {
+            at = r.end;
+            last = Some(i);
+        }
+    }
+    if at < total {
+        problems.push(format!("items {at}..{total} are in no state"));
+    }
+    if !problems.is_empty() {
+        return Err(format!(
+            "the states do not cover the render once ({total} items): {}",
+            problems.join("; ")
+        ));
+    }
+    let mut states = states.into_iter().map(|(_, s)| s);
+    let mut whole = states.next().expect("checked above");
+    for s in states {
+        whole.film.add_film(&s.film);
+    }
+    whole.items = 0..total;
+    Ok(whole)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{UVec2, Vec2, Vec3};
+    use base::FilterDesc;
+
+    fn state(items: Range<u64>, seed: u32) -> FilmState {
+        let mut film = Film::new(
+            9,
+            7,
+            Some(CropWindow {
+                offset_x: 1,
+                offset_y: 2,
+                width: 6,
+                height: 4,
+            }),
+            Filter::new(&FilterDesc::Mitchell {
+                b: 1.0 / 3.0,
+                c: 1.0 / 3.0,
+                radius: 2.0,
+            }),
+        );
+        let mut tile = film.tile(UVec2::ZERO, UVec2::new(9, 7));
+        for k in 0..50 {
+            let u = ((k * 7919 + seed * 104729) % 1000) as f32 / 1000.0;
+            tile.add_sample(
+                Vec2::new(1.0 + 6.0 * u, 2.0 + 4.0 * (1.0 - u)),
+                Vec3::new(u, -u * 1e5, 1e-9),
+            );
+        }
+        film.merge(&tile);
+        film.add_splat(Vec2::new(3.5, 3.5), Vec3::splat(seed as f32));
+        film.set_splat_scale(0.25);
+        FilmState {
+            identity: 42,
+            description: "test.xml, 4 spp".into(),
+            items_total: 10,
+            items,
+            spp: 4,
+            tonemap: Some(Tonemap::Photographic {
+                key: 0.18,
+                burn_percent: 1.0,
+                saturation: 1.0,
+                gamma: 2.2,
+            }),
+            film,
+        }
+    }
+
+    /// A state reads back as written (every sum, bounds, filter, tone mapping); damage and
+    /// truncation are refused with a message, never a panic.
+    #[test]
+    fn round_trip_and_damage() {
+        let s = state(3..7, 1);
+        let bytes = s.to_bytes();
+        let back = FilmState::from_bytes(&bytes).unwrap();
+        assert_eq!(back.film.fixed_sums(), s.film.fixed_sums());
+        assert_eq!(back.to_bytes(), bytes);
+        assert_eq!(back.items, 3..7);
+        assert_eq!(back.film.develop().pixels, s.film.develop().pixels);
+        for cut in [0, 10, MAGIC.len() + 3, bytes.len() / 2, bytes.len() - 1] {
+            assert!(
+                FilmState::from_bytes(&bytes[..cut]).is_err(),
+                "cut at {cut}"
+            );
+        }
+        for at in (0..bytes.len()).step_by(7) {
+            let mut bad = bytes.clone();
+            bad[at] ^= 0x5a;
+            assert!(FilmState::from_bytes(&bad).is_err(), "flip at {at}");
+        }
+    }
+
+    /// Merging checks the cover: a gap, a double and a foreign state are named; disjoint
+    /// states covering everything add up exactly, in any order.
+    #[test]
+    fn merge_checks_the_cover() {
+        let parts = || {
+            vec![
+                ("a".to_string(), state(0..3, 1)),
+                ("b".to_string(), state(3..7, 2)),
+                ("c".to_string(), state(7..10, 3)),
+            ]
+        };
+        let whole = merge(parts()).unwrap();
+        let mut reversed = parts();
+        reversed.reverse();
+        assert_eq!(
+            merge(reversed).unwrap().film.fixed_sums(),
+            whole.film.fixed_sums()
+        );
+        assert_eq!(whole.items, 0..10);
+        let mut gap = parts();
+        gap.remove(1);
+        let e = merge(gap).unwrap_err();
+        assert!(e.contains("items 3..7 are in no state"), "{e}");
+        let mut double = parts();
+        double.push(("d".into(), state(5..8, 4)));
+        let e = merge(double).unwrap_err();
+        assert!(e.contains("in both b and d"), "{e}");
+        let mut foreign = parts();
+        foreign[2].1.identity = 7;
+        assert!(merge(foreign).unwrap_err().contains("another render"));
+    }
+}
