@@ -1046,6 +1046,10 @@ pub(crate) fn render_scene_with(
         }
     }
 
+    if images.is_empty() && display.is_none() && job.stderr.is_none() {
+        // A shard or a render written as a state only: no image to develop.
+        return end_of_render(&outcome);
+    }
     let mut image = outcome.film.develop();
     let mut layers = Vec::new();
     if let (Some(d), Some(filter)) = (&job.denoise, &user_filter) {
@@ -1120,6 +1124,11 @@ pub(crate) fn render_scene_with(
             eprintln!("wrote {}", se.display());
         }
     }
+    end_of_render(&outcome)
+}
+
+/// What every render says at its end: discarded samples, and exit code 130 if interrupted.
+fn end_of_render(outcome: &render::render::RenderOutcome) -> Result<(), Failure> {
     let bad = outcome.film.nonfinite_count();
     if bad > 0 {
         eprintln!("warning: {bad} sample(s) were NaN or infinite and were discarded");
@@ -1194,20 +1203,20 @@ fn split_render(
     };
     if let Some(path) = &s.resume {
         let st = split::read_resume(path, identity)?;
-        if st.items.start != range.start || st.items.end > range.end {
+        if st.info.items.start != range.start || st.info.items.end > range.end {
             return Err(Failure::input(format!(
                 "--resume {}: it holds items {}..{}, which do not start this render's {}..{} \
                  (another shard?)",
                 path.display(),
-                st.items.start,
-                st.items.end,
+                st.info.items.start,
+                st.info.items.end,
                 range.start,
                 range.end
             )));
         }
         ropts.resume = Some(Arc::new(render::drive::Resume {
             film: st.film,
-            items: st.items,
+            items: st.info.items,
         }));
     }
     let (w, h) = (scene.film.width, scene.film.height);

@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use render::film::Film;
-use render::film::state::{self, FilmState, Fnv};
+use render::film::state::{self, FilmState, Fnv, StateInfo};
 use render::image_io::{write_image, write_image_tonemapped};
 use render::render::{Progress, RenderObserver};
 use scene::SceneDesc;
@@ -144,23 +144,17 @@ impl Saver {
         }
     }
 
-    /// The state of `film` holding `items`.
-    pub fn state(&self, film: Film, items: Range<u64>) -> FilmState {
-        FilmState {
+    /// Writes the state of `film` with `items` to `path`.
+    pub fn write(&self, path: &Path, film: &Film, items: Range<u64>) -> Result<(), Failure> {
+        let info = StateInfo {
             identity: self.identity,
             description: self.description.clone(),
             items_total: self.items_total,
             items,
             spp: self.spp,
             tonemap: self.tonemap.clone(),
-            film,
-        }
-    }
-
-    /// Writes the state of `film` with `items` to `path`.
-    pub fn write(&self, path: &Path, film: &Film, items: Range<u64>) -> Result<(), Failure> {
-        self.state(film.clone(), items)
-            .write(path)
+        };
+        state::write(path, &info, film)
             .map_err(|e| Failure::other(format!("{}: cannot write the state: {e}", path.display())))
     }
 
@@ -218,19 +212,7 @@ pub fn cmd_merge(
         crate::check_outputs(&[se.to_path_buf()])?;
     }
     let start = Instant::now();
-    // Files read (and decoded) in parallel: most of a merge's time.
-    let read: Vec<Result<(String, FilmState), String>> = {
-        use rayon::prelude::*;
-        states
-            .par_iter()
-            .map(|p| FilmState::read(p).map(|s| (p.display().to_string(), s)))
-            .collect()
-    };
-    let read = read
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(Failure::input)?;
-    let whole = state::merge(read).map_err(Failure::input)?;
+    let whole = state::merge_files(states).map_err(Failure::input)?;
     let image = whole.film.develop();
     for o in outputs {
         if o.extension()
@@ -240,7 +222,8 @@ pub fn cmd_merge(
                 .write(o)
                 .map_err(|e| Failure::other(format!("{}: {e}", o.display())))?;
         } else {
-            write_image_tonemapped(o, &image, whole.tonemap.as_ref()).map_err(Failure::other)?;
+            write_image_tonemapped(o, &image, whole.info.tonemap.as_ref())
+                .map_err(Failure::other)?;
         }
     }
     if let Some(se) = stderr {
@@ -249,8 +232,8 @@ pub fn cmd_merge(
     eprintln!(
         "merged {} state(s) of {} ({} items) in {:.2} s",
         states.len(),
-        whole.description,
-        whole.items_total,
+        whole.info.description,
+        whole.info.items_total,
         start.elapsed().as_secs_f64()
     );
     Ok(())

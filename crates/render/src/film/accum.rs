@@ -221,7 +221,7 @@ impl FixedSums {
 
     /// Adds another film's sums (exact).
     #[inline]
-    fn add(&mut self, o: &FixedSums) {
+    pub fn add(&mut self, o: &FixedSums) {
         for (a, b) in self.v.iter_mut().zip(&o.v) {
             *a = a.wrapping_add(*b);
         }
@@ -743,6 +743,18 @@ impl Film {
     /// there are no splats): what a film state file holds.
     pub fn fixed_sums(&self) -> (&[FixedSums], &[[i128; 3]]) {
         (&self.pixels, &self.splats)
+    }
+
+    /// The exact sums to add to (a state file decoded into the film), the splat layer
+    /// empty until resized to the pixels' length.
+    pub fn fixed_sums_mut(&mut self) -> (&mut [FixedSums], &mut Vec<[i128; 3]>) {
+        (&mut self.pixels, &mut self.splats)
+    }
+
+    /// Adds to the sample counts (with [`Self::fixed_sums_mut`]).
+    pub fn add_counts(&mut self, samples: u64, nonfinite: u64) {
+        self.samples += samples;
+        self.nonfinite += nonfinite;
     }
 
     /// A film with these exact sums (the inverse of [`Self::fixed_sums`] and the counts):
