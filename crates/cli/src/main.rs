@@ -926,6 +926,11 @@ pub(crate) fn render_scene_with(
         time_budget: job.time.map(Duration::from_secs_f64),
         cancel,
         // Progressive output: one sample per pixel a pass, the image rewritten after each.
+        chunk_spp: if extras.progressive {
+            1
+        } else {
+            render::drive::CHUNK_SPP
+        },
         pass_duration: if extras.progressive {
             Duration::ZERO
         } else if let Some(s) = job
@@ -1191,7 +1196,8 @@ fn split_render(
     let n = integrator
         .work_items(scene, ropts)
         .map_err(Failure::input)?;
-    let identity = split::identity(desc, &(&job.build, ropts.spp), ropts.tile_size);
+    let what = (&job.build, ropts.spp, ropts.tile_size, ropts.chunk_spp);
+    let identity = split::identity(desc, &what);
     let range = match &s.shard {
         Some(shard) => {
             let i = shard.resolve()?;

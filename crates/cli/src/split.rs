@@ -94,18 +94,17 @@ impl Shard {
 /// The identity of a render: the loaded scene (after every `-D` and command-line override),
 /// the options that change the image and this program's version. Shards and checkpoints
 /// of one render share it on any machine; anything else differs.
-pub fn identity(desc: &SceneDesc, options: &impl std::fmt::Debug, tile_size: u32) -> u64 {
+pub fn identity(desc: &SceneDesc, options: &impl std::fmt::Debug) -> u64 {
     use std::fmt::Write;
     let mut h = Fnv::default();
     // Hashed as the Debug text, streamed: no copy of the (possibly large) meshes.
     let _ = write!(
         h,
-        "{} {} {:?} {:?} {tile_size} {}",
+        "{} {} {:?} {:?}",
         env!("CARGO_PKG_VERSION"),
         state::FORMAT,
         desc,
         options,
-        render::drive::CHUNK_SPP
     );
     h.0
 }

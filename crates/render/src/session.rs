@@ -29,6 +29,10 @@ pub struct RenderOptions {
     /// The work items to render (`None`: all): a shard's range (see `drive/work.rs` and
     /// `Integrator::work_items`).
     pub items: Option<Range<u64>>,
+    /// Sample indices per chunk of the tile loop's work items (`drive/tiles.rs`; default
+    /// [`crate::drive::CHUNK_SPP`]): also the smallest pass. Part of what makes the image, as
+    /// the tile size is.
+    pub chunk_spp: u32,
     /// A checkpoint to continue from (its items' range must start where this render's
     /// does); ignored by integrators whose work has no items.
     pub resume: Option<Arc<Resume>>,
@@ -43,6 +47,7 @@ impl Default for RenderOptions {
             cancel: Arc::new(AtomicBool::new(false)),
             pass_duration: Duration::from_secs(1),
             items: None,
+            chunk_spp: crate::drive::CHUNK_SPP,
             resume: None,
         }
     }

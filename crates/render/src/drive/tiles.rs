@@ -28,9 +28,9 @@ use crate::session::{Job, Progress, RenderOptions, RenderOutcome, camera_sample}
 use crate::spectral::lanes::PathMode;
 use crate::world::Scene;
 
-/// Sample indices per chunk: an item's f64 sums cover this many samples of each of its
-/// tile's pixels before they are rounded into the film (rounding more often costs more;
-/// longer chunks make coarser passes and shards).
+/// Sample indices per chunk by default ([`RenderOptions::chunk_spp`]): an item's f64 sums
+/// cover this many samples of each of its tile's pixels before they are rounded into the
+/// film (rounding more often costs more; longer chunks make coarser passes and shards).
 pub const CHUNK_SPP: u32 = 4;
 
 /// A tile's bounds, `[min, max)`.
@@ -40,6 +40,7 @@ type TileBounds = (UVec2, UVec2);
 pub struct TileWork {
     tiles: Vec<TileBounds>,
     spp: u32,
+    chunk: u32,
 }
 
 impl TileWork {
@@ -49,6 +50,7 @@ impl TileWork {
         TileWork {
             tiles: tile_bounds(min, max, opts.tile_size.max(1)),
             spp: opts.spp.max(1),
+            chunk: opts.chunk_spp.max(1),
         }
     }
 
@@ -59,7 +61,7 @@ impl TileWork {
 
     /// The number of items.
     pub fn len(&self) -> u64 {
-        self.per_chunk() * self.spp.div_ceil(CHUNK_SPP) as u64
+        self.per_chunk() * self.spp.div_ceil(self.chunk) as u64
     }
 
     pub fn is_empty(&self) -> bool {
@@ -70,10 +72,10 @@ impl TileWork {
     pub fn item(&self, i: u64) -> (TileBounds, Range<u32>) {
         let t = self.per_chunk();
         let c = (i / t) as u32;
-        let s0 = c * CHUNK_SPP;
+        let s0 = c * self.chunk;
         (
             self.tiles[(i % t) as usize],
-            s0..(s0 + CHUNK_SPP).min(self.spp),
+            s0..(s0 + self.chunk).min(self.spp),
         )
     }
 
@@ -93,7 +95,7 @@ impl TileWork {
     /// Samples per pixel in the chunks before item `end` that are complete from item 0.
     pub fn spp_before(&self, end: u64) -> u32 {
         ((end / self.per_chunk().max(1)) as u32)
-            .saturating_mul(CHUNK_SPP)
+            .saturating_mul(self.chunk)
             .min(self.spp)
     }
 }
