@@ -160,7 +160,7 @@ fn a_film_beyond_the_memory_budget_is_refused() {
         .arg(dir.join("small.exr"))
         .output()
         .unwrap();
-    assert_input_failure(&out, &["64x64 film", "limit of 1.0 MiB"]);
+    assert_input_failure(&out, &["64x64 film", "limit of 512.0 KiB"]);
 }
 
 #[test]
