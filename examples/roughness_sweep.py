@@ -3,9 +3,11 @@
     pip install .            # the penumbra package, from the repository root
     python examples/roughness_sweep.py [--spp 64] [--out /tmp/penumbra/roughness_sweep.png]
 
-The scene is a Mitsuba 3 string whose `<default name="alpha">` is set per render, as
-`penumbra render -D alpha=...` would. With matplotlib installed the images go into one
-figure; without it, into one PNG strip written with penumbra.write.
+The scene is a Mitsuba 3 string, loaded once; each roughness is set with
+`scene.update({"ball.alpha": ...})` (the material `ball` is rebuilt, the rest of the scene
+is kept), which renders what loading the string with that `alpha` would, bit for bit. With
+matplotlib installed the images go into one figure; without it, into one PNG strip written
+with penumbra.write.
 """
 
 from __future__ import annotations
@@ -18,7 +20,6 @@ import numpy as np
 import penumbra
 
 SCENE = """<scene version="3.0.0">
-    <default name="alpha" value="0.1"/>
     <integrator type="path"><integer name="max_depth" value="6"/></integrator>
     <sensor type="perspective">
         <float name="fov" value="30"/>
@@ -28,9 +29,9 @@ SCENE = """<scene version="3.0.0">
     </sensor>
     <shape type="sphere">
         <point name="center" value="0, 0.5, 0"/><float name="radius" value="0.5"/>
-        <bsdf type="roughplastic">
+        <bsdf type="roughplastic" id="ball">
             <rgb name="diffuse_reflectance" value="0.1, 0.25, 0.6"/>
-            <float name="alpha" value="$alpha"/>
+            <float name="alpha" value="0.1"/>
         </bsdf>
     </shape>
     <shape type="rectangle">
@@ -56,8 +57,9 @@ def main() -> None:
     os.makedirs(os.path.dirname(args.out) or ".", exist_ok=True)
 
     images = []
+    scene = penumbra.load_string(SCENE)
     for alpha in ALPHAS:
-        scene = penumbra.load_string(SCENE, alpha=alpha)
+        scene.update({"ball.alpha": alpha})
         images.append(penumbra.render(scene, spp=args.spp, seed=0))
         print(f"alpha {alpha}: mean {images[-1].mean():.4f}")
 

@@ -9,6 +9,14 @@ array, write, compare and denoise images::
     image = penumbra.render(scene, spp=64, seed=1)      # H x W x 3, linear RGB
     penumbra.write("/tmp/cornell.exr", image)
 
+Scenes can be edited without reloading them, as Mitsuba 3's ``traverse``/``update``::
+
+    scene.parameters()                       # {"white.reflectance": (0.73, 0.73, 0.73), ...}
+    scene.update({"white.reflectance": (0.5, 0.5, 0.5)})
+    image = penumbra.render(scene, spp=64, seed=1)      # rebuilds the materials only
+
+and made from Mitsuba 3's dictionary form with :func:`load_dict`.
+
 Every call goes through the same library code as the ``penumbra`` command: ``render`` at a
 given seed and spp equals ``penumbra render --seed S --spp N -o out.exr`` bit for bit.
 Rendering releases the GIL (other Python threads run, and several renders can run at once);
@@ -35,6 +43,7 @@ __all__ = [
     "Comparison",
     "load_file",
     "load_string",
+    "load_dict",
     "render",
     "write",
     "read",
@@ -78,6 +87,235 @@ def load_string(text: str, format: str = "xml", **params: object) -> Scene:
     name the text ``<string>``: ``<string>:3:5: ...``.
     """
     return _penumbra.load_string(text, format, _defines(params))
+
+
+# Mitsuba 3's plugin types (the ones Penumbra reads) and the XML tag of each: the
+# dictionary form names the type only.
+_TAGS = {
+    "bsdf": "diffuse conductor roughconductor dielectric thindielectric roughdielectric "
+    "plastic roughplastic twosided null principled principledthin blendbsdf bumpmap "
+    "normalmap mask pplastic mirror microfacet",
+    "shape": "obj ply serialized sphere rectangle disk cube cylinder shapegroup instance",
+    "emitter": "area point spot directional constant envmap sunsky projector directionalarea",
+    "sensor": "perspective thinlens orthographic radiancemeter",
+    "film": "hdrfilm ldrfilm specfilm",
+    "sampler": "independent stratified multijitter orthogonal ldsampler halton hammersley sobol",
+    "rfilter": "box tent gaussian mitchell catmullrom lanczos",
+    "integrator": "path volpath volpathmis direct photonmapper sppm ppm ptracer bdpt pssmlt mlt "
+    "normals albedo depth aov ao whitted simple prb",
+    "texture": "bitmap checkerboard",
+    "medium": "homogeneous heterogeneous",
+    "phase": "isotropic hg rayleigh tabphase blendphase",
+    "volume": "constvolume gridvolume",
+    "spectrum": "blackbody d65 regular irregular uniform",
+}
+_TAG_OF = {t: tag for tag, types in _TAGS.items() for t in types.split()}
+
+
+def _path(path: Tuple[str, ...]) -> str:
+    return "dict" + "".join(f"[{k!r}]" for k in path)
+
+
+def _num(x: object) -> str:
+    # repr of a Python float is exact (shortest round-trip), so the loader reads the very
+    # number given.
+    return repr(float(x))  # type: ignore[arg-type]
+
+
+def _matrix(value: object, path: Tuple[str, ...]) -> Optional[np.ndarray]:
+    """A 4x4 transform from a nested list, a NumPy array or an object with a ``matrix``
+    (Mitsuba's ``ScalarTransform4f``); None when ``value`` is none of these."""
+    if hasattr(value, "matrix") and not isinstance(value, np.ndarray):
+        value = np.asarray(value.matrix)  # type: ignore[attr-defined]
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    if a.shape != (4, 4):
+        return None
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{_path(path)}: a transform must be finite")
+    return a
+
+
+class _Xml:
+    """Mitsuba XML written one element per line, remembering the dictionary path of each
+    line so that a loader error can name the key it comes from."""
+
+    def __init__(self) -> None:
+        self.lines: List[str] = []
+        self.paths: List[Tuple[str, ...]] = []
+
+    def add(self, depth: int, text: str, path: Tuple[str, ...]) -> None:
+        self.lines.append("  " * depth + text)
+        self.paths.append(path)
+
+
+def _attrs(**attrs: object) -> str:
+    from xml.sax.saxutils import quoteattr
+
+    return "".join(f" {k}={quoteattr(str(v))}" for k, v in attrs.items() if v is not None)
+
+
+def _object(xml: _Xml, d: dict, name: Optional[str], oid: Optional[str], depth: int,
+            path: Tuple[str, ...]) -> None:
+    ty = d.get("type")
+    if not isinstance(ty, str):
+        raise ValueError(f"{_path(path)}: an object needs a 'type' string, found {ty!r}")
+    if ty == "scene":
+        raise ValueError(f"{_path(path)}: a scene cannot be nested in another object")
+    tag = _TAG_OF.get(ty)
+    if tag is None:
+        raise ValueError(
+            f"{_path(path)}: unknown plugin type {ty!r} (Penumbra reads: "
+            f"{', '.join(sorted(_TAG_OF))})"
+        )
+    if "id" in d and not isinstance(d["id"], str):
+        raise TypeError(f"{_path(path + ('id',))}: an id is a string, found {d['id']!r}")
+    oid = d.get("id", oid)
+    xml.add(depth, f"<{tag}{_attrs(type=ty, id=oid, name=name)}>", path)
+    for key, value in d.items():
+        if key in ("type", "id"):
+            continue
+        _entry(xml, key, value, depth + 1, path + (key,))
+    xml.add(depth, f"</{tag}>", path)
+
+
+def _entry(xml: _Xml, key: object, value: object, depth: int, path: Tuple[str, ...]) -> None:
+    """One ``key: value`` of an object: a property, a child object or a reference."""
+    if not isinstance(key, str):
+        raise TypeError(f"{_path(path[:-1])}: keys are strings, found {key!r}")
+    if isinstance(value, dict):
+        ty = value.get("type")
+        if ty == "ref":
+            rid = value.get("id")
+            if not isinstance(rid, str):
+                raise ValueError(f"{_path(path)}: a reference needs an 'id' string")
+            xml.add(depth, f"<ref{_attrs(name=key, id=rid)}/>", path)
+        elif ty == "rgb":
+            v = value.get("value")
+            vals = [v] if isinstance(v, (int, float)) else list(np.ravel(np.asarray(v, dtype=np.float64)))
+            if len(vals) not in (1, 3):
+                raise ValueError(f"{_path(path)}: an rgb value is a float or 3 floats, found {v!r}")
+            xml.add(depth, f"<rgb{_attrs(name=key, value=', '.join(_num(x) for x in vals))}/>", path)
+        elif ty == "spectrum" and "filename" in value:
+            fn = os.path.abspath(os.fspath(value["filename"]))
+            xml.add(depth, f"<spectrum{_attrs(name=key, filename=fn)}/>", path)
+        elif ty == "spectrum":
+            v = value.get("value")
+            if isinstance(v, (int, float)):
+                text = _num(v)
+            else:
+                try:
+                    text = ", ".join(f"{_num(w)}:{_num(x)}" for w, x in v)  # type: ignore[union-attr]
+                except (TypeError, ValueError):
+                    raise ValueError(
+                        f"{_path(path)}: a spectrum value is a float or (wavelength, value) "
+                        f"pairs, found {v!r}"
+                    ) from None
+            xml.add(depth, f"<spectrum{_attrs(name=key, value=text)}/>", path)
+        else:
+            _object(xml, value, key, None, depth, path)
+        return
+    if isinstance(value, (bool, np.bool_)):
+        xml.add(depth, f"<boolean{_attrs(name=key, value='true' if value else 'false')}/>", path)
+    elif isinstance(value, (int, np.integer)):
+        xml.add(depth, f"<integer{_attrs(name=key, value=int(value))}/>", path)
+    elif isinstance(value, (float, np.floating)):
+        xml.add(depth, f"<float{_attrs(name=key, value=_num(value))}/>", path)
+    elif isinstance(value, (str, os.PathLike)):
+        text = os.fspath(value)
+        if key == "filename" and text:
+            # Relative to the working directory, as Mitsuba resolves them.
+            text = os.path.abspath(text)
+        xml.add(depth, f"<string{_attrs(name=key, value=text)}/>", path)
+    else:
+        m = _matrix(value, path)
+        if m is not None:
+            xml.add(depth, f"<transform{_attrs(name=key)}>", path)
+            xml.add(depth + 1, f"<matrix{_attrs(value=' '.join(_num(x) for x in m.ravel()))}/>", path)
+            xml.add(depth, "</transform>", path)
+            return
+        try:
+            v = np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError):
+            v = None
+        if v is None or v.shape != (3,):
+            raise TypeError(
+                f"{_path(path)}: unsupported value {value!r} (expected a bool, int, float, "
+                f"str, 3-vector, 4x4 transform, or a dict with a 'type')"
+            )
+        xml.add(depth, f"<point{_attrs(name=key, value=', '.join(_num(x) for x in v))}/>", path)
+
+
+def _dict_to_xml(d: object) -> _Xml:
+    if not isinstance(d, dict):
+        raise TypeError(f"load_dict takes a dict, found {type(d).__name__}")
+    if d.get("type") != "scene":
+        raise ValueError(
+            f"dict['type']: load_dict loads scenes ({{'type': 'scene', ...}}), found "
+            f"{d.get('type')!r}"
+        )
+    xml = _Xml()
+    xml.add(0, '<scene version="3.0.0">', ())
+    for key, value in d.items():
+        if key == "type":
+            continue
+        path = (key,)
+        if key == "id":
+            continue
+        if not isinstance(value, dict):
+            raise TypeError(
+                f"{_path(path)}: a scene holds objects (dicts with a 'type'), found {value!r}"
+            )
+        if value.get("type") == "ref":
+            raise ValueError(f"{_path(path)}: a reference cannot stand at the top of a scene")
+        # As Mitsuba 3: a top-level object's key is its id unless it gives one.
+        _object(xml, value, None, str(key), 1, path)
+    xml.add(0, "</scene>", ())
+    return xml
+
+
+def load_dict(d: dict, **params: object) -> Scene:
+    """Load a scene from Mitsuba 3's dictionary form (``mi.load_dict``)::
+
+        penumbra.load_dict({
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 8},
+            "sensor": {"type": "perspective", "fov": 40.0, "to_world": matrix_4x4,
+                       "film": {"type": "hdrfilm", "width": 64, "height": 64}},
+            "white": {"type": "diffuse",
+                      "reflectance": {"type": "rgb", "value": [0.7, 0.7, 0.7]}},
+            "ball": {"type": "sphere", "radius": 0.5, "bsdf": {"type": "ref", "id": "white"}},
+            "light": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+        })
+
+    Every plugin Penumbra reads from Mitsuba XML works: the dictionary is written as that
+    XML and loaded by the same loader. Nested dicts with a ``"type"`` are child objects;
+    ``"id"`` names an object (a top-level object's key is its id unless it gives one, as in
+    Mitsuba 3, so ``parameters()`` keys start with it); ``{"type": "ref", "id": ...}``
+    refers to an object; ``{"type": "rgb", "value": ...}`` and ``{"type": "spectrum",
+    "value": ...}`` are colours. Values: bool, int, float, str (relative ``filename`` values
+    resolve against the working directory), 3-vectors (lists, tuples, arrays) as points, and
+    transforms (``to_world``...) as 4x4 matrices: nested lists, NumPy arrays, or objects with
+    a ``matrix`` (Mitsuba's ``ScalarTransform4f``). ``params`` as for :func:`load_file`.
+
+    Errors name the key path: a malformed dictionary raises ``TypeError`` or ``ValueError``
+    (``dict['ball']['radius']: ...``); what the loader refuses raises ``SceneError`` whose
+    message starts with the key path of the object at fault.
+    """
+    xml = _dict_to_xml(d)
+    text = "\n".join(xml.lines) + "\n"
+    try:
+        return _penumbra.load_string(text, "xml", _defines(params))
+    except SceneError as e:
+        line = getattr(e, "line", 0)
+        if 1 <= line <= len(xml.paths):
+            where = _path(xml.paths[line - 1])
+            err = SceneError(f"{where}: {e}")
+            err.file, err.line, err.col = "<dict>", 0, 0  # type: ignore[attr-defined]
+            raise err from None
+        raise
 
 
 def _image(buf: bytearray, width: int, height: int) -> np.ndarray:

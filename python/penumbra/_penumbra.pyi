@@ -1,7 +1,7 @@
 """Type hints of the native module (crates/python/src/lib.rs); use the `penumbra` package's
 functions, which take and return NumPy arrays."""
 
-from typing import Callable, List, Optional, Sequence, Tuple, Union
+from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 __version__: str
 
@@ -16,7 +16,9 @@ class InternalError(RuntimeError):
     """A Rust panic inside penumbra, caught before it reached Python (a bug)."""
 
 class Scene:
-    """A loaded scene (immutable; safe to render from several threads at once)."""
+    """A loaded scene, editable with ``update`` (safe to render from several threads at
+    once). It keeps what its renders built (textures, the acceleration structure) for the
+    next render, as far as ``update`` leaves it valid."""
 
     @property
     def source(self) -> str:
@@ -29,6 +31,19 @@ class Scene:
         """The number of sensors (cameras)."""
     def resolution(self, sensor: int = 0) -> Tuple[int, int]:
         """The film size ``(width, height)`` of a sensor."""
+    def parameters(self) -> Dict[str, Union[float, Tuple[float, float, float], List[List[float]]]]:
+        """The editable values by key ``"<object>.<parameter>"`` (material colours and
+        roughness, light intensities, sensor and shape ``to_world``): floats, 3-tuples, and
+        4x4 matrices as lists of rows."""
+    def update(self, values: Mapping[str, object]) -> List[str]:
+        """Set parameters by key without reloading; the next render rebuilds only what they
+        made stale (the acceleration structure only for a shape's ``to_world``). Raises
+        ``KeyError`` (unknown key), ``TypeError`` (wrong kind of value), ``ValueError`` (out
+        of range). Returns the kinds of change: ``material``, ``light``, ``camera``,
+        ``geometry``."""
+    def cache_info(self) -> Dict[str, bool]:
+        """Whether the next render reuses an acceleration structure (``geometry``) and
+        decoded textures (``textures``)."""
 
 def load_file(path: str, defines: Sequence[Tuple[str, str]] = ...) -> Scene: ...
 def load_string(text: str, format: str = "xml", defines: Sequence[Tuple[str, str]] = ...) -> Scene: ...

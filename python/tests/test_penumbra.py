@@ -326,9 +326,13 @@ def test_denoise():
 
 
 def test_help_is_useful():
-    for f in (penumbra.load_file, penumbra.load_string, penumbra.render, penumbra.write,
-              penumbra.read, penumbra.compare, penumbra.denoise, penumbra.denoiser_available):
+    for f in (penumbra.load_file, penumbra.load_string, penumbra.load_dict, penumbra.render,
+              penumbra.write, penumbra.read, penumbra.compare, penumbra.denoise,
+              penumbra.denoiser_available, penumbra.Scene.parameters, penumbra.Scene.update,
+              penumbra.Scene.cache_info):
         assert f.__doc__ and len(f.__doc__) > 60, f.__name__
+    assert "<object>.<parameter>" in penumbra.Scene.parameters.__doc__
+    assert "KeyError" in penumbra.Scene.update.__doc__
     assert "KeyboardInterrupt" in penumbra.render.__doc__
     assert penumbra.SceneError.__doc__ and "file:line:col" in penumbra.SceneError.__doc__
     assert penumbra.Scene.__doc__

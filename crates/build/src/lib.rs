@@ -13,12 +13,16 @@ mod lights;
 mod materials;
 mod media;
 pub mod nori_tests;
+pub mod params;
 mod shapes;
 pub mod spec;
 mod textures;
 
 pub use materials::material_kind;
 pub use shapes::{cube_mesh, rectangle_mesh};
+
+use std::collections::HashMap;
+use std::sync::Arc;
 
 use render::accel::Accel;
 use render::film::{FilmSettings, Filter};
@@ -69,6 +73,91 @@ pub struct Built {
 
 /// Turn a loaded scene into a renderable one.
 pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError> {
+    build_cached(desc, opts, &mut BuildCache::default())
+}
+
+/// What a build read from files or derived from the geometry alone, kept for the next build
+/// of the same scene after an edit of its description (Python's `scene.update`): the
+/// world-space geometry and its acceleration structure, the scene's decoded textures (and
+/// the alpha channels read for cut-outs), the media (and the grids they read), the images
+/// lights read, rough plastic's tables (by α and η). Materials, lights, the camera, the film
+/// and the integrator are cheap and are made anew by every build, from the description as it
+/// is then.
+///
+/// The cache is only valid for the description it was filled from, up to the edits that
+/// [`BuildCache::invalidate`] was told about: after an edit of anything else (a texture, a
+/// medium, the shape list) use a fresh cache. A build with another `mode` or
+/// `flatten_instances` than the cached one empties it first.
+#[derive(Default)]
+pub struct BuildCache {
+    key: Option<(base::RenderMode, bool)>,
+    geometry: Option<Arc<CachedGeometry>>,
+    textures: Option<Vec<render::textures::Texture>>,
+    alphas: HashMap<u32, Option<render::textures::Texture>>,
+    media: Option<Vec<render::media::Medium>>,
+    light_images: lights::LightImages,
+    plastic_tables: materials::PlasticTables,
+}
+
+/// The geometry part of a [`BuildCache`].
+struct CachedGeometry {
+    geoms: Vec<ShapeGeom>,
+    accel: Arc<Accel>,
+    warning: Option<String>,
+    has_motion: bool,
+    triangle_count: usize,
+}
+
+/// What an edit of a scene description changed, for [`BuildCache::invalidate`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Changed {
+    /// A material's parameter (a colour, a roughness): materials are rebuilt by every build.
+    Material,
+    /// A light's parameter (intensity, radiance, scale, its placement): lights are rebuilt
+    /// by every build; an area light's radiance leaves its shape's geometry alone.
+    Light,
+    /// A sensor's parameter (its placement): the camera is made by every build.
+    Camera,
+    /// A shape's geometry (its transform): the world-space geometry and the acceleration
+    /// structure are rebuilt.
+    Geometry,
+}
+
+impl BuildCache {
+    /// Forget what an edit of kind `what` made stale (only [`Changed::Geometry`] does).
+    pub fn invalidate(&mut self, what: Changed) {
+        match what {
+            Changed::Geometry => self.geometry = None,
+            Changed::Material | Changed::Light | Changed::Camera => {}
+        }
+    }
+
+    /// Whether the next build will reuse an acceleration structure (for tests).
+    pub fn has_geometry(&self) -> bool {
+        self.geometry.is_some()
+    }
+
+    /// Whether the next build will reuse decoded textures (for tests).
+    pub fn has_textures(&self) -> bool {
+        self.textures.is_some()
+    }
+}
+
+/// [`build`], reusing what `cache` holds from an earlier build of the same description (as
+/// [`BuildCache`] says) and keeping there what this build reads or derives. The result is
+/// the one [`build`] gives for `desc`, bit for bit.
+pub fn build_cached(
+    desc: &SceneDesc,
+    opts: &BuildOptions,
+    cache: &mut BuildCache,
+) -> Result<Built, BuildError> {
+    let key = (opts.mode, opts.flatten_instances);
+    if cache.key != Some(key) {
+        *cache = BuildCache {
+            key: Some(key),
+            ..BuildCache::default()
+        };
+    }
     let sensor = desc.sensors.get(opts.sensor).ok_or_else(|| BuildError {
         loc: Loc::file(&desc.source),
         message: format!(
@@ -80,38 +169,71 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
 
     let spectral = opts.mode == base::RenderMode::Spectral;
     let mut declared = materials::Declared::new(spectral, desc.textures.len());
-    let (materials, default_material) = materials::materials(&desc.materials, &mut declared)?;
-    let mut media = media::media(desc)?;
+    let (materials, default_material) =
+        materials::materials(&desc.materials, &mut declared, &mut cache.plastic_tables)?;
+    cache.plastic_tables.keep_used();
+    let mut media = match &cache.media {
+        Some(m) => m.clone(),
+        None => {
+            let m = media::media(desc)?;
+            cache.media = Some(m.clone());
+            m
+        }
+    };
     let beer = media::beer_media(&desc.materials, &mut media);
-    let shapes::Shapes {
-        mut shapes,
-        protos,
-        warning,
-    } = shapes::shapes(
+    let geometry = match &cache.geometry {
+        Some(g) => g.clone(),
+        None => {
+            let shapes::Geometry {
+                geoms,
+                protos,
+                warning,
+            } = shapes::geometry(desc, opts)?;
+            let has_motion = geoms
+                .iter()
+                .any(|g| matches!(g, ShapeGeom::Instance(i) if i.motion != Vec3::ZERO));
+            let triangle_count = geoms.iter().map(ShapeGeom::triangle_count).sum();
+            let accel = Accel::build_instanced(
+                geoms.iter().map(ShapeGeom::accel_shape).collect(),
+                protos.iter().map(ShapeGeom::accel_shape).collect(),
+            );
+            let g = Arc::new(CachedGeometry {
+                geoms,
+                accel: Arc::new(accel),
+                warning,
+                has_motion,
+                triangle_count,
+            });
+            cache.geometry = Some(g.clone());
+            g
+        }
+    };
+    let mut shapes = shapes::shape_infos(
         desc,
-        opts,
+        geometry.geoms.clone(),
         &materials,
         default_material,
         &beer,
         &mut declared,
-    )?;
-    let mut warnings: Vec<String> = warning.into_iter().collect();
-    let has_motion = shapes
-        .iter()
-        .any(|s| matches!(&s.geom, ShapeGeom::Instance(i) if i.motion != Vec3::ZERO));
-    let triangle_count = shapes.iter().map(|s| s.geom.triangle_count()).sum();
-    let accel = Accel::build_instanced(
-        shapes.iter().map(|s| s.geom.accel_shape()).collect(),
-        protos.iter().map(ShapeGeom::accel_shape).collect(),
     );
-    drop(protos);
+    let mut warnings: Vec<String> = geometry.warning.iter().cloned().collect();
+    let has_motion = geometry.has_motion;
+    let triangle_count = geometry.triangle_count;
+    let accel = geometry.accel.clone();
     let bounds = accel.bounds();
 
-    let mut textures = desc
-        .textures
-        .iter()
-        .map(textures::load_texture)
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut textures = match &cache.textures {
+        Some(t) => t.clone(),
+        None => {
+            let t = desc
+                .textures
+                .iter()
+                .map(textures::load_texture)
+                .collect::<Result<Vec<_>, _>>()?;
+            cache.textures = Some(t.clone());
+            t
+        }
+    };
     // Projectors' textures and their aspect ratios (Mitsuba's resolution: a bitmap's, 1×1
     // for the others).
     let projectors: Vec<Option<(render::textures::ColorRef, f32)>> = desc
@@ -135,7 +257,7 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         .collect();
     // Declared spectra's textures sit right after the scene's (`Declared` counts on it).
     textures.append(&mut declared.textures);
-    textures::opacity_from_alpha(desc, &mut shapes, &mut textures)?;
+    textures::opacity_from_alpha(desc, &mut shapes, &mut textures, &mut cache.alphas)?;
 
     let selection = opts.light_selection.unwrap_or(desc.light_selection);
     let split = selection != LightSelection::Uniform;
@@ -143,7 +265,14 @@ pub fn build(desc: &SceneDesc, opts: &BuildOptions) -> Result<Built, BuildError>
         lights,
         shape_lights,
         media: light_media,
-    } = lights::lights(desc, &shapes, split, &declared, &projectors)?;
+    } = lights::lights(
+        desc,
+        &shapes,
+        split,
+        &declared,
+        &projectors,
+        &mut cache.light_images,
+    )?;
     let infinite_lights = (0..lights.len() as u32)
         .filter(|&i| lights[i as usize].is_infinite())
         .collect();

@@ -26,6 +26,26 @@ pub(crate) struct BuiltLights {
     pub media: Vec<Option<u32>>,
 }
 
+/// The images lights read from files (environment maps, goniometric and projection lights),
+/// decoded as sRGB-encoded files are, kept by path so that a build after a light edit (a
+/// scale, a transform) does not read them again (see [`crate::BuildCache`]).
+#[derive(Default)]
+pub(crate) struct LightImages(std::collections::HashMap<std::path::PathBuf, render::film::Image>);
+
+impl LightImages {
+    fn read(
+        &mut self,
+        path: &std::path::Path,
+    ) -> Result<render::film::Image, image_io::ImageError> {
+        if let Some(image) = self.0.get(path) {
+            return Ok(image.clone());
+        }
+        let image = image_io::read_image_with(path, Decode::Srgb)?;
+        self.0.insert(path.to_path_buf(), image.clone());
+        Ok(image)
+    }
+}
+
 /// Every emitter of the scene: area lights (one per emitting shape, or with `split` one per
 /// triangle of an emitting mesh) first, then the others; with the light of each shape and
 /// the medium each light emits into (an emitting shape's exterior, a point-like emitter's
@@ -36,6 +56,7 @@ pub(crate) fn lights(
     split: bool,
     declared: &Declared,
     projectors: &[Option<(ColorRef, f32)>],
+    images: &mut LightImages,
 ) -> Result<BuiltLights, BuildError> {
     // In spectral mode, the spectrum a light's constant was declared as.
     let spectrum = |v: &scene::ColorValue| declared.value(v).map(Arc::new);
@@ -161,7 +182,7 @@ pub(crate) fn lights(
                 profile,
                 power,
             } => Light::ImagePoint(Arc::new(image_point(
-                to_world, path, *intensity, *profile, *power, &e.loc,
+                to_world, path, *intensity, *profile, *power, &e.loc, images,
             )?)),
             scene::Emitter::SunSky(d) => Light::SunSky(Arc::new(sunsky(d))),
             scene::Emitter::Projector {
@@ -185,11 +206,10 @@ pub(crate) fn lights(
                 to_world,
                 mapping,
             } => {
-                let image =
-                    image_io::read_image_with(path, Decode::Srgb).map_err(|err| BuildError {
-                        loc: e.loc.clone(),
-                        message: format!("cannot read environment map: {err}"),
-                    })?;
+                let image = images.read(path).map_err(|err| BuildError {
+                    loc: e.loc.clone(),
+                    message: format!("cannot read environment map: {err}"),
+                })?;
                 Light::EnvMap(Arc::new(EnvMap::new(image, *scale, to_world, *mapping)))
             }
         });
@@ -240,6 +260,7 @@ fn image_point(
     profile: scene::ImageProfile,
     power: Option<f32>,
     loc: &scene::Loc,
+    images: &mut LightImages,
 ) -> Result<ImagePointLight, BuildError> {
     let fail = |message: String| BuildError {
         loc: loc.clone(),
@@ -255,7 +276,8 @@ fn image_point(
                 .into(),
         ));
     }
-    let image = image_io::read_image_with(path, Decode::Srgb)
+    let image = images
+        .read(path)
         .map_err(|err| fail(format!("cannot read the light's image: {err}")))?;
     if image.pixels.iter().any(|p| !p.is_finite()) {
         return Err(fail(format!(

@@ -2,6 +2,7 @@
 //! `normalmap`, `bumpmap` and `mask` chains are resolved here, once, into layers; parameters
 //! become texture references.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use render::bsdf::{IdealLobe, Microfacet, MicrofacetType, NoriMicrofacet, RoughPlasticTables};
@@ -24,11 +25,13 @@ use crate::BuildError;
 pub(crate) fn materials(
     materials: &[MaterialDesc],
     declared: &mut Declared,
+    tables: &mut PlasticTables,
 ) -> Result<(Vec<RtMaterial>, u32), BuildError> {
     let mut resolver = MaterialResolver {
         materials,
         kinds: vec![None; materials.len()],
         declared,
+        tables,
     };
     let mut list = (0..materials.len() as u32)
         .map(|id| resolver.material(MaterialId(id)))
@@ -74,6 +77,40 @@ pub(crate) fn beer_absorption(
         }
     }
     None
+}
+
+/// Rough plastic's tables (its coating's transmittance and internal reflectance, integrated
+/// numerically: most of a build's time in scenes with several rough plastics), by what they
+/// depend on: the distribution, α and η. Kept by [`crate::BuildCache`] so that a build after
+/// an edit computes only the tables of the materials whose α or η changed.
+#[derive(Default)]
+pub(crate) struct PlasticTables {
+    tables: HashMap<(u8, u32, u32), Arc<RoughPlasticTables>>,
+    /// The keys the build in progress asked for (see [`PlasticTables::keep_used`]).
+    used: Vec<(u8, u32, u32)>,
+}
+
+impl PlasticTables {
+    fn get(&mut self, kind: MicrofacetType, alpha: f32, eta: f32) -> Arc<RoughPlasticTables> {
+        let key = (kind as u8, alpha.to_bits(), eta.to_bits());
+        self.used.push(key);
+        self.tables
+            .entry(key)
+            .or_insert_with(|| {
+                Arc::new(RoughPlasticTables::new(
+                    Microfacet::isotropic(kind, alpha),
+                    eta,
+                ))
+            })
+            .clone()
+    }
+
+    /// Forget the tables the last build did not use (a roughness sweep keeps one per
+    /// material, not one per value swept).
+    pub fn keep_used(&mut self) {
+        let used = std::mem::take(&mut self.used);
+        self.tables.retain(|k, _| used.contains(k));
+    }
 }
 
 /// Declared spectra on their way to the runtime scene. In RGB mode there are none: a
@@ -176,6 +213,7 @@ struct MaterialResolver<'a> {
     materials: &'a [MaterialDesc],
     kinds: Vec<Option<Option<MaterialKind>>>,
     declared: &'a mut Declared,
+    tables: &'a mut PlasticTables,
 }
 
 impl MaterialResolver<'_> {
@@ -343,6 +381,7 @@ impl MaterialResolver<'_> {
             *slot = Some(material_kind_in(
                 &self.materials[id.0 as usize].material,
                 self.declared,
+                self.tables,
             ));
         }
         slot.clone().flatten()
@@ -351,11 +390,15 @@ impl MaterialResolver<'_> {
 
 /// The runtime model of a leaf material (`None`: it does not scatter), in RGB mode.
 pub fn material_kind(m: &Material) -> Option<MaterialKind> {
-    material_kind_in(m, &mut Declared::rgb())
+    material_kind_in(m, &mut Declared::rgb(), &mut PlasticTables::default())
 }
 
 /// The runtime model of a leaf material, its declared spectra kept by `declared`.
-fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKind> {
+fn material_kind_in(
+    m: &Material,
+    declared: &mut Declared,
+    tables: &mut PlasticTables,
+) -> Option<MaterialKind> {
     Some(match m {
         Material::Diffuse { reflectance } => MaterialKind::Diffuse {
             reflectance: declared.color_ref(reflectance),
@@ -530,10 +573,7 @@ fn material_kind_in(m: &Material, declared: &mut Declared) -> Option<MaterialKin
             MaterialKind::RoughPlastic {
                 microfacet: Microfacet::isotropic(kind, alpha(*a)),
                 eta,
-                tables: Arc::new(RoughPlasticTables::new(
-                    Microfacet::isotropic(kind, *a),
-                    eta,
-                )),
+                tables: tables.get(kind, *a, eta),
                 diffuse: declared.color_ref(diffuse_reflectance),
                 specular: declared.color_ref(specular_reflectance),
                 nonlinear: *nonlinear,
@@ -669,6 +709,7 @@ mod tests {
             materials: mats,
             kinds: vec![None; mats.len()],
             declared: &mut Declared::rgb(),
+            tables: &mut PlasticTables::default(),
         }
         .material(MaterialId(id))
     }

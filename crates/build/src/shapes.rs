@@ -13,26 +13,19 @@ use scene::{Material, SceneDesc, Shape, TriMesh};
 use crate::materials::{Declared, float_ref};
 use crate::{BuildError, BuildOptions};
 
-/// The runtime shapes of a scene, the instancing prototypes their accelerator needs, and a
-/// warning about motion that was dropped.
-pub(crate) struct Shapes {
-    pub shapes: Vec<ShapeInfo>,
+/// The world-space geometry of a scene's shapes (one per shape, in order; instances refer to
+/// `protos`), and a warning about motion that was dropped. It depends on the shapes' own
+/// geometry only (shape, transform, motion, whether they emit), on whether the scene has
+/// textures (rotated textured spheres) and on `flatten_instances`: not on materials or
+/// lights, so that a build after a material or light edit reuses it (see [`crate::BuildCache`]).
+pub(crate) struct Geometry {
+    pub geoms: Vec<ShapeGeom>,
     pub protos: Vec<ShapeGeom>,
     pub warning: Option<String>,
 }
 
-/// Every shape of `desc`; `materials` are the resolved materials, `default_material` the
-/// index of Mitsuba's default diffuse among them, `beer` the medium of Beer absorption inside
-/// each scene material (`media::beer_media`), which a shape without a declared interior gets
-/// as its interior.
-pub(crate) fn shapes(
-    desc: &SceneDesc,
-    opts: &BuildOptions,
-    materials: &[RtMaterial],
-    default_material: u32,
-    beer: &[Option<u32>],
-    declared: &mut Declared,
-) -> Result<Shapes, BuildError> {
+/// The geometry of every shape of `desc` (see [`Geometry`]).
+pub(crate) fn geometry(desc: &SceneDesc, opts: &BuildOptions) -> Result<Geometry, BuildError> {
     // Instancing: a mesh shared (same `Arc`) by two or more shapes that do not emit is a
     // prototype, built once in its object space; each of its shapes is an instance. A mesh
     // used once is copied to world space as before. Emitters are always copied: light
@@ -50,7 +43,7 @@ pub(crate) fn shapes(
     let mut proto_of: HashMap<*const TriMesh, u32> = HashMap::new();
     let mut protos: Vec<ShapeGeom> = Vec::new();
     let mut motion_ignored = false;
-    let mut shapes = Vec::with_capacity(desc.shapes.len());
+    let mut geoms = Vec::with_capacity(desc.shapes.len());
     for s in &desc.shapes {
         // Emitters and infinite planes do not move (light sampling is static; a plane has
         // no bounds to sweep).
@@ -156,6 +149,36 @@ pub(crate) fn shapes(
             }
             (g, None) => g,
         };
+        geoms.push(geom);
+    }
+    let warning = motion_ignored.then(|| {
+        format!(
+            "{}: warning: motion blur of emitters and infinite planes is not supported; they stay at their time-0 place",
+            desc.source.display()
+        )
+    });
+    Ok(Geometry {
+        geoms,
+        protos,
+        warning,
+    })
+}
+
+/// The runtime record of every shape of `desc`, around its geometry `geoms` (from
+/// [`geometry`]): `materials` are the resolved materials, `default_material` the index of
+/// Mitsuba's default diffuse among them, `beer` the medium of Beer absorption inside each
+/// scene material (`media::beer_media`), which a shape without a declared interior gets as
+/// its interior.
+pub(crate) fn shape_infos(
+    desc: &SceneDesc,
+    geoms: Vec<ShapeGeom>,
+    materials: &[RtMaterial],
+    default_material: u32,
+    beer: &[Option<u32>],
+    declared: &mut Declared,
+) -> Vec<ShapeInfo> {
+    let mut shapes = Vec::with_capacity(geoms.len());
+    for (s, geom) in desc.shapes.iter().zip(geoms) {
         // Shapes without a material get Mitsuba's default diffuse, emitters none.
         let material = match s.material {
             Some(m) => Some(m.0),
@@ -187,17 +210,7 @@ pub(crate) fn shapes(
             },
         });
     }
-    let warning = motion_ignored.then(|| {
-        format!(
-            "{}: warning: motion blur of emitters and infinite planes is not supported; they stay at their time-0 place",
-            desc.source.display()
-        )
-    });
-    Ok(Shapes {
-        shapes,
-        protos,
-        warning,
-    })
+    shapes
 }
 
 fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {

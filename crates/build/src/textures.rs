@@ -15,10 +15,13 @@ use crate::BuildError;
 /// An opacity read from a bitmap whose file has an alpha channel uses that channel (an RGBA
 /// `map_d`, or the diffuse map itself as exporters write it); files without one use their
 /// first channel, as any scalar texture does. The alpha textures are appended to `textures`.
+/// `alphas` keeps the alpha channel read for each scene texture (`None`: opaque, or not a
+/// bitmap), so that a later build of the same scene does not read the file again.
 pub(crate) fn opacity_from_alpha(
     desc: &SceneDesc,
     shapes: &mut [ShapeInfo],
     textures: &mut Vec<Texture>,
+    alphas: &mut std::collections::HashMap<u32, Option<Texture>>,
 ) -> Result<(), BuildError> {
     let mut alpha_of: std::collections::HashMap<u32, Option<u32>> = Default::default();
     for shape in shapes.iter_mut() {
@@ -28,7 +31,15 @@ pub(crate) fn opacity_from_alpha(
         let id = match alpha_of.get(t) {
             Some(id) => *id,
             None => {
-                let id = alpha_texture(&desc.textures[*t as usize])?.map(|tex| {
+                let alpha = match alphas.get(t) {
+                    Some(a) => a.clone(),
+                    None => {
+                        let a = alpha_texture(&desc.textures[*t as usize])?;
+                        alphas.insert(*t, a.clone());
+                        a
+                    }
+                };
+                let id = alpha.map(|tex| {
                     textures.push(tex);
                     textures.len() as u32 - 1
                 });

@@ -162,6 +162,7 @@ pub(crate) fn apply(
     desc.integrator = IntegratorDesc::Path(path);
     if let Some(env) = &args.envmap {
         desc.emitters.push(EmitterDesc {
+            name: None,
             medium: None,
             emitter: envmap_emitter(env),
             loc: Loc::file(env),

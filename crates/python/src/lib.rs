@@ -13,16 +13,17 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
 
 use pyo3::create_exception;
-use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyKeyError, PyOSError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyByteArray, PyDict};
+use pyo3::types::{PyBool, PyByteArray, PyDict, PyString};
 
 use build::BuildOptions;
+use build::params::Value;
 use render::compare::{CompareOptions, Comparison, Reference, TestImages};
 use render::film::Image;
 use render::math::Vec3;
@@ -83,14 +84,91 @@ fn load_error(py: Python<'_>, e: &LoadError, rename: Option<(&Path, &str)>) -> P
     scene_error(py, message, &file, e.loc.line, e.loc.col)
 }
 
-/// A loaded scene: the format-independent scene description (see `docs/architecture.md`).
-/// Made by `load_file` / `load_string`; rendered by `render`. Immutable: rendering it from
-/// several threads at once is safe.
+/// A loaded scene: the format-independent scene description (see `docs/architecture.md`),
+/// and what its builds read from files or derived from its geometry (`build::BuildCache`),
+/// kept for the next render. Made by `load_file` / `load_string` / `load_dict`; rendered by
+/// `render`; its editable values are listed by `parameters()` and changed by `update()`
+/// without a reload. Rendering it from several threads at once is safe.
 #[pyclass(frozen, module = "penumbra._penumbra")]
 struct Scene {
-    desc: Arc<SceneDesc>,
+    /// The description and the build cache, changed together: a build (under the lock)
+    /// always sees a cache that matches the description it builds.
+    state: Mutex<SceneState>,
     /// What it was loaded from (a path, or `<string>`).
     source: String,
+}
+
+struct SceneState {
+    desc: SceneDesc,
+    cache: build::BuildCache,
+}
+
+impl Scene {
+    fn new(desc: SceneDesc, source: String) -> Scene {
+        Scene {
+            state: Mutex::new(SceneState {
+                desc,
+                cache: build::BuildCache::default(),
+            }),
+            source,
+        }
+    }
+
+    /// The state; a panic while it was held (a bug, reported as `InternalError`) leaves it
+    /// consistent: the cache keeps only what was built completely.
+    fn lock(&self) -> MutexGuard<'_, SceneState> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+/// A parameter's value as Python sees it: a float, an (r, g, b) / (x, y, z) tuple, or a
+/// 4×4 matrix as a list of rows.
+fn value_to_py<'py>(py: Python<'py>, v: &Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        Value::Float(f) => f64::from(*f).into_pyobject(py)?.into_any(),
+        Value::Vec3([a, b, c]) => (f64::from(*a), f64::from(*b), f64::from(*c))
+            .into_pyobject(py)?
+            .into_any(),
+        Value::Matrix(m) => {
+            let rows: Vec<Vec<f64>> = (0..4)
+                .map(|r| (0..4).map(|c| f64::from(m.col(c)[r])).collect())
+                .collect();
+            rows.into_pyobject(py)?.into_any()
+        }
+    })
+}
+
+/// A Python value as a parameter's value (its kind is checked against the key by
+/// `build::params::set`).
+fn value_from_py(key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
+    let wrong = || {
+        PyTypeError::new_err(format!(
+            "parameter '{key}': expected a float, a sequence of 3 floats or a 4x4 matrix,              found {}",
+            v.get_type()
+                .name()
+                .map_or_else(|_| "?".to_string(), |n| n.to_string())
+        ))
+    };
+    if v.is_instance_of::<PyBool>() || v.is_instance_of::<PyString>() {
+        return Err(wrong());
+    }
+    if let Ok(f) = v.extract::<f64>() {
+        return Ok(Value::Float(f as f32));
+    }
+    if let Ok(xs) = v.extract::<Vec<f64>>() {
+        return match xs.as_slice() {
+            [a, b, c] => Ok(Value::Vec3([*a as f32, *b as f32, *c as f32])),
+            _ => Err(wrong()),
+        };
+    }
+    if let Ok(rows) = v.extract::<Vec<Vec<f64>>>()
+        && rows.len() == 4
+        && rows.iter().all(|r| r.len() == 4)
+    {
+        let cols: [f32; 16] = std::array::from_fn(|i| rows[i % 4][i / 4] as f32);
+        return Ok(Value::Matrix(render::math::Mat4::from_cols_array(&cols)));
+    }
+    Err(wrong())
 }
 
 #[pymethods]
@@ -104,32 +182,141 @@ impl Scene {
     /// The loader's warnings (ignored parameters, substituted defaults), as the CLI prints them.
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.desc.warnings.iter().map(|w| w.to_string()).collect()
+        self.lock()
+            .desc
+            .warnings
+            .iter()
+            .map(|w| w.to_string())
+            .collect()
     }
 
     /// The number of sensors (cameras) in the scene; `render(sensor=i)` picks one.
     #[getter]
     fn sensor_count(&self) -> usize {
-        self.desc.sensors.len()
+        self.lock().desc.sensors.len()
     }
 
     /// The film size `(width, height)` of sensor `sensor`, as the scene declares it.
     #[pyo3(signature = (sensor = 0))]
     fn resolution(&self, sensor: usize) -> PyResult<(u32, u32)> {
+        let state = self.lock();
         let s =
-            self.desc.sensors.get(sensor).ok_or_else(|| {
+            state.desc.sensors.get(sensor).ok_or_else(|| {
                 PyValueError::new_err(format!("the scene has no sensor {sensor}"))
             })?;
         Ok((s.film.width, s.film.height))
     }
 
+    /// parameters() -> dict: the scene's editable values by key, with their current values.
+    ///
+    /// Keys are `"<object>.<parameter>"`, Mitsuba 3's `traverse()` names without `.value`:
+    /// `<object>` is the object's `id` in the scene file; an object without one is named by
+    /// what holds it (a shape's inline material `"<shape>.bsdf"`, the material a `twosided`
+    /// wraps `"<twosided>.brdf_0"` / `".brdf_1"`, the one a `normalmap`, `bumpmap` or `mask`
+    /// wraps `"<outer>.nested_bsdf"`, a `blendbsdf`'s `"<outer>.bsdf_0"` / `".bsdf_1"`), else by
+    /// kind and index in file order (`shape_3`, `bsdf_2`, `emitter_0`, `sensor_0`); a shape's
+    /// area light is `"<shape>.emitter"`. `<parameter>` is the scene file's name:
+    /// `reflectance`, `diffuse_reflectance`, `specular_reflectance`, `alpha` (sets `alpha_u`
+    /// and `alpha_v` together; listed when they are equal), `base_color`, `roughness`,
+    /// `metallic`, `intensity`, `radiance`, `irradiance`, `scale`, `position`, `direction`,
+    /// `fov`, `to_world`...
+    ///
+    /// Values are floats, `(r, g, b)` or `(x, y, z)` tuples, and 4x4 matrices as lists of
+    /// rows (`to_world` of shapes, sensors and lights). Only constants are listed: a parameter
+    /// given by a texture or a declared spectrum (a named conductor's `eta`) is not.
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        guard(|| {
+            let params = build::params::parameters(&self.lock().desc);
+            let d = PyDict::new(py);
+            for p in params {
+                d.set_item(p.key, value_to_py(py, &p.value)?)?;
+            }
+            Ok(d)
+        })
+    }
+
+    /// update(values) -> list: set parameters (keys as `parameters()` lists them) without
+    /// reloading the scene.
+    ///
+    /// Values: a float, a sequence of 3 floats (a float for a colour is a grey), a 4x4
+    /// matrix (nested sequences or a NumPy array, rows first). All the edits are made or
+    /// none: an unknown key raises `KeyError`, a value of the wrong kind `TypeError`, a
+    /// value out of range (not finite, a negative roughness) `ValueError`.
+    ///
+    /// The next `render` rebuilds only what the edits made stale: material, light and camera
+    /// edits keep the acceleration structure, the meshes and the decoded textures; a shape's
+    /// `to_world` rebuilds the acceleration structure. The image is the one a reload of the
+    /// scene file edited the same way gives, bit for bit. Returns the kinds of change made
+    /// (`"material"`, `"light"`, `"camera"`, `"geometry"`).
+    fn update(&self, py: Python<'_>, values: &Bound<'_, PyDict>) -> PyResult<Vec<String>> {
+        guard(|| {
+            let mut edits = Vec::with_capacity(values.len());
+            for (k, v) in values.iter() {
+                let key: String = k.extract().map_err(|_| {
+                    PyTypeError::new_err(format!(
+                        "parameter keys are strings, found {}",
+                        k.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
+                    ))
+                })?;
+                let value = value_from_py(&key, &v)?;
+                edits.push((key, value));
+            }
+            // All or nothing: the edits go to a copy, which replaces the description only
+            // when every one of them is valid.
+            let result = py.detach(|| {
+                let mut state = self.lock();
+                let mut desc = state.desc.clone();
+                let mut changed = Vec::new();
+                for (key, value) in &edits {
+                    let c = build::params::set(&mut desc, key, *value)?;
+                    if !changed.contains(&c) {
+                        changed.push(c);
+                    }
+                }
+                state.desc = desc;
+                for c in &changed {
+                    state.cache.invalidate(*c);
+                }
+                Ok::<_, build::params::ParamError>(changed)
+            });
+            let changed = result.map_err(|e| match e {
+                build::params::ParamError::Unknown { .. } => PyKeyError::new_err(e.to_string()),
+                build::params::ParamError::WrongType { .. } => PyTypeError::new_err(e.to_string()),
+                build::params::ParamError::Invalid { .. } => PyValueError::new_err(e.to_string()),
+            })?;
+            Ok(changed
+                .into_iter()
+                .map(|c| {
+                    match c {
+                        build::Changed::Material => "material",
+                        build::Changed::Light => "light",
+                        build::Changed::Camera => "camera",
+                        build::Changed::Geometry => "geometry",
+                    }
+                    .to_string()
+                })
+                .collect())
+        })
+    }
+
+    /// Whether the next render reuses a built acceleration structure (and decoded textures):
+    /// `{"geometry": bool, "textures": bool}`.
+    fn cache_info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let state = self.lock();
+        let d = PyDict::new(py);
+        d.set_item("geometry", state.cache.has_geometry())?;
+        d.set_item("textures", state.cache.has_textures())?;
+        Ok(d)
+    }
+
     fn __repr__(&self) -> String {
+        let state = self.lock();
         format!(
             "<penumbra.Scene from {} ({} shapes, {} emitters, {} sensors)>",
             self.source,
-            self.desc.shapes.len(),
-            self.desc.emitters.len(),
-            self.desc.sensors.len()
+            state.desc.shapes.len(),
+            state.desc.emitters.len(),
+            state.desc.sensors.len()
         )
     }
 }
@@ -139,7 +326,7 @@ fn load_document(
     path: &Path,
     defines: Vec<(String, String)>,
     rename: Option<(&Path, &str)>,
-) -> PyResult<Arc<SceneDesc>> {
+) -> PyResult<SceneDesc> {
     let xml = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
@@ -162,7 +349,7 @@ fn load_document(
         .map_err(panic_error)?
         .map_err(|e| load_error(py, &e, rename))?;
     match doc {
-        Document::Scene(desc) => Ok(Arc::new(*desc)),
+        Document::Scene(desc) => Ok(*desc),
         Document::Test(_) => Err(scene_error(
             py,
             format!(
@@ -182,10 +369,7 @@ fn load_document(
 fn load_file(py: Python<'_>, path: PathBuf, defines: Vec<(String, String)>) -> PyResult<Scene> {
     guard(|| {
         let desc = load_document(py, &path, defines, None)?;
-        Ok(Scene {
-            desc,
-            source: path.display().to_string(),
-        })
+        Ok(Scene::new(desc, path.display().to_string()))
     })
 }
 
@@ -223,10 +407,7 @@ fn load_string(
             .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
         let result = load_document(py, &path, defines, Some((&path, "<string>")));
         let _ = std::fs::remove_dir_all(&dir);
-        Ok(Scene {
-            desc: result?,
-            source: "<string>".into(),
-        })
+        Ok(Scene::new(result?, "<string>".into()))
     })
 }
 
@@ -301,16 +482,19 @@ fn py_render<'py>(
                 "resolution must be between 1 and 65536 per axis, found ({w}, {h})"
             )));
         }
-        if sensor >= scene.desc.sensors.len() {
+        let (sensors, scene_integrator) = {
+            let state = scene.lock();
+            (state.desc.sensors.len(), state.desc.integrator.clone())
+        };
+        if sensor >= sensors {
             return Err(PyValueError::new_err(format!(
-                "the scene has no sensor {sensor} ({} sensors)",
-                scene.desc.sensors.len()
+                "the scene has no sensor {sensor} ({sensors} sensors)"
             )));
         }
         let integrator = match integrator {
             Some(s) => {
                 let mut i = build::spec::parse_integrator(s).map_err(PyValueError::new_err)?;
-                build::spec::keep_scene_max_depth(&scene.desc.integrator, &mut i);
+                build::spec::keep_scene_max_depth(&scene_integrator, &mut i);
                 Some(i)
             }
             None => None,
@@ -335,7 +519,6 @@ fn py_render<'py>(
             .num_threads(threads.unwrap_or(0))
             .build()
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        let desc = scene.desc.clone();
         let cancel = Arc::new(AtomicBool::new(false));
         let finished = AtomicBool::new(false);
         let shared = Shared::default();
@@ -345,7 +528,14 @@ fn py_render<'py>(
                 scene,
                 integrator,
                 spp,
-            } = build::build(&desc, &opts).map_err(RenderFailure::Scene)?;
+            } = {
+                // The build reuses what earlier renders read and built (textures, the
+                // acceleration structure), as far as `update` left it valid.
+                let mut state = scene.lock();
+                let state = &mut *state;
+                build::build_cached(&state.desc, &opts, &mut state.cache)
+                    .map_err(RenderFailure::Scene)?
+            };
             if let Some(why) = integrator.unsupported(&scene) {
                 return Err(RenderFailure::Value(why.to_string()));
             }

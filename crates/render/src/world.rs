@@ -3,6 +3,8 @@
 //! hit, occlusion, parameters at a hit, light selection). Built by [`crate::build`]; the
 //! integrators, lights and materials read it and never the builder.
 
+use std::sync::Arc;
+
 use base::SamplerKind;
 use base::spectrum::DeclaredSpectrum;
 
@@ -44,7 +46,9 @@ pub struct SamplerSettings {
 pub struct Scene {
     /// The colour mode the scene was built for and its paths run in.
     pub mode: base::RenderMode,
-    pub accel: Accel,
+    /// Shared, so that a build of an edited description that keeps the geometry (a material
+    /// or light edit from Python's `scene.update`) reuses the tree instead of rebuilding it.
+    pub accel: Arc<Accel>,
     pub shapes: Vec<ShapeInfo>,
     pub materials: Vec<RtMaterial>,
     /// Findings of the build step worth telling the user (unsupported features).

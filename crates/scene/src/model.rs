@@ -984,6 +984,8 @@ pub struct EmitterDesc {
     pub emitter: Emitter,
     /// The medium the emitter sits in (Mitsuba `<ref id="..."/>` in an emitter).
     pub medium: Option<MediumId>,
+    /// The emitter's id in the scene file (Mitsuba's `id`), when it has one.
+    pub name: Option<String>,
     pub loc: Loc,
 }
 

@@ -136,6 +136,7 @@ fn env_scene(mapping: EnvMapping) -> SceneDesc {
     render::image_io::write_image(&path, &img).unwrap();
     let mut d = base();
     d.emitters.push(EmitterDesc {
+        name: None,
         medium: None,
         emitter: Emitter::EnvMap {
             path,

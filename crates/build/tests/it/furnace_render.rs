@@ -47,6 +47,7 @@ fn furnace_in(material: Material, fov: f32, mode: scene::RenderMode, spp: u32) -
         loc: Default::default(),
     });
     desc.emitters.push(EmitterDesc {
+        name: None,
         medium: None,
         emitter: Emitter::Constant {
             radiance: Vec3::ONE.into(),

@@ -29,6 +29,7 @@ mod nori;
 mod nori_vdb_box;
 mod normal_map;
 mod null_path;
+mod params_update;
 mod path_variants;
 mod pbrt_grid_media;
 mod pbrt_image_lights;

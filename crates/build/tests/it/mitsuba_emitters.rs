@@ -129,6 +129,7 @@ fn sky_scene(d: SunSkyDesc) -> SceneDesc {
     };
     desc.shapes.clear();
     desc.emitters = vec![EmitterDesc {
+        name: None,
         emitter: Emitter::SunSky(d),
         medium: None,
         loc: Default::default(),

@@ -68,6 +68,7 @@ fn scene_desc(w: u32, h: u32, spp: u32) -> SceneDesc {
             loc: Default::default(),
         }],
         emitters: vec![EmitterDesc {
+            name: None,
             medium: None,
             emitter: Emitter::Constant {
                 radiance: Vec3::ONE.into(),

@@ -1158,6 +1158,7 @@ impl Builder {
                 }
             };
             self.desc.emitters.push(EmitterDesc {
+                name: None,
                 medium: None,
                 emitter,
                 loc,

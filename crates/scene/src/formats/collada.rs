@@ -1042,6 +1042,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
             }
         };
         self.desc.emitters.push(EmitterDesc {
+            name: None,
             medium: None,
             emitter,
             loc,

@@ -681,6 +681,7 @@ impl Parser<'_> {
         let color = self.color(color);
         self.light_id(l, id)?;
         self.desc.emitters.push(EmitterDesc {
+            name: None,
             medium: None,
             emitter: crate::Emitter::Point {
                 position,

@@ -2258,6 +2258,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                         }
                         self.scene.emitters.push(EmitterDesc {
                             medium,
+                            name: c.id().map(str::to_string),
                             emitter: e,
                             loc: cp.loc().clone(),
                         });

@@ -1611,6 +1611,7 @@ impl Loader {
         };
         self.finish_params("LightSource", ty, p);
         self.scene.emitters.push(EmitterDesc {
+            name: None,
             emitter,
             medium,
             loc: loc.clone(),
