@@ -355,7 +355,7 @@ def render(
     The GIL is released while rendering. Ctrl-C (SIGINT) stops the render at the end of the
     current pass (passes last about 0.25 s) and raises ``KeyboardInterrupt``.
     """
-    buf, width, height, _spp, _warnings = _penumbra.render(
+    buf, width, height, _spp, _warnings, _state = _penumbra.render(
         scene,
         spp=spp,
         seed=seed,

@@ -18,7 +18,10 @@ class InternalError(RuntimeError):
 class Scene:
     """A loaded scene, editable with ``update`` (safe to render from several threads at
     once). It keeps what its renders built (textures, the acceleration structure) for the
-    next render, as far as ``update`` leaves it valid."""
+    next render, as far as ``update`` leaves it valid. It pickles (its file path or text,
+    parameters and edits), so Dask can send it to workers."""
+
+    def __reduce__(self) -> Tuple[object, tuple]: ...
 
     @property
     def source(self) -> str:
@@ -57,7 +60,12 @@ def render(
     sensor: int = 0,
     mode: Optional[str] = None,
     progress: Optional[Callable[[float], object]] = None,
-) -> Tuple[bytearray, int, int, int, List[str]]: ...
+    shard: Optional[Tuple[int, int]] = None,
+) -> Tuple[bytearray, int, int, int, List[str], Optional[bytes]]: ...
+def merge_states(parts: Sequence[bytes]) -> Tuple[bytearray, int, int, int]: ...
+def _rebuild_scene(
+    kind: str, payload: str, format: str, defines: List[Tuple[str, str]], edits: dict
+) -> Scene: ...
 def write(path: str, data: bytes, width: int, height: int) -> None: ...
 def read(path: str, srgb: bool = True) -> Tuple[bytearray, int, int]: ...
 def compare(

@@ -2,7 +2,8 @@
 //! Python package so that both turn the same words into the same scene: `--integrator`'s
 //! `NAME[:ARGS]` ([`parse_integrator`]), `--filter KIND` ([`parse_filter`]), `--mode`
 //! ([`parse_mode`]) and the rule that a replacement integrator keeps the scene's path length
-//! ([`keep_scene_max_depth`]).
+//! ([`keep_scene_max_depth`]); and how both name a render and split it into shards
+//! ([`identity`], [`shard_items`]).
 
 use scene::IntegratorDesc;
 
@@ -199,6 +200,32 @@ pub fn parse_integrator(s: &str) -> Result<IntegratorDesc, String> {
             ));
         }
     })
+}
+
+/// The identity of a render (shards and checkpoints, `render::film::state`): the loaded
+/// scene (after every parameter and override), what else changes the image (`what`: the
+/// build options, samples per pixel, tile size, chunk) and the program's version, hashed
+/// from their `Debug` text (streamed: no copy of the meshes). The same on every machine
+/// for the same inputs; the CLI and the Python package compute it alike.
+pub fn identity(desc: &scene::SceneDesc, what: &impl std::fmt::Debug) -> u64 {
+    use std::fmt::Write;
+    let mut h = render::film::state::Fnv::default();
+    let _ = write!(
+        h,
+        "{} {} {:?} {:?}",
+        env!("CARGO_PKG_VERSION"),
+        render::film::state::FORMAT,
+        desc,
+        what
+    );
+    h.0
+}
+
+/// Shard `i` of `count` of a render's `n` work items: the i-th of `count` nearly equal
+/// consecutive ranges (they cover `0..n` once).
+pub fn shard_items(i: u32, count: u32, n: u64) -> std::ops::Range<u64> {
+    let at = |k: u32| (n as u128 * k as u128 / count.max(1) as u128) as u64;
+    at(i.min(count))..at((i + 1).min(count))
 }
 
 /// `--mode`: `rgb`, `spectral` or a Mitsuba 3 variant name, which selects its colour part.

@@ -1197,11 +1197,11 @@ fn split_render(
         .work_items(scene, ropts)
         .map_err(Failure::input)?;
     let what = (&job.build, ropts.spp, ropts.tile_size, ropts.chunk_spp);
-    let identity = split::identity(desc, &what);
+    let identity = build::spec::identity(desc, &what);
     let range = match &s.shard {
         Some(shard) => {
             let i = shard.resolve()?;
-            let r = split::Shard::items(i, shard.count, n);
+            let r = build::spec::shard_items(i, shard.count, n);
             ropts.items = Some(r.clone());
             r
         }

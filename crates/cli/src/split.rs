@@ -12,10 +12,9 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use render::film::Film;
-use render::film::state::{self, FilmState, Fnv, StateInfo};
+use render::film::state::{self, FilmState, StateInfo};
 use render::image_io::{write_image, write_image_tonemapped};
 use render::render::{Progress, RenderObserver};
-use scene::SceneDesc;
 
 use crate::Failure;
 
@@ -83,30 +82,6 @@ impl Shard {
         }
         Ok(i)
     }
-
-    /// Shard `i`'s items of `0..n`: the i-th of K nearly equal consecutive ranges.
-    pub fn items(i: u32, count: u32, n: u64) -> Range<u64> {
-        let at = |k: u32| (n as u128 * k as u128 / count as u128) as u64;
-        at(i)..at(i + 1)
-    }
-}
-
-/// The identity of a render: the loaded scene (after every `-D` and command-line override),
-/// the options that change the image and this program's version. Shards and checkpoints
-/// of one render share it on any machine; anything else differs.
-pub fn identity(desc: &SceneDesc, options: &impl std::fmt::Debug) -> u64 {
-    use std::fmt::Write;
-    let mut h = Fnv::default();
-    // Hashed as the Debug text, streamed: no copy of the (possibly large) meshes.
-    let _ = write!(
-        h,
-        "{} {} {:?} {:?}",
-        env!("CARGO_PKG_VERSION"),
-        state::FORMAT,
-        desc,
-        options,
-    );
-    h.0
 }
 
 /// Where a render's film state goes: the periodic checkpoint (and how often), and whether
@@ -260,7 +235,7 @@ mod tests {
             for k in [1u32, 3, 7] {
                 let mut at = 0;
                 for i in 0..k {
-                    let r = Shard::items(i, k, n);
+                    let r = build::spec::shard_items(i, k, n);
                     assert_eq!(r.start, at);
                     at = r.end;
                 }

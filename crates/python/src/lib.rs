@@ -20,7 +20,7 @@ use std::time::Duration;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyKeyError, PyOSError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyByteArray, PyDict, PyString};
+use pyo3::types::{PyBool, PyByteArray, PyBytes, PyDict, PyString};
 
 use build::BuildOptions;
 use build::params::Value;
@@ -96,21 +96,34 @@ struct Scene {
     state: Mutex<SceneState>,
     /// What it was loaded from (a path, or `<string>`).
     source: String,
+    /// How to load it again (pickling: Dask sends scenes to its workers this way).
+    origin: Origin,
+}
+
+/// A scene's file or text and its parameters, from which a copy is loaded elsewhere.
+#[derive(Clone)]
+enum Origin {
+    File(PathBuf, Vec<(String, String)>),
+    Text(String, String, Vec<(String, String)>),
 }
 
 struct SceneState {
     desc: SceneDesc,
     cache: build::BuildCache,
+    /// The `update` edits made since loading, in order (replayed on a copy).
+    edits: Vec<(String, Value)>,
 }
 
 impl Scene {
-    fn new(desc: SceneDesc, source: String) -> Scene {
+    fn new(desc: SceneDesc, source: String, origin: Origin) -> Scene {
         Scene {
             state: Mutex::new(SceneState {
                 desc,
                 cache: build::BuildCache::default(),
+                edits: Vec::new(),
             }),
             source,
+            origin,
         }
     }
 
@@ -143,7 +156,8 @@ fn value_to_py<'py>(py: Python<'py>, v: &Value) -> PyResult<Bound<'py, PyAny>> {
 fn value_from_py(key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
     let wrong = || {
         PyTypeError::new_err(format!(
-            "parameter '{key}': expected a float, a sequence of 3 floats or a 4x4 matrix,              found {}",
+            "parameter '{key}': expected a float, a sequence of 3 floats or a 4x4 matrix, \
+             found {}",
             v.get_type()
                 .name()
                 .map_or_else(|_| "?".to_string(), |n| n.to_string())
@@ -274,6 +288,7 @@ impl Scene {
                     }
                 }
                 state.desc = desc;
+                state.edits.extend(edits.iter().cloned());
                 for c in &changed {
                     state.cache.invalidate(*c);
                 }
@@ -307,6 +322,34 @@ impl Scene {
         d.set_item("geometry", state.cache.has_geometry())?;
         d.set_item("textures", state.cache.has_textures())?;
         Ok(d)
+    }
+
+    /// Pickling (Dask, multiprocessing): the scene is loaded again from its file or text
+    /// with its parameters, and its `update` edits are replayed. A file must be at the same
+    /// path where the copy is loaded.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let rebuild = py.import("penumbra._penumbra")?.getattr("_rebuild_scene")?;
+        let edits = PyDict::new(py);
+        for (k, v) in &self.lock().edits {
+            edits.set_item(k, value_to_py(py, v)?)?;
+        }
+        let args = match &self.origin {
+            Origin::File(path, defines) => (
+                "file",
+                path.display().to_string(),
+                "",
+                defines.clone(),
+                edits,
+            ),
+            Origin::Text(text, format, defines) => (
+                "text",
+                text.clone(),
+                format.as_str(),
+                defines.clone(),
+                edits,
+            ),
+        };
+        Ok((rebuild, args.into_pyobject(py)?.into_any()))
     }
 
     fn __repr__(&self) -> String {
@@ -368,8 +411,11 @@ fn load_document(
 #[pyo3(signature = (path, defines = Vec::new()))]
 fn load_file(py: Python<'_>, path: PathBuf, defines: Vec<(String, String)>) -> PyResult<Scene> {
     guard(|| {
+        let defines_kept = defines.clone();
         let desc = load_document(py, &path, defines, None)?;
-        Ok(Scene::new(desc, path.display().to_string()))
+        let absolute = std::path::absolute(&path).unwrap_or_else(|_| path.clone());
+        let origin = Origin::File(absolute, defines_kept);
+        Ok(Scene::new(desc, path.display().to_string(), origin))
     })
 }
 
@@ -405,9 +451,10 @@ fn load_string(
         std::fs::create_dir_all(&dir)
             .and_then(|()| std::fs::write(&path, text))
             .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let origin = Origin::Text(text.to_string(), ext.clone(), defines.clone());
         let result = load_document(py, &path, defines, Some((&path, "<string>")));
         let _ = std::fs::remove_dir_all(&dir);
-        Ok(Scene::new(result?, "<string>".into()))
+        Ok(Scene::new(result?, "<string>".into(), origin))
     })
 }
 
@@ -432,6 +479,8 @@ struct Rendered {
     height: u32,
     spp: u32,
     warnings: Vec<String>,
+    /// A shard's film state.
+    state: Option<Vec<u8>>,
 }
 
 /// Why the render thread stopped without an image.
@@ -443,21 +492,31 @@ enum RenderFailure {
 
 /// How long one pass of the progressive loop lasts (the CLI's is 1 s). Cancellation
 /// (Ctrl-C) takes effect at the end of a pass, so this bounds how long KeyboardInterrupt
-/// waits; a shorter pass changes only the f64 association of the film's sums (see
-/// `render::film::accum`), far below the f32 of the image.
+/// waits; the image does not depend on it (the film's sums are exact: see
+/// `render::film::accum`).
 const PASS_DURATION: Duration = Duration::from_millis(250);
 
 /// How often the waiting thread takes the GIL to check for signals and report progress.
 const POLL: Duration = Duration::from_millis(20);
 
-/// What `render` returns: the pixels, width, height, samples per pixel done, warnings.
-type Rendering<'py> = (Bound<'py, PyByteArray>, u32, u32, u32, Vec<String>);
+/// What `render` returns: the pixels, width, height, samples per pixel done, warnings and a
+/// shard's film state.
+type Rendering<'py> = (
+    Bound<'py, PyByteArray>,
+    u32,
+    u32,
+    u32,
+    Vec<String>,
+    Option<Bound<'py, PyBytes>>,
+);
 
-/// render(scene, spp, seed, resolution, integrator, threads, sensor, mode, progress)
-///   -> (bytearray, width, height, spp, warnings)
+/// render(scene, spp, seed, resolution, integrator, threads, sensor, mode, progress, shard)
+///   -> (bytearray, width, height, spp, warnings, state)
+/// With `shard=(i, k)`, renders the i-th of k parts of the work and `state` is its film
+/// state (bytes, for `merge_states`); else `state` is None.
 #[pyfunction(name = "render")]
 #[pyo3(signature = (scene, spp = None, seed = None, resolution = None, integrator = None,
-                    threads = None, sensor = 0, mode = None, progress = None))]
+                    threads = None, sensor = 0, mode = None, progress = None, shard = None))]
 #[allow(clippy::too_many_arguments)]
 fn py_render<'py>(
     py: Python<'py>,
@@ -470,8 +529,16 @@ fn py_render<'py>(
     sensor: usize,
     mode: Option<&str>,
     progress: Option<Bound<'py, PyAny>>,
+    shard: Option<(u32, u32)>,
 ) -> PyResult<Rendering<'py>> {
     guard(|| {
+        if let Some((i, k)) = shard
+            && i >= k
+        {
+            return Err(PyValueError::new_err(format!(
+                "shard ({i}, {k}): the index must be below the count"
+            )));
+        }
         if spp == Some(0) {
             return Err(PyValueError::new_err("spp must be at least 1"));
         }
@@ -522,31 +589,63 @@ fn py_render<'py>(
         let cancel = Arc::new(AtomicBool::new(false));
         let finished = AtomicBool::new(false);
         let shared = Shared::default();
+        let source = scene.source.clone();
 
         let work = || -> Result<Rendered, RenderFailure> {
-            let build::Built {
-                scene,
-                integrator,
-                spp,
-            } = {
+            let defaults = RenderOptions::default();
+            let (
+                build::Built {
+                    scene,
+                    integrator,
+                    spp,
+                },
+                identity,
+            ) = {
                 // The build reuses what earlier renders read and built (textures, the
                 // acceleration structure), as far as `update` left it valid.
                 let mut state = scene.lock();
                 let state = &mut *state;
-                build::build_cached(&state.desc, &opts, &mut state.cache)
-                    .map_err(RenderFailure::Scene)?
+                let built = build::build_cached(&state.desc, &opts, &mut state.cache)
+                    .map_err(RenderFailure::Scene)?;
+                // A shard's render is named by what makes its image (see the CLI's).
+                let what = (&opts, built.spp, defaults.tile_size, defaults.chunk_spp);
+                let identity = shard.map(|_| build::spec::identity(&state.desc, &what));
+                (built, identity)
             };
             if let Some(why) = integrator.unsupported(&scene) {
                 return Err(RenderFailure::Value(why.to_string()));
             }
-            let ropts = RenderOptions {
+            let mut ropts = RenderOptions {
                 spp,
                 cancel: cancel.clone(),
                 pass_duration: PASS_DURATION,
                 ..RenderOptions::default()
             };
+            // A shard: its items, and the state that names the render.
+            let info = match shard {
+                None => None,
+                Some((i, k)) => {
+                    let n = integrator
+                        .work_items(&scene, &ropts)
+                        .map_err(RenderFailure::Value)?;
+                    let items = build::spec::shard_items(i, k, n);
+                    ropts.items = Some(items.clone());
+                    Some(render::film::state::StateInfo {
+                        identity: identity.unwrap_or_default(),
+                        description: format!("{source} ({} spp)", ropts.spp),
+                        items_total: n,
+                        items,
+                        spp: ropts.spp,
+                        tonemap: scene.film.tonemap.clone(),
+                    })
+                }
+            };
             let outcome =
                 pool.install(|| render::render::render(&scene, &integrator, &ropts, &shared));
+            let state = info.map(|mut info| {
+                info.items = outcome.items.clone();
+                render::film::state::to_bytes(&info, &outcome.film)
+            });
             let image: Image = outcome.film.develop();
             let mut warnings: Vec<String> = scene.warnings.iter().map(|w| w.to_string()).collect();
             let bad = outcome.film.nonfinite_count();
@@ -561,6 +660,7 @@ fn py_render<'py>(
                 pixels: image.pixels,
                 spp: outcome.spp,
                 warnings,
+                state,
             })
         };
 
@@ -628,6 +728,7 @@ fn py_render<'py>(
             rendered.height,
             rendered.spp,
             rendered.warnings,
+            rendered.state.map(|s| PyBytes::new(py, &s)),
         ))
     })
 }
@@ -833,6 +934,55 @@ fn denoiser_available(py: Python<'_>) -> bool {
     py.detach(|| render::denoise::Oidn::load().is_ok())
 }
 
+/// _rebuild_scene(kind, payload, format, defines, edits) -> Scene: what unpickling a scene
+/// calls (see `Scene.__reduce__`).
+#[pyfunction]
+fn _rebuild_scene(
+    py: Python<'_>,
+    kind: &str,
+    payload: String,
+    format: &str,
+    defines: Vec<(String, String)>,
+    edits: Bound<'_, PyDict>,
+) -> PyResult<Scene> {
+    let scene = match kind {
+        "file" => load_file(py, PathBuf::from(payload), defines)?,
+        "text" => load_string(py, &payload, format, defines)?,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unknown scene origin '{other}'"
+            )));
+        }
+    };
+    if !edits.is_empty() {
+        scene.update(py, &edits)?;
+    }
+    Ok(scene)
+}
+
+/// merge_states(parts) -> (bytearray, width, height, spp): the image of a render from the
+/// film states of its shards (`render(..., shard=(i, k))`), bit for bit the single
+/// process's; refuses states of other renders and names missing or doubled work.
+#[pyfunction]
+fn merge_states<'py>(
+    py: Python<'py>,
+    parts: Vec<Vec<u8>>,
+) -> PyResult<(Bound<'py, PyByteArray>, u32, u32, u32)> {
+    guard(|| {
+        let named: Vec<(String, &[u8])> = parts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (format!("part {i}"), p.as_slice()))
+            .collect();
+        let whole = py
+            .detach(|| render::film::state::merge_bytes(&named))
+            .map_err(PyValueError::new_err)?;
+        let image = whole.film.develop();
+        let bytes = PyByteArray::new(py, &pixel_bytes(&image.pixels));
+        Ok((bytes, image.width, image.height, whole.info.spp))
+    })
+}
+
 #[pymodule]
 fn _penumbra(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Scene>()?;
@@ -841,6 +991,8 @@ fn _penumbra(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load_file, m)?)?;
     m.add_function(wrap_pyfunction!(load_string, m)?)?;
     m.add_function(wrap_pyfunction!(py_render, m)?)?;
+    m.add_function(wrap_pyfunction!(merge_states, m)?)?;
+    m.add_function(wrap_pyfunction!(_rebuild_scene, m)?)?;
     m.add_function(wrap_pyfunction!(py_write, m)?)?;
     m.add_function(wrap_pyfunction!(py_read, m)?)?;
     m.add_function(wrap_pyfunction!(py_compare, m)?)?;

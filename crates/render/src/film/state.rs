@@ -512,34 +512,28 @@ pub fn check_cover(states: &[(String, StateInfo)]) -> Result<(), String> {
     }
 }
 
-/// Merges state files of one render that cover its items once into the state of the
-/// whole: headers (and checksums) first, so that a wrong set of files is refused before
-/// anything is decoded; then the files decoded in parallel, each worker adding into a film
-/// of its own (one film per thread, not per file), and those films added. Errors name the
-/// file.
-pub fn merge_files(paths: &[std::path::PathBuf]) -> Result<FilmState, String> {
+/// Merges states of one render (file contents, named for messages) that cover its items
+/// once into the state of the whole: headers (and checksums) first, so that a wrong set is
+/// refused before anything is decoded; then the states decoded in parallel, each worker
+/// adding into a film of its own (one film per thread, not per state), and those films
+/// added.
+pub fn merge_bytes(parts: &[(String, &[u8])]) -> Result<FilmState, String> {
     use rayon::prelude::*;
-    let data: Vec<Vec<u8>> = paths
-        .par_iter()
-        .map(|p| std::fs::read(p).map_err(|e| format!("{}: cannot read: {e}", p.display())))
-        .collect::<Result<_, _>>()?;
-    let infos = paths
+    let infos = parts
         .iter()
-        .zip(&data)
-        .map(|(p, d)| {
+        .map(|(name, d)| {
             read_info(d)
-                .map(|i| (p.display().to_string(), i))
-                .map_err(|e| format!("{}: {e}", p.display()))
+                .map(|i| (name.clone(), i))
+                .map_err(|e| format!("{name}: {e}"))
         })
         .collect::<Result<Vec<_>, _>>()?;
     check_cover(&infos)?;
-    let films = paths
+    let films = parts
         .par_iter()
-        .zip(&data)
         .try_fold(
             || None,
-            |mut acc: Option<Film>, (p, d)| {
-                decode_into(d, &mut acc).map_err(|e| format!("{}: {e}", p.display()))?;
+            |mut acc: Option<Film>, (name, d)| {
+                decode_into(d, &mut acc).map_err(|e| format!("{name}: {e}"))?;
                 Ok(acc)
             },
         )
@@ -552,6 +546,21 @@ pub fn merge_files(paths: &[std::path::PathBuf]) -> Result<FilmState, String> {
     let mut info = infos[0].1.clone();
     info.items = 0..info.items_total;
     Ok(FilmState { info, film: whole })
+}
+
+/// [`merge_bytes`] of state files (read in parallel); errors name the file.
+pub fn merge_files(paths: &[std::path::PathBuf]) -> Result<FilmState, String> {
+    use rayon::prelude::*;
+    let data: Vec<Vec<u8>> = paths
+        .par_iter()
+        .map(|p| std::fs::read(p).map_err(|e| format!("{}: cannot read: {e}", p.display())))
+        .collect::<Result<_, _>>()?;
+    let named: Vec<(String, &[u8])> = paths
+        .iter()
+        .zip(&data)
+        .map(|(p, d)| (p.display().to_string(), d.as_slice()))
+        .collect();
+    merge_bytes(&named)
 }
 
 #[cfg(test)]
