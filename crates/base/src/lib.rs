@@ -163,6 +163,11 @@ pub enum Projection {
     /// Mitsuba 3's `radiancemeter`: every sample is the one ray from the frame's origin along
     /// its +z (no clipping); its film is 1×1.
     RadianceMeter,
+    /// Mitsuba 3's `irradiancemeter`, nested in the shape of index `shape` of the scene's
+    /// shapes: rays leave the shape's surface, uniform by area, cosine-distributed about its
+    /// normal, each sample weighted π; its 1×1 film measures the irradiance averaged over the
+    /// shape. `to_world` is unused.
+    IrradianceMeter { shape: usize },
     /// A pinhole whose image is the window [left, right] × [bottom, top] of the plane one
     /// unit in front of the eye, in the image's own right/up coordinates (CENG795
     /// `NearPlane` / `NearDistance`): off-axis when the window is not centred, non-square

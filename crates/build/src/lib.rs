@@ -327,7 +327,12 @@ pub fn build_cached(
         kind: sensor.sampler.kind,
         seed: opts.seed.unwrap_or(sensor.sampler.seed),
     };
-    let camera = camera::camera(&sensor.camera, film.width, film.height);
+    let camera = camera::camera(desc, &sensor.camera, &shapes, film.width, film.height).map_err(
+        |message| BuildError {
+            loc: sensor.loc.clone(),
+            message,
+        },
+    )?;
     let integrator_desc = opts
         .integrator
         .clone()
@@ -361,6 +366,28 @@ pub fn build_cached(
             loc: Loc::file(&desc.source),
             message: e.to_string(),
         })?;
+    // An irradiance meter's samples carry a weight (π), which the tile loop applies; the
+    // integrators that render their passes themselves start no camera rays from it.
+    if matches!(
+        sensor.camera.projection,
+        scene::Projection::IrradianceMeter { .. }
+    ) && !matches!(
+        integrator,
+        Integrator::Aov(_)
+            | Integrator::Path(_)
+            | Integrator::VolPath(_)
+            | Integrator::Direct(_)
+            | Integrator::Photon(_)
+    ) {
+        return Err(BuildError {
+            loc: sensor.loc.clone(),
+            message: format!(
+                "an irradiancemeter is measured by the per-sample integrators (path, volpath, \
+                 direct, aov, photon), not by {}",
+                integrator.name()
+            ),
+        });
+    }
     // Mitsuba's `path` ignores media, and so does ours for a scene that declares any. When
     // every medium comes from Beer absorption (purely absorbing, homogeneous), the path
     // tracer applies them, as the courses' tracers apply absorption inside their glass.

@@ -213,7 +213,7 @@ pub(crate) fn shape_infos(
     shapes
 }
 
-fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {
+pub(crate) fn mesh_geom(mesh: &TriMesh, to_world: &Mat4) -> ShapeGeom {
     let positions: Arc<[Vec3]> = mesh
         .positions
         .iter()

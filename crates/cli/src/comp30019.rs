@@ -192,9 +192,10 @@ pub(crate) fn plan(args: &Args) -> Result<Plan, Failure> {
             aperture_radius,
             focus_distance,
         } => (fov, fov_axis, Some((aperture_radius, focus_distance))),
-        Projection::Orthographic | Projection::Window { .. } | Projection::RadianceMeter => {
-            (60.0, scene::FovAxis::X, None)
-        }
+        Projection::Orthographic
+        | Projection::Window { .. }
+        | Projection::RadianceMeter
+        | Projection::IrradianceMeter { .. } => (60.0, scene::FovAxis::X, None),
     };
     let lens = if args.aperture_radius.is_some() || args.focal_length.is_some() {
         let r = args.aperture_radius.unwrap_or(lens.map_or(0.0, |l| l.0));

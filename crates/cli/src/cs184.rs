@@ -185,7 +185,10 @@ pub(crate) fn apply(
                 _ => (t * a, t),
             }
         }
-        Projection::Orthographic | Projection::Window { .. } | Projection::RadianceMeter => {
+        Projection::Orthographic
+        | Projection::Window { .. }
+        | Projection::RadianceMeter
+        | Projection::IrradianceMeter { .. } => {
             return Err(Failure::input(
                 "only perspective cameras are supported by cs184",
             ));

@@ -298,6 +298,9 @@ fn print_scene(desc: &SceneDesc, indent: &str) {
             ),
             Projection::Orthographic => "orthographic".into(),
             Projection::RadianceMeter => "radiancemeter (one ray)".into(),
+            Projection::IrradianceMeter { shape } => {
+                format!("irradiancemeter on shape {shape}")
+            }
             Projection::Window {
                 left,
                 right,

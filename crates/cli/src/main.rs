@@ -507,8 +507,10 @@ impl ViewArgs {
                         "--fov does not apply to an orthographic camera",
                     ));
                 }
-                scene::Projection::RadianceMeter => {
-                    return Err(Failure::input("--fov does not apply to a radiancemeter"));
+                scene::Projection::RadianceMeter | scene::Projection::IrradianceMeter { .. } => {
+                    return Err(Failure::input(
+                        "--fov does not apply to a radiancemeter or an irradiancemeter",
+                    ));
                 }
             }
         }

@@ -13,14 +13,22 @@
 //!   `focus_distance` along +z.
 //! - `Orthographic`: the image covers [-1,1] × [-1/aspect, 1/aspect] of the camera plane (scale
 //!   it with `to_world`), rays along +z.
+//! - `IrradianceMeter`: Mitsuba 3's `irradiancemeter`, attached to a shape
+//!   ([`Camera::with_irradiance_meter`]): a ray leaves a point uniform over the shape's area
+//!   (from the film sample) in a cosine-distributed direction about its normal (from the lens
+//!   sample), and each sample counts π times ([`Camera::sample_weight`]), so that the 1×1
+//!   film measures the irradiance averaged over the shape.
 //! - `Window`: a pinhole whose image is a given window [l, r] × [b, t] of the z = 1 plane
 //!   (right and up in image terms, so x_cam = −(l + s_x (r − l)), y_cam = t − s_y (t − b)).
 
 use base::{FovAxis, Projection};
 
 use crate::geometry::Ray;
-use crate::math::{Mat4, Vec2, Vec3};
-use crate::sampling::warp::square_to_uniform_disk_concentric;
+use crate::lights::AreaLight;
+use crate::math::{Frame, Mat4, PI, Vec2, Vec3};
+use crate::sampling::warp::{square_to_cosine_hemisphere, square_to_uniform_disk_concentric};
+use crate::shapes::{ShapeGeom, offset_ray_origin};
+use crate::textures::TexRef;
 
 #[derive(Clone, Debug)]
 pub struct Camera {
@@ -40,7 +48,7 @@ pub struct Camera {
     far_clip: f32,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 enum Kind {
     Perspective,
     ThinLens {
@@ -50,6 +58,69 @@ enum Kind {
     Orthographic,
     /// One ray: the origin along +z (Mitsuba's `radiancemeter`).
     RadianceMeter,
+    /// Rays leaving a shape's surface (Mitsuba's `irradiancemeter`).
+    IrradianceMeter(Box<MeterShape>),
+}
+
+/// The shape an irradiance meter sits on: its world-space geometry and the uniform-by-area
+/// point placement of area lights (`AreaLight::sample_position_on`, which is one copy of
+/// "a uniform point on a shape" for emitters and this sensor alike).
+#[derive(Clone, Debug)]
+pub struct MeterShape {
+    geom: ShapeGeom,
+    flip: f32,
+    sampler: AreaLight,
+}
+
+impl MeterShape {
+    /// The meter on `geom` (world space; a mesh, sphere, disk, cylinder or ellipsoid, not an
+    /// instance nor a plane), normals flipped when `flip_normals`. `None` for a shape that
+    /// cannot be sampled by area (an infinite plane, an instance, a degenerate mesh).
+    pub fn new(geom: ShapeGeom, flip_normals: bool) -> Option<MeterShape> {
+        let area = geom.area();
+        if !(area > 0.0 && area.is_finite()) {
+            return None;
+        }
+        let triangles = match &geom {
+            ShapeGeom::Mesh {
+                positions, indices, ..
+            } => {
+                let areas: Vec<f32> = indices
+                    .iter()
+                    .map(|t| {
+                        let [a, b, c] = t.map(|i| positions[i as usize]);
+                        0.5 * (b - a).cross(c - a).length()
+                    })
+                    .collect();
+                Some(crate::shapes::MeshSampling::new(positions, indices, &areas))
+            }
+            ShapeGeom::Sphere { .. }
+            | ShapeGeom::Disk { .. }
+            | ShapeGeom::Cylinder(_)
+            | ShapeGeom::Ellipsoid(_) => None,
+            ShapeGeom::Plane { .. } | ShapeGeom::Instance(_) => return None,
+        };
+        Some(MeterShape {
+            geom,
+            flip: if flip_normals { -1.0 } else { 1.0 },
+            sampler: AreaLight {
+                shape: 0,
+                radiance: TexRef::Const(Vec3::ZERO),
+                two_sided: false,
+                triangles,
+                prim: None,
+                area,
+            },
+        })
+    }
+
+    /// A point of the surface (uniform by area), its error bound and its unit normal.
+    fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, Vec3)> {
+        let (p, err, n, _, _) = self
+            .sampler
+            .sample_position_on(&self.geom, self.flip, false, u)?;
+        Some((p, err, n))
+    }
 }
 
 /// A camera ray with its extent: valid for 0 < t < `t_max`.
@@ -134,7 +205,8 @@ impl Camera {
                 Some(fov_x_degrees(fov, fov_axis, aspect)),
             ),
             Projection::Orthographic => (Kind::Orthographic, None),
-            Projection::RadianceMeter => {
+            // An irradiance meter's shape comes from `with_irradiance_meter`.
+            Projection::RadianceMeter | Projection::IrradianceMeter { .. } => {
                 return Camera {
                     kind: Kind::RadianceMeter,
                     to_world,
@@ -181,6 +253,23 @@ impl Camera {
         }
     }
 
+    /// This camera as Mitsuba's `irradiancemeter` on `shape` (the film is 1×1).
+    pub fn with_irradiance_meter(mut self, shape: MeterShape) -> Camera {
+        self.kind = Kind::IrradianceMeter(Box::new(shape));
+        self
+    }
+
+    /// The weight every camera sample carries into the film: π for an irradiance meter
+    /// (Mitsuba's `irradiancemeter` returns it from `sample_ray`: the cosine-weighted
+    /// hemisphere's π), 1 for the others.
+    #[inline]
+    pub fn sample_weight(&self) -> f32 {
+        match self.kind {
+            Kind::IrradianceMeter(_) => PI,
+            _ => 1.0,
+        }
+    }
+
     pub fn position(&self) -> Vec3 {
         self.to_world.w_axis.truncate().into()
     }
@@ -198,6 +287,9 @@ impl Camera {
 
     /// The ray through continuous film position `p_film`; `u_lens` is used by the thin lens.
     pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2) -> CameraRay {
+        if let Kind::IrradianceMeter(meter) = &self.kind {
+            return meter_ray(meter, p_film / self.resolution, u_lens);
+        }
         let p = self.film_to_camera(p_film);
         // `d_cam` need not be unit length: only its direction and its z component relative
         // to its length enter below.
@@ -218,6 +310,7 @@ impl Camera {
                 (q, Vec3::Z)
             }
             Kind::RadianceMeter => (Vec3::ZERO, Vec3::Z),
+            Kind::IrradianceMeter(_) => unreachable!("handled above"),
         };
         let o = self.to_world.transform_point3a(o_cam);
         let d_world = self.to_world.transform_vector3a(d_cam);
@@ -253,7 +346,7 @@ impl Camera {
             let dp = self.to_world.transform_vector3a(q - pc);
             if dp.is_finite() { dp } else { Vec3::ZERO }
         };
-        if matches!(self.kind, Kind::RadianceMeter) {
+        if matches!(self.kind, Kind::RadianceMeter | Kind::IrradianceMeter(_)) {
             return (Vec3::ZERO, Vec3::ZERO);
         }
         let [dx, dy] = offsets.map(|off| match self.kind {
@@ -296,7 +389,10 @@ impl Camera {
     /// Whether light paths can be connected to this camera ([`Self::sample_wi`]): every
     /// projection but the orthographic one (a delta in direction and position alike).
     pub fn supports_importance(&self) -> bool {
-        !matches!(self.kind, Kind::Orthographic | Kind::RadianceMeter)
+        !matches!(
+            self.kind,
+            Kind::Orthographic | Kind::RadianceMeter | Kind::IrradianceMeter(_)
+        )
     }
 
     /// Connect the world point `p` to the lens (a point on the aperture from `u` for a thin
@@ -312,7 +408,7 @@ impl Camera {
                 let lens = square_to_uniform_disk_concentric(u) * aperture_radius;
                 Vec3::new(lens.x, lens.y, 0.0)
             }
-            Kind::Orthographic | Kind::RadianceMeter => return None,
+            Kind::Orthographic | Kind::RadianceMeter | Kind::IrradianceMeter(_) => return None,
         };
         let p_cam = self.to_camera.transform_point3a(p);
         if !(p_cam.z > self.near_clip && p_cam.z < self.far_clip) {
@@ -363,7 +459,9 @@ impl Camera {
             Kind::ThinLens {
                 aperture_radius, ..
             } => crate::math::PI * aperture_radius * aperture_radius,
-            Kind::Orthographic | Kind::RadianceMeter => return (0.0, 0.0),
+            Kind::Orthographic | Kind::RadianceMeter | Kind::IrradianceMeter(_) => {
+                return (0.0, 0.0);
+            }
         };
         let c = self.to_camera.transform_vector3a(d).normalize();
         if c.z <= 0.0 {
@@ -386,6 +484,27 @@ impl Camera {
     /// Whether the lens needs a 2D sample.
     pub fn needs_lens_sample(&self) -> bool {
         matches!(self.kind, Kind::ThinLens { .. })
+    }
+}
+
+/// An irradiance meter's ray: from a point uniform over the shape (`u_pos`) in a cosine
+/// distributed direction about its normal (`u_dir`), leaving the surface by its error bound
+/// (Mitsuba moves it by a fixed ray epsilon). A degenerate shape gives a ray that finds
+/// nothing (t_max = 0).
+#[inline(never)]
+fn meter_ray(meter: &MeterShape, u_pos: Vec2, u_dir: Vec2) -> CameraRay {
+    let Some((p, err, n)) = meter.sample(u_pos) else {
+        return CameraRay {
+            ray: Ray::new(Vec3::ZERO, Vec3::Z),
+            t_max: 0.0,
+            lens: Vec3::ZERO,
+        };
+    };
+    let d = Frame::from_normal(n).to_world(square_to_cosine_hemisphere(u_dir));
+    CameraRay {
+        ray: Ray::new(offset_ray_origin(p, err, n, d), d),
+        t_max: f32::INFINITY,
+        lens: p,
     }
 }
 

@@ -110,6 +110,8 @@ fn render_tile<M: PathMode, E: Estimator<M>>(
     (lo, hi): (UVec2, UVec2),
     samples: Range<u32>,
 ) {
+    // 1 but for an irradiance meter (π): exact, so other cameras' images are unchanged.
+    let weight = scene.camera.sample_weight();
     let mut stream = (lo.y..hi.y)
         .flat_map(|y| (lo.x..hi.x).map(move |x| UVec2::new(x, y)))
         .flat_map(|pixel| samples.clone().map(move |index| (pixel, index)));
@@ -121,7 +123,7 @@ fn render_tile<M: PathMode, E: Estimator<M>>(
             let (pixel, index) = stream.next()?;
             Some(camera_sample(scene, sampler, pixel, index))
         },
-        |p_film, l| tile.add_sample(p_film, l),
+        |p_film, l| tile.add_sample(p_film, l * weight),
     );
 }
 

@@ -122,7 +122,21 @@ impl AreaLight {
     ) -> Option<(Vec3, Vec3, Vec3, Vec2, f32)> {
         let info = scene.shape(self.shape);
         let flip = if info.flip_normals { -1.0 } else { 1.0 };
-        Some(match &info.geom {
+        self.sample_position_on(&info.geom, flip, textured, u_pos)
+    }
+
+    /// [`Self::sample_position`] on a given geometry (world space, `flip` −1 for flipped
+    /// normals): also Mitsuba's `irradiancemeter`, which places its rays' origins so
+    /// (the camera module's `MeterShape`).
+    #[inline]
+    pub fn sample_position_on(
+        &self,
+        geom: &ShapeGeom,
+        flip: f32,
+        textured: bool,
+        u_pos: Vec2,
+    ) -> Option<(Vec3, Vec3, Vec3, Vec2, f32)> {
+        Some(match geom {
             ShapeGeom::Sphere { center, radius } => {
                 let d = warp::square_to_uniform_sphere(u_pos);
                 let p = *center + d * *radius;

@@ -1474,9 +1474,17 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         let flip_normals = pl.props.bool("flip_normals", false)? != cylinder_flip;
         let mut material = None;
         let mut emission = None;
+        let mut sensor = None;
         let mut media = MediumInterface::default();
         for c in &pl.children {
             match c.elem.tag.as_str() {
+                "sensor" => {
+                    // Mitsuba 3's irradiancemeter sits on a shape; read after the shape is in.
+                    if sensor.is_some() {
+                        return Err(err(&c.loc, "a shape can have only one sensor"));
+                    }
+                    sensor = Some(c);
+                }
                 "bsdf" => {
                     if material.is_some() {
                         return Err(err(&c.loc, "a shape can have only one bsdf"));
@@ -1530,6 +1538,10 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             name,
             loc: pl.loc().clone(),
         });
+        if let Some(c) = sensor {
+            let cp = self.ctx.plugin(c.elem)?;
+            self.sensor(&cp, Some(self.scene.shapes.len() - 1))?;
+        }
         Ok(())
     }
 
@@ -1790,7 +1802,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         ))
     }
 
-    fn sensor(&mut self, pl: &Plugin<'s>) -> Result<()> {
+    /// A sensor; `on_shape` is the index of the shape it is nested in (an irradiance meter).
+    fn sensor(&mut self, pl: &Plugin<'s>, on_shape: Option<usize>) -> Result<()> {
         let nori = pl.elem.tag == "camera";
         let mut to_world = pl.props.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
         let (near_default, far_default) = if nori { (1e-4, 1e4) } else { (1e-2, 1e4) };
@@ -1802,7 +1815,29 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 format!("need 0 < near_clip < far_clip, found {near_clip} and {far_clip}"),
             ));
         }
+        if on_shape.is_some() != (pl.ty == "irradiancemeter") {
+            return Err(err(
+                pl.loc(),
+                if on_shape.is_some() {
+                    format!("a '{}' sensor cannot be nested in a shape", pl.ty)
+                } else {
+                    "an irradiancemeter is nested in the shape it measures".to_string()
+                },
+            ));
+        }
         let projection = match pl.ty.as_str() {
+            "irradiancemeter" => {
+                if pl.props.has("to_world") {
+                    // Mitsuba: "Found a 'to_world' transformation -- this is not allowed".
+                    return Err(err(
+                        pl.loc(),
+                        "an irradiancemeter takes its place from its shape, not a to_world",
+                    ));
+                }
+                Projection::IrradianceMeter {
+                    shape: on_shape.unwrap_or_default(),
+                }
+            }
             "perspective" => {
                 let (fov, fov_axis) = self.fov(pl, nori)?;
                 if !nori {
@@ -1851,7 +1886,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             _ => {
                 return Err(unknown_type(
                     pl,
-                    "perspective, thinlens, orthographic, radiancemeter",
+                    "perspective, thinlens, orthographic, radiancemeter, irradiancemeter",
                 ));
             }
         };
@@ -1906,13 +1941,17 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 tonemap: None,
             },
         };
-        if matches!(projection, Projection::RadianceMeter) && (film.width, film.height) != (1, 1) {
+        if matches!(
+            projection,
+            Projection::RadianceMeter | Projection::IrradianceMeter { .. }
+        ) && (film.width, film.height) != (1, 1)
+        {
             // As Mitsuba: "This sensor only supports films of size 1x1 Pixels!".
             return Err(err(
                 pl.loc(),
                 format!(
-                    "a radiancemeter takes a 1×1 film, found {}×{}",
-                    film.width, film.height
+                    "a {} takes a 1×1 film, found {}×{}",
+                    pl.ty, film.width, film.height
                 ),
             ));
         }
@@ -2267,7 +2306,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 }
                 "sensor" | "camera" => {
                     let cp = self.ctx.plugin(c.elem)?;
-                    self.sensor(&cp)?;
+                    self.sensor(&cp, None)?;
                 }
                 "integrator" => {
                     if self.has_integrator {
