@@ -15,6 +15,12 @@ use crate::math::{UVec2, Vec2};
 use crate::sampling::Sampler;
 use crate::world::Scene;
 
+/// Sample indices per chunk by default ([`RenderOptions::chunk_spp`]): a tile loop's work
+/// item sums this many samples of each of its tile's pixels in f64 before they are rounded
+/// into the film (rounding more often costs more; longer chunks make coarser passes and
+/// shards).
+pub const CHUNK_SPP: u32 = 4;
+
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
     /// Samples per pixel to reach (upper bound when a time budget is set).
@@ -30,8 +36,8 @@ pub struct RenderOptions {
     /// `Integrator::work_items`).
     pub items: Option<Range<u64>>,
     /// Sample indices per chunk of the tile loop's work items (`drive/tiles.rs`; default
-    /// [`crate::drive::CHUNK_SPP`]): also the smallest pass. Part of what makes the image, as
-    /// the tile size is.
+    /// [`CHUNK_SPP`]): also the smallest pass. Part of what makes the image, as the tile
+    /// size is.
     pub chunk_spp: u32,
     /// A checkpoint to continue from (its items' range must start where this render's
     /// does); ignored by integrators whose work has no items.
@@ -47,7 +53,7 @@ impl Default for RenderOptions {
             cancel: Arc::new(AtomicBool::new(false)),
             pass_duration: Duration::from_secs(1),
             items: None,
-            chunk_spp: crate::drive::CHUNK_SPP,
+            chunk_spp: CHUNK_SPP,
             resume: None,
         }
     }
