@@ -178,7 +178,13 @@ pub fn to_fixed(v: f64) -> i128 {
 
 #[inline(always)]
 fn from_fixed(x: i128) -> f64 {
-    x as f64 * (1.0 / FIXED_SCALE)
+    // `i128 as f64` is a library call; through i64, where the value fits, one instruction
+    // with the same correctly rounded result (developing a 1080p film spent 0.5 s in it).
+    let f = match i64::try_from(x) {
+        Ok(v) => v as f64,
+        Err(_) => x as f64,
+    };
+    f * (1.0 / FIXED_SCALE)
 }
 
 impl FixedSums {
@@ -226,6 +232,18 @@ impl FixedSums {
             *a = a.wrapping_add(*b);
         }
         self.count += o.count;
+    }
+
+    /// `Σ w L / Σ w` as [`PixelSums::mean`] of [`Self::to_f64`] gives it, from the four
+    /// sums it needs.
+    #[inline]
+    fn mean(&self) -> Vec3 {
+        PixelSums {
+            weighted: [0, 1, 2].map(|c| from_fixed(self.v[c])),
+            weight: from_fixed(self.v[3]),
+            ..PixelSums::default()
+        }
+        .mean()
     }
 
     /// The sums as f64 (to develop).
@@ -777,19 +795,21 @@ impl Film {
         Some(self)
     }
 
-    fn develop_with(&self, f: impl Fn(&PixelSums) -> Vec3) -> Image {
+    /// An image of `f` of every stored pixel's sums, the pixels in parallel.
+    fn develop_with(&self, f: impl Fn(&FixedSums) -> Vec3 + Sync + Send) -> Image {
+        use rayon::prelude::*;
         let size = self.size();
         Image {
             width: size.x,
             height: size.y,
-            pixels: self.pixels.iter().map(|p| f(&p.to_f64())).collect(),
+            pixels: self.pixels.par_iter().map(f).collect(),
         }
     }
 
     /// `Σ w L / Σ w` per pixel plus the scaled splats, a crop-sized image (pixels without
     /// weight or splats are black).
     pub fn develop(&self) -> Image {
-        let mut img = self.develop_with(PixelSums::mean);
+        let mut img = self.develop_with(FixedSums::mean);
         if !self.splats.is_empty() {
             let (nx, ny) = (self.splat_norms(0), self.splat_norms(1));
             let stride = nx.len().max(1);
@@ -807,7 +827,7 @@ impl Film {
     /// to the per-pixel error for the box filter.
     pub fn develop_stderr(&self) -> Image {
         let scale = self.filter.footprint().sqrt() as f32;
-        self.develop_with(|p| p.stderr() * scale)
+        self.develop_with(|p| p.to_f64().stderr() * scale)
     }
 
     /// Samples rejected because their radiance or position was NaN or infinite.
