@@ -139,8 +139,8 @@ pub fn render_tiles<M: PathMode, E: Estimator<M>>(job: &Job, integrator: &E) -> 
         pixels * opts.spp.max(1) as u64 * (range.end - range.start) / plan.len().max(1);
     let done = AtomicU64::new(0);
     let mut passes = 0u32;
-    // Tiles kept from item to item and pass to pass (a fresh tile's storage cost a page
-    // fault per 4 KiB each time: 1.6 % of bench-cbox).
+    // Tiles kept from item to item and pass to pass, so that their storage is not
+    // allocated (and page-faulted) again.
     let spare = Mutex::new(Vec::<FilmTile>::new());
     let (next, cancelled) = work::run(
         job,

@@ -178,8 +178,8 @@ pub fn to_fixed(v: f64) -> i128 {
 
 #[inline(always)]
 fn from_fixed(x: i128) -> f64 {
-    // `i128 as f64` is a library call; through i64, where the value fits, one instruction
-    // with the same correctly rounded result (developing a 1080p film spent 0.5 s in it).
+    // `i128 as f64` is a library call; through i64, where the value fits, it is one
+    // instruction with the same correctly rounded result.
     let f = match i64::try_from(x) {
         Ok(v) => v as f64,
         Err(_) => x as f64,
@@ -211,8 +211,7 @@ impl FixedSums {
         let largest = scaled.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         if largest < 9.0e18 {
             // The common case, in a form the compiler turns into a few vector instructions:
-            // round, convert to i64, add with carry (a quarter of the time of one
-            // `to_fixed` after another, which was 4.7 % of bench-cbox).
+            // round, convert to i64, add with carry.
             let q = scaled.map(|x| x.round_ties_even() as i64);
             for (a, x) in self.v.iter_mut().zip(q) {
                 *a = a.wrapping_add(x as i128);
@@ -365,8 +364,7 @@ impl FilmTile {
     /// Ends a unit of work: rounds the f64 sums into the tile's fixed-point sums (what
     /// [`Film::merge`] would do with them, exactly) and clears them. A driver that renders
     /// several units of one tile in a row merges the tile once, after the last, touching
-    /// the film once instead of once per unit (4.7 % of bench-cbox when every 4-sample unit
-    /// was merged into the film on its own: the film is larger than the caches).
+    /// the film (larger than the caches) once instead of once per unit.
     pub fn finish_unit(&mut self) {
         if self.fixed.len() != self.pixels.len() {
             self.fixed.clear();
