@@ -355,7 +355,17 @@ def render(
     The GIL is released while rendering. Ctrl-C (SIGINT) stops the render at the end of the
     current pass (passes last about 0.25 s) and raises ``KeyboardInterrupt``.
     """
-    buf, width, height, _spp, _warnings, _state = _penumbra.render(
+    buf, width, height, _spp, _warnings, _state = _native_render(
+        scene, spp, seed, resolution, integrator, threads, sensor, mode, progress=progress
+    )
+    return _image(buf, width, height)
+
+
+def _native_render(scene, spp, seed, resolution, integrator, threads, sensor, mode,
+                   progress=None, shard=None):
+    """``_penumbra.render`` with the arguments as :func:`render` takes them (shared with
+    ``penumbra.distributed``)."""
+    return _penumbra.render(
         scene,
         spp=spp,
         seed=seed,
@@ -365,8 +375,8 @@ def render(
         sensor=sensor,
         mode=mode,
         progress=progress,
+        shard=shard,
     )
-    return _image(buf, width, height)
 
 
 def _rgb(image: object, what: str = "image") -> Tuple[bytes, int, int]:

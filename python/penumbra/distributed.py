@@ -18,6 +18,7 @@ from typing import Any, List, Optional, Tuple
 import numpy as np
 
 from . import _penumbra
+from . import _image, _native_render
 from ._penumbra import Scene
 
 __all__ = ["render", "render_part", "merge"]
@@ -37,17 +38,10 @@ def render_part(
 ) -> bytes:
     """Render part ``index`` of ``shards`` of ``scene`` and return its film state (bytes):
     what a worker runs. Arguments as :func:`penumbra.render`."""
-    _, _, _, _, _, state = _penumbra.render(
-        scene,
-        spp=spp,
-        seed=seed,
-        resolution=None if resolution is None else (int(resolution[0]), int(resolution[1])),
-        integrator=integrator,
-        threads=threads,
-        sensor=sensor,
-        mode=mode,
+    state = _native_render(
+        scene, spp, seed, resolution, integrator, threads, sensor, mode,
         shard=(int(index), int(shards)),
-    )
+    )[5]
     return bytes(state)
 
 
@@ -56,7 +50,7 @@ def merge(parts: List[bytes]) -> np.ndarray:
     Raises ``ValueError`` when they belong to different renders or a part is missing or
     doubled."""
     buf, width, height, _spp = _penumbra.merge_states([bytes(p) for p in parts])
-    return np.frombuffer(buf, dtype=np.float32).reshape(height, width, 3)
+    return _image(buf, width, height)
 
 
 def render(
