@@ -773,26 +773,6 @@ impl Film {
         self.nonfinite += nonfinite;
     }
 
-    /// A film with these exact sums (the inverse of [`Self::fixed_sums`] and the counts):
-    /// `None` if the lengths do not fit the film.
-    pub fn with_fixed_sums(
-        mut self,
-        pixels: Vec<FixedSums>,
-        splats: Vec<[i128; 3]>,
-        samples: u64,
-        nonfinite: u64,
-    ) -> Option<Film> {
-        if pixels.len() != self.pixels.len() || !(splats.is_empty() || splats.len() == pixels.len())
-        {
-            return None;
-        }
-        self.pixels = pixels;
-        self.splats = splats;
-        self.samples = samples;
-        self.nonfinite = nonfinite;
-        Some(self)
-    }
-
     /// An image of `f` of every stored pixel's sums, the pixels in parallel.
     fn develop_with(&self, f: impl Fn(&FixedSums) -> Vec3 + Sync + Send) -> Image {
         use rayon::prelude::*;
