@@ -163,6 +163,10 @@ pub struct FixedSums {
 /// One unit of [`FixedSums`]: values are rounded to multiples of `1 / FIXED_SCALE`.
 pub const FIXED_SCALE: f64 = (1u64 << 40) as f64;
 
+/// 1.5·2⁵²: `x + MAGIC` has the unit as its last place for |x| < [`MAGIC_RANGE`] = 2⁵¹.
+const MAGIC: f64 = 6_755_399_441_055_744.0;
+const MAGIC_RANGE: f64 = 2_251_799_813_685_248.0;
+
 /// `v` in units of 2⁻⁴⁰, rounded to nearest (ties to even); saturating beyond ±2¹²⁷.
 #[inline(always)]
 pub fn to_fixed(v: f64) -> i128 {
@@ -208,10 +212,19 @@ impl FixedSums {
             p.cross[2],
         ];
         let scaled = f.map(|x| x * FIXED_SCALE);
-        let largest = scaled.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        if largest < 9.0e18 {
-            // The common case, in a form the compiler turns into a few vector instructions:
-            // round, convert to i64, add with carry.
+        // `&` rather than a short-circuit or a NaN-aware `max`, so that the test is a few
+        // vector compares; NaN fails it and takes the general path.
+        let below = |limit: f64| scaled.iter().fold(true, |ok, x| ok & (x.abs() < limit));
+        if below(MAGIC_RANGE) {
+            // The common case: adding 1.5·2⁵² rounds |x| < 2⁵¹ to an integer (the FPU's
+            // round-to-nearest-even, as `round_ties_even`), which the sum's bits then hold
+            // above the constant's: an add and an integer subtract, no saturating
+            // conversion.
+            for (a, x) in self.v.iter_mut().zip(scaled) {
+                let q = (x + MAGIC).to_bits() as i64 - MAGIC.to_bits() as i64;
+                *a = a.wrapping_add(q as i128);
+            }
+        } else if below(9.0e18) {
             let q = scaled.map(|x| x.round_ties_even() as i64);
             for (a, x) in self.v.iter_mut().zip(q) {
                 *a = a.wrapping_add(x as i128);
@@ -280,6 +293,8 @@ pub struct FilmTile {
     /// empty until the first).
     fixed: Vec<FixedSums>,
     samples: u64,
+    /// Of `samples`, those already in `fixed` (the rest are in `pixels`).
+    rounded: u64,
     nonfinite: u64,
 }
 
@@ -358,6 +373,7 @@ impl FilmTile {
         self.pixels.fill(PixelSums::default());
         self.fixed.clear();
         self.samples = 0;
+        self.rounded = 0;
         self.nonfinite = 0;
     }
 
@@ -374,6 +390,7 @@ impl FilmTile {
             f.add_rounded(p);
             *p = PixelSums::default();
         }
+        self.rounded = self.samples;
     }
 
     /// Adds `l` with weight `g(i + ½ − p.x) g(j + ½ − p.y)` to the stored pixels `(i, j)` with
@@ -428,6 +445,7 @@ impl Default for FilmTile {
             pixels: Vec::new(),
             fixed: Vec::new(),
             samples: 0,
+            rounded: 0,
             nonfinite: 0,
         }
     }
@@ -469,6 +487,7 @@ impl FilmLayout {
             .resize(size.x as usize * size.y as usize, PixelSums::default());
         tile.fixed.clear();
         tile.samples = 0;
+        tile.rounded = 0;
         tile.nonfinite = 0;
     }
 }
@@ -700,11 +719,14 @@ impl Film {
         for y in lo.y..hi.y {
             let t0 = (y - tile.min.y) as usize * tw + (lo.x - tile.min.x) as usize;
             let f0 = (y - self.min.y) as usize * fw + (lo.x - self.min.x) as usize;
-            for (f, t) in self.pixels[f0..f0 + len]
-                .iter_mut()
-                .zip(&tile.pixels[t0..t0 + len])
-            {
-                f.add_rounded(t);
+            // After `finish_unit` the f64 sums are all zero: not read again.
+            if tile.samples != tile.rounded {
+                for (f, t) in self.pixels[f0..f0 + len]
+                    .iter_mut()
+                    .zip(&tile.pixels[t0..t0 + len])
+                {
+                    f.add_rounded(t);
+                }
             }
             if !tile.fixed.is_empty() {
                 for (f, t) in self.pixels[f0..f0 + len]
@@ -1141,6 +1163,71 @@ mod tests {
         assert_eq!(to_fixed(-1e300), i128::MIN);
         assert_eq!(to_fixed(1e7), (1e7 * FIXED_SCALE) as i128);
         assert_eq!(to_fixed(-2.5 / FIXED_SCALE), -2);
+    }
+
+    #[test]
+    fn rounding_a_pixels_sums_is_to_fixed_of_each() {
+        // Each of the three paths of `add_rounded` (the 1.5·2⁵² trick below 2⁵¹ units, the
+        // i64 conversion below 9e18, the i128 one beyond) against `to_fixed` one value at a
+        // time, at ties (odd multiples of half a unit), at the paths' limits and beyond (within
+        // i128; `to_fixed` saturates outside it).
+        assert_eq!(to_fixed(1e30), i128::MAX);
+        assert_eq!(to_fixed(-1e30), i128::MIN);
+        let u = 1.0 / FIXED_SCALE;
+        let limit = MAGIC_RANGE * u;
+        let values = [
+            0.0,
+            -0.0,
+            0.5 * u,
+            1.5 * u,
+            -2.5 * u,
+            3.25 * u,
+            0.1,
+            -7.3,
+            1.0 / 3.0,
+            limit.next_down(),
+            -limit.next_down(),
+            limit,
+            -limit,
+            1e5,
+            -9.0e18 * u,
+            1e12,
+            -1e25,
+        ];
+        for (k, &x) in values.iter().enumerate() {
+            // `x` alone in a slot, and `x` beside values of the other paths.
+            for others in [0.0, 0.25, 1e6, 1e20] {
+                let mut p = PixelSums {
+                    weighted: [x, others, 0.75],
+                    weight: x,
+                    weighted_sq: [0.5, x, others],
+                    weight_sq: 1.0,
+                    cross: [x, -x, others],
+                    count: 1 + k as u64,
+                };
+                p.weight_sq = -x;
+                let fields = [
+                    p.weighted[0],
+                    p.weighted[1],
+                    p.weighted[2],
+                    p.weight,
+                    p.weighted_sq[0],
+                    p.weighted_sq[1],
+                    p.weighted_sq[2],
+                    p.weight_sq,
+                    p.cross[0],
+                    p.cross[1],
+                    p.cross[2],
+                ];
+                let mut f = FixedSums::default();
+                f.v = [3; 11];
+                f.add_rounded(&p);
+                for (got, want) in f.v.iter().zip(fields) {
+                    assert_eq!(*got, 3 + to_fixed(want), "{want:e} beside {others:e}");
+                }
+                assert_eq!(f.count, p.count);
+            }
+        }
     }
 
     #[test]
