@@ -7,19 +7,22 @@
 //! disjoint item ranges add up to the film of their union bit for bit, and [`merge`] checks
 //! that they cover the render once.
 //!
-//! Layout (little-endian), version 1:
+//! Layout (little-endian), version 2:
 //! ```text
 //! "PENUMBRA-STATE\n"  version u32  identity u64  description (u32 length, UTF-8)
 //! items_total u64  items.start u64  items.end u64  spp u32
 //! width u32  height u32  min.x min.y max.x max.y u32  filter (u8 tag, 3 × f32)
 //! tonemap (u8 tag, 4 × f32)  splat_scale f64  samples u64  nonfinite u64
-//! pixels: per stored pixel 11 sums (zigzag LEB128 of i128) and the count (LEB128)
-//! splats: u8 0 | 1, then 3 sums per pixel
+//! pixels: rows, per stored pixel 11 sums (zigzag LEB128 of i128) and the count (LEB128)
+//! splats: u8 0 | 1, then rows, 3 sums per pixel
 //! checksum u64 (FNV-1a of everything before)
 //! ```
+//! where "rows" is the byte length of each of the crop's rows (u32 each), then the rows.
 //! Sums are mostly far below 2¹²⁷, so the variable-length integers take about half of the
-//! 16 bytes each; the checksum catches a truncated or damaged file. Files are written to a
-//! temporary name beside the target and renamed, so a state on disk is always whole.
+//! 16 bytes each; the row lengths let a reader decode rows in parallel, and a merge add
+//! every state's row into one film without a film per thread. The checksum catches a
+//! truncated or damaged file. Files are written to a temporary name beside the target and
+//! renamed, so a state on disk is always whole.
 
 use std::io::Write;
 use std::ops::Range;
@@ -32,7 +35,7 @@ use base::{CropWindow, Tonemap};
 
 const MAGIC: &[u8] = b"PENUMBRA-STATE\n";
 /// The version of the layout this program writes and reads.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 
 /// What a state says about its film: the render it belongs to and the part it holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -145,6 +148,21 @@ impl Reader<'_> {
         Ok(f64::from_bits(self.u64()?))
     }
     fn uleb(&mut self) -> Result<u128, String> {
+        // Most numbers end within 8 bytes (56 bits): read them from one word, the first
+        // byte without its continuation bit ending them.
+        if let Some(w) = self.data.get(self.at..self.at + 8) {
+            let w = u64::from_le_bytes(w.try_into().unwrap());
+            let ends = !w & 0x8080_8080_8080_8080;
+            if ends != 0 {
+                let n = ends.trailing_zeros() / 8 + 1;
+                let mut v = 0u64;
+                for i in 0..n {
+                    v |= ((w >> (8 * i)) & 0x7f) << (7 * i);
+                }
+                self.at += n as usize;
+                return Ok(v as u128);
+            }
+        }
         let mut v = 0u128;
         for shift in (0..133).step_by(7) {
             let b = self.u8()?;
@@ -234,21 +252,48 @@ pub fn to_bytes(info: &StateInfo, film: &Film) -> Vec<u8> {
     out.extend_from_slice(&f.splat_scale().to_le_bytes());
     out.extend_from_slice(&f.sample_count().to_le_bytes());
     out.extend_from_slice(&f.nonfinite_count().to_le_bytes());
-    for p in pixels {
+    let width = (max.x - min.x).max(1) as usize;
+    put_rows(&mut out, pixels, width, |out, p| {
         for &v in &p.v {
-            put_sleb(&mut out, v);
+            put_sleb(out, v);
         }
-        put_uleb(&mut out, p.count as u128);
-    }
+        put_uleb(out, p.count as u128);
+    });
     out.push(!splats.is_empty() as u8);
-    for s in splats {
-        for &v in s {
-            put_sleb(&mut out, v);
-        }
+    if !splats.is_empty() {
+        put_rows(&mut out, splats, width, |out, s| {
+            for &v in s {
+                put_sleb(out, v);
+            }
+        });
     }
     let sum = checksum(&out);
     out.extend_from_slice(&sum.to_le_bytes());
     out
+}
+
+/// Appends `values` as rows of `width`: each row's byte length (u32), then the rows, each
+/// encoded by `put` value by value (rows in parallel).
+fn put_rows<T: Sync>(
+    out: &mut Vec<u8>,
+    values: &[T],
+    width: usize,
+    put: impl Fn(&mut Vec<u8>, &T) + Sync,
+) {
+    use rayon::prelude::*;
+    let rows: Vec<Vec<u8>> = values
+        .par_chunks(width)
+        .map(|row| {
+            let mut bytes = Vec::with_capacity(row.len() * 100);
+            row.iter().for_each(|v| put(&mut bytes, v));
+            bytes
+        })
+        .collect();
+    for row in &rows {
+        let len = u32::try_from(row.len()).expect("a row of a film state is under 4 GiB");
+        out.extend_from_slice(&len.to_le_bytes());
+    }
+    rows.iter().for_each(|row| out.extend_from_slice(row));
 }
 
 /// Writes the state of `film` described by `info` to `path` atomically (a temporary file
@@ -403,64 +448,170 @@ fn open(data: &[u8], verify: bool) -> Result<Reader<'_>, String> {
     Ok(r)
 }
 
-/// Only the description of a state file (its header), checked for damage.
-pub fn read_info(data: &[u8]) -> Result<StateInfo, String> {
-    Ok(read_header(&mut open(data, true)?)?.info)
+/// A checked state file: its header and the encoded rows of its layers.
+struct Parsed<'a> {
+    h: Header,
+    pixel_rows: Vec<&'a [u8]>,
+    splat_rows: Option<Vec<&'a [u8]>>,
 }
 
-/// Decodes a state file's bytes, adding its film to `acc` (made from the first file's
-/// header when `None`; later files must have the same film). Returns its description.
-pub fn decode_into(data: &[u8], acc: &mut Option<Film>) -> Result<StateInfo, String> {
-    decode_checked(data, acc, true)
-}
-
-/// [`decode_into`], the checksum checked only with `verify` (once is enough).
-fn decode_checked(data: &[u8], acc: &mut Option<Film>, verify: bool) -> Result<StateInfo, String> {
-    let mut r = open(data, verify)?;
-    let h = read_header(&mut r)?;
-    let n = h.crop.width as usize * h.crop.height as usize;
-    // Each pixel takes at least 12 bytes: refuse sizes the file cannot hold before
-    // allocating for them.
-    if n > data.len() / 12 {
-        return Err("the film is larger than the file holds (damaged file?)".into());
-    }
-    let film = acc.get_or_insert_with(|| {
+impl Parsed<'_> {
+    /// An empty film of the state's size, crop, filter and splat scale.
+    fn blank_film(&self) -> Film {
+        let h = &self.h;
         let mut f = Film::new(h.full.0, h.full.1, Some(h.crop), h.filter);
         f.set_splat_scale(h.splat_scale);
         f
-    });
-    let (min, max) = film.pixel_bounds();
-    let same = film.full_resolution() == UVec2::new(h.full.0, h.full.1)
-        && min == UVec2::new(h.crop.offset_x, h.crop.offset_y)
-        && max - min == UVec2::new(h.crop.width, h.crop.height)
-        && *film.filter() == h.filter;
-    if !same {
-        return Err("its film differs in size, crop or filter from the other states'".into());
     }
-    let (pixels, splats) = film.fixed_sums_mut();
-    for px in pixels.iter_mut() {
-        let mut p = FixedSums::default();
-        for v in &mut p.v {
-            *v = r.sleb()?;
-        }
-        p.count = u64::try_from(r.uleb()?).map_err(|_| "a sample count is out of range")?;
-        px.add(&p);
+
+    /// Whether `film` has this state's size, crop and filter.
+    fn fits(&self, film: &Film) -> bool {
+        let h = &self.h;
+        let (min, max) = film.pixel_bounds();
+        film.full_resolution() == UVec2::new(h.full.0, h.full.1)
+            && min == UVec2::new(h.crop.offset_x, h.crop.offset_y)
+            && max - min == UVec2::new(h.crop.width, h.crop.height)
+            && *film.filter() == h.filter
     }
-    if r.u8()? == 1 {
-        if splats.is_empty() {
-            splats.resize(n, [0; 3]);
-        }
-        for s in splats.iter_mut() {
-            for c in s.iter_mut() {
-                *c = c.wrapping_add(r.sleb()?);
-            }
-        }
+}
+
+/// Reads the row lengths of a layer of `rows` rows and returns the rows' bytes.
+fn take_rows<'a>(r: &mut Reader<'a>, rows: usize) -> Result<Vec<&'a [u8]>, String> {
+    // Each row length takes 4 bytes: refuse counts the file cannot hold before allocating.
+    if rows > (r.data.len() - r.at) / 4 {
+        return Err("the film is larger than the file holds (damaged file?)".into());
     }
+    let lens = (0..rows)
+        .map(|_| r.u32().map(|n| n as usize))
+        .collect::<Result<Vec<_>, _>>()?;
+    let data = r.data;
+    lens.into_iter()
+        .map(|n| {
+            let at = r.at;
+            r.take(n)?;
+            Ok(&data[at..at + n])
+        })
+        .collect()
+}
+
+/// Checks a state file (its checksum only with `verify`) and finds its rows.
+fn parse(data: &[u8], verify: bool) -> Result<Parsed<'_>, String> {
+    let mut r = open(data, verify)?;
+    let h = read_header(&mut r)?;
+    let rows = if h.crop.width == 0 {
+        0
+    } else {
+        h.crop.height as usize
+    };
+    let pixel_rows = take_rows(&mut r, rows)?;
+    // Each pixel takes at least 12 bytes: refuse a film the rows cannot hold before
+    // allocating for it.
+    let bytes: usize = pixel_rows.iter().map(|row| row.len()).sum();
+    if (h.crop.width as usize).saturating_mul(rows) > bytes / 12 {
+        return Err("the film is larger than the file holds (damaged file?)".into());
+    }
+    let splat_rows = match r.u8()? {
+        0 => None,
+        1 => Some(take_rows(&mut r, rows)?),
+        _ => return Err("unknown splat layer tag (damaged file?)".into()),
+    };
     if r.at != r.data.len() {
         return Err("unexpected bytes after the film (damaged file?)".into());
     }
-    film.add_counts(h.samples, h.nonfinite);
-    Ok(h.info)
+    Ok(Parsed {
+        h,
+        pixel_rows,
+        splat_rows,
+    })
+}
+
+/// Decodes one encoded row, adding each value (`get` reads one) to `out`'s.
+fn add_row<T>(
+    bytes: &[u8],
+    out: &mut [T],
+    mut get: impl FnMut(&mut Reader, &mut T) -> Result<(), String>,
+) -> Result<(), String> {
+    let mut r = Reader { data: bytes, at: 0 };
+    for v in out.iter_mut() {
+        get(&mut r, v)?;
+    }
+    if r.at != bytes.len() {
+        return Err("a row of the film has bytes left over (damaged file?)".into());
+    }
+    Ok(())
+}
+
+/// Adds the films of `parts` (each [`Parsed::fits`] `film`) into `film`: rows in parallel,
+/// every part's row added into the film's row (exact integer sums, so in any order).
+fn add_parts(film: &mut Film, parts: &[(String, Parsed)]) -> Result<(), String> {
+    use rayon::prelude::*;
+    let (min, max) = film.pixel_bounds();
+    let width = ((max.x - min.x) as usize).max(1);
+    let named = |name: &str, e: String| {
+        if name.is_empty() {
+            e
+        } else {
+            format!("{name}: {e}")
+        }
+    };
+    let (pixels, splats) = film.fixed_sums_mut();
+    pixels
+        .par_chunks_mut(width)
+        .enumerate()
+        .try_for_each(|(y, row)| {
+            for (name, p) in parts {
+                add_row(p.pixel_rows[y], row, |r, px| {
+                    let mut add = FixedSums::default();
+                    for v in &mut add.v {
+                        *v = r.sleb()?;
+                    }
+                    add.count =
+                        u64::try_from(r.uleb()?).map_err(|_| "a sample count is out of range")?;
+                    px.add(&add);
+                    Ok(())
+                })
+                .map_err(|e| named(name, e))?;
+            }
+            Ok::<(), String>(())
+        })?;
+    if parts.iter().any(|(_, p)| p.splat_rows.is_some()) {
+        if splats.is_empty() {
+            splats.resize(pixels.len(), [0; 3]);
+        }
+        splats
+            .par_chunks_mut(width)
+            .enumerate()
+            .try_for_each(|(y, row)| {
+                for (name, p) in parts {
+                    let Some(rows) = &p.splat_rows else { continue };
+                    add_row(rows[y], row, |r, s| {
+                        for c in s.iter_mut() {
+                            *c = c.wrapping_add(r.sleb()?);
+                        }
+                        Ok(())
+                    })
+                    .map_err(|e| named(name, e))?;
+                }
+                Ok::<(), String>(())
+            })?;
+    }
+    for (_, p) in parts {
+        film.add_counts(p.h.samples, p.h.nonfinite);
+    }
+    Ok(())
+}
+
+/// Decodes a state file's bytes, adding its film to `acc` (made from the file's header when
+/// `None`; otherwise it must have the same film). Returns its description.
+pub fn decode_into(data: &[u8], acc: &mut Option<Film>) -> Result<StateInfo, String> {
+    let p = parse(data, true)?;
+    let film = acc.get_or_insert_with(|| p.blank_film());
+    if !p.fits(film) {
+        return Err("its film differs in size, crop or filter from the other states'".into());
+    }
+    let info = p.h.info.clone();
+    add_parts(film, &[(String::new(), p)])?;
+    Ok(info)
 }
 
 /// Checks that states of one render cover its items once (named states: errors say which
@@ -518,37 +669,32 @@ pub fn check_cover(states: &[(String, StateInfo)]) -> Result<(), String> {
 }
 
 /// Merges states of one render (file contents, named for messages) that cover its items
-/// once into the state of the whole: headers (and checksums) first, so that a wrong set is
-/// refused before anything is decoded; then the states decoded in parallel, each worker
-/// adding into a film of its own (one film per thread, not per state), and those films
-/// added.
+/// once into the state of the whole: headers and checksums first (in parallel), so that a
+/// wrong set is refused before anything is decoded; then every state's rows added into one
+/// film, rows in parallel.
 pub fn merge_bytes(parts: &[(String, &[u8])]) -> Result<FilmState, String> {
     use rayon::prelude::*;
-    let infos = parts
+    let parsed = parts
         .par_iter()
         .map(|(name, d)| {
-            read_info(d)
-                .map(|i| (name.clone(), i))
+            parse(d, true)
+                .map(|p| (name.clone(), p))
                 .map_err(|e| format!("{name}: {e}"))
         })
         .collect::<Result<Vec<_>, _>>()?;
+    let infos: Vec<(String, StateInfo)> = parsed
+        .iter()
+        .map(|(name, p)| (name.clone(), p.h.info.clone()))
+        .collect();
     check_cover(&infos)?;
-    let films = parts
-        .par_iter()
-        .try_fold(
-            || None,
-            |mut acc: Option<Film>, (name, d)| {
-                // Checksums were checked with the headers.
-                decode_checked(d, &mut acc, false).map_err(|e| format!("{name}: {e}"))?;
-                Ok(acc)
-            },
-        )
-        .collect::<Result<Vec<_>, String>>()?;
-    let mut films = films.into_iter().flatten();
-    let mut whole = films.next().ok_or("no states to merge")?;
-    for f in films {
-        whole.add_film(&f);
+    let (_, first) = parsed.first().ok_or("no states to merge")?;
+    let mut whole = first.blank_film();
+    if let Some((name, _)) = parsed.iter().find(|(_, p)| !p.fits(&whole)) {
+        return Err(format!(
+            "{name}: its film differs in size, crop or filter from the other states'"
+        ));
     }
+    add_parts(&mut whole, &parsed)?;
     let mut info = infos[0].1.clone();
     info.items = 0..info.items_total;
     Ok(FilmState { info, film: whole })
@@ -618,6 +764,29 @@ mod tests {
             },
             film,
         }
+    }
+
+    /// Variable-length integers read back as written, through the one-word path (numbers
+    /// that end within 8 bytes with 8 bytes left) and the byte-by-byte one (longer
+    /// numbers, the file's last bytes).
+    #[test]
+    fn leb128_round_trip() {
+        let mut values = vec![0i128, 1, -1, 63, -64, 64, i128::MAX, i128::MIN];
+        for b in [7, 27, 28, 55, 56, 57, 63, 64, 100, 126] {
+            let p = 1i128 << b;
+            values.extend([p - 1, p, p + 1, -p, -p - 1, 1 - p]);
+        }
+        let mut bytes = Vec::new();
+        values.iter().for_each(|&v| put_sleb(&mut bytes, v));
+        let mut r = Reader {
+            data: &bytes,
+            at: 0,
+        };
+        for &v in &values {
+            assert_eq!(r.sleb().unwrap(), v);
+        }
+        assert_eq!(r.at, bytes.len());
+        assert!(r.sleb().is_err());
     }
 
     /// A state reads back as written (every sum, bounds, filter, tone mapping); damage and
