@@ -1219,8 +1219,10 @@ mod tests {
                     p.cross[1],
                     p.cross[2],
                 ];
-                let mut f = FixedSums::default();
-                f.v = [3; 11];
+                let mut f = FixedSums {
+                    v: [3; 11],
+                    count: 0,
+                };
                 f.add_rounded(&p);
                 for (got, want) in f.v.iter().zip(fields) {
                     assert_eq!(*got, 3 + to_fixed(want), "{want:e} beside {others:e}");
