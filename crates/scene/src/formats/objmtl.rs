@@ -22,8 +22,12 @@
 //! warning and the constant colour instead. `map_bump`/`bump`/`norm` are tangent-space normal
 //! maps (read raw, wrapping the material in `Material::NormalMap`). `map_d` (read raw: its
 //! alpha channel when the file has one, else its first channel) or `d` < 1 (`Tr` > 0) on a
-//! material that is not transparent is an alpha cut-out (`Material::Mask` outermost). `disp`,
-//! `Ka`, `map_Ka` are reported as ignored.
+//! material that is not transparent is an alpha cut-out (`Material::Mask` outermost). `disp`
+//! is a height map (read raw, its first channel, `-bm` its scale, 1 by default) applied as
+//! Mitsuba 3's `bumpmap` (`Material::HeightBump`) on a material without a normal map; with
+//! one, the normal map alone shades, as in the CS-E5520 renderer, whose path tracer reads
+//! normal maps and no height maps (its Chesterfield scene has both, one note says so).
+//! `Ka`, `map_Ka` and the other reflection-model keys are reported as ignored.
 //!
 //! # Scene defaults (the course application's, which the file does not store)
 //! A perspective camera looking down −z at the bounding box's centre (just inside the box when
@@ -75,6 +79,8 @@ pub struct MtlMaterial {
     pub map_ke: Option<PathBuf>,
     pub map_bump: Option<PathBuf>,
     pub map_d: Option<PathBuf>,
+    /// `disp`: a height map and its `-bm` scale.
+    pub disp: Option<(PathBuf, f32)>,
 }
 
 impl MtlMaterial {
@@ -95,6 +101,7 @@ impl MtlMaterial {
             map_ke: None,
             map_bump: None,
             map_d: None,
+            disp: None,
         }
     }
 
@@ -191,7 +198,14 @@ pub fn parse_mtl(text: &str, file: &Path, warnings: &mut Vec<Warning>) -> Vec<Mt
                     _ => m.map_bump = Some(p),
                 }
             }
-            "ka" | "map_ka" | "disp" | "sharpness" | "map_ns" | "refl" | "decal" => {
+            "disp" => match (map_file(rest), bump_multiplier(rest)) {
+                (None, _) => warn(warnings, format!("{kw} without a file name ignored")),
+                (_, Err(e)) => warn(warnings, format!("{kw}: {e}; ignored")),
+                (Some(name), Ok(scale)) => {
+                    m.disp = Some((dir.join(name.replace('\\', "/")), scale));
+                }
+            },
+            "ka" | "map_ka" | "sharpness" | "map_ns" | "refl" | "decal" => {
                 // Known but meaningless to a path tracer, or not supported: silent for Ka
                 // (always present), reported at mapping time for the others.
                 if kwl != "ka" {
@@ -253,6 +267,18 @@ fn colour(s: &str) -> std::result::Result<Rgb, String> {
         _ => return Err(format!("expected 1 or 3 numbers, found '{s}'")),
     };
     Ok(c.max(Rgb::ZERO))
+}
+
+/// The `-bm` (bump multiplier) option of a map line: 1 without one.
+fn bump_multiplier(rest: &str) -> std::result::Result<f32, String> {
+    let toks: Vec<&str> = rest.split_whitespace().collect();
+    match toks.iter().position(|t| *t == "-bm") {
+        None => Ok(1.0),
+        Some(i) => match toks.get(i + 1).map(|t| t.parse::<f32>()) {
+            Some(Ok(v)) if v.is_finite() => Ok(v),
+            _ => Err("-bm needs a finite number".into()),
+        },
+    }
 }
 
 /// The file name of a `map_*` line after its options (`-bm 1`, `-s 1 1 1`, `-clamp on`...).
@@ -631,7 +657,8 @@ fn map_material(
         })
     };
     let mut id = add(material, desc);
-    // `map_bump`/`bump`/`norm`: a tangent-space normal map (read raw) around the material.
+    // `map_bump`/`bump`/`norm`: a tangent-space normal map (read raw) around the material;
+    // else `disp`, a height map, as Mitsuba 3's `bumpmap` with its defaults.
     if let Some(p) = &m.map_bump
         && let Some(texture) = texture(p, &m.loc, desc, cache, true)
     {
@@ -639,6 +666,30 @@ fn map_material(
             Material::NormalMap {
                 nested: id,
                 texture,
+            },
+            desc,
+        );
+        if let Some((h, _)) = &m.disp {
+            desc.warnings.push(Warning {
+                loc: m.loc.clone(),
+                message: format!(
+                    "material '{}': its height map (disp) {} is not applied under its \
+                     normal map, which shades alone as in the CS-E5520 renderer",
+                    m.name,
+                    h.display()
+                ),
+            });
+        }
+    } else if let Some((p, scale)) = &m.disp
+        && let Some(texture) = texture(p, &m.loc, desc, cache, true)
+    {
+        id = add(
+            Material::HeightBump {
+                nested: id,
+                texture,
+                scale: *scale,
+                flip_invalid_normals: true,
+                shadowing: true,
             },
             desc,
         );
@@ -692,6 +743,9 @@ mod tests {
         );
         assert_eq!(map_file("-clamp on x.png").as_deref(), Some("x.png"));
         assert_eq!(map_file("-bm 1"), None);
+        assert_eq!(bump_multiplier("-bm 0.5 -s 1 1 1 h.png"), Ok(0.5));
+        assert_eq!(bump_multiplier("h.png"), Ok(1.0));
+        assert!(bump_multiplier("-bm x h.png").is_err());
     }
 
     #[test]

@@ -165,6 +165,61 @@ fn dissolve_and_alpha_maps_are_cut_outs() {
     ));
 }
 
+/// `disp` is a height bump map (Mitsuba 3's `bumpmap`, `-bm` its scale) on a material
+/// without a normal map; under a normal map it is not applied, and one note says so.
+#[test]
+fn height_maps_bump_unless_a_normal_map_shades() {
+    let dir = tmpdir("disp");
+    for f in ["h.png", "n.png"] {
+        std::fs::write(dir.join(f), b"").unwrap(); // existence is all the loader checks
+    }
+    let s = load(
+        &dir,
+        QUAD,
+        "newmtl wall\nKd 0.5 0.5 0.5\ndisp -bm 0.25 h.png\n\
+         newmtl lamp\nKd 0.2 0.2 0.2\nmap_bump n.png\ndisp h.png\nKe 1 1 1\n",
+    )
+    .unwrap();
+    let outer = |i: usize| &s.material(s.shapes[i].material.unwrap()).material;
+    let Material::HeightBump {
+        nested,
+        texture,
+        scale,
+        flip_invalid_normals: true,
+        shadowing: true,
+    } = outer(0)
+    else {
+        panic!("disp makes a bump map, got {}", outer(0).kind_name())
+    };
+    assert_eq!(*scale, 0.25);
+    assert!(matches!(
+        s.material(*nested).material,
+        Material::Diffuse { .. }
+    ));
+    assert!(matches!(
+        &s.textures[texture.0 as usize].texture,
+        scene::Texture::Bitmap { raw: true, path, .. } if path.ends_with("h.png")
+    ));
+    assert!(
+        matches!(outer(1), Material::NormalMap { nested, .. }
+            if matches!(s.material(*nested).material, Material::RoughPlastic { .. } | Material::Diffuse { .. })),
+        "a normal map shades alone, got {}",
+        outer(1).kind_name()
+    );
+    let notes: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.message.contains("height map"))
+        .collect();
+    assert_eq!(notes.len(), 1, "{:?}", s.warnings);
+    assert!(notes[0].message.contains("'lamp'"), "{}", notes[0].message);
+    assert!(
+        !s.warnings
+            .iter()
+            .any(|w| w.message.contains("not supported"))
+    );
+}
+
 #[test]
 fn missing_texture_warns_once_and_falls_back() {
     let dir = tmpdir("tex");
