@@ -388,6 +388,19 @@ pub fn build_cached(
             ),
         });
     }
+    // Microflake media (`sggx`) scale their extinction by direction, which volpath's
+    // free flights and transmittances apply; the other integrators' media densities do not.
+    if media.iter().any(|m| m.phase.is_microflake())
+        && !matches!(integrator, Integrator::VolPath(_) | Integrator::Path(_))
+    {
+        return Err(BuildError {
+            loc: Loc::file(&desc.source),
+            message: format!(
+                "phase 'sggx' is rendered by volpath (path ignores media), not by {}",
+                integrator.name()
+            ),
+        });
+    }
     // Mitsuba's `path` ignores media, and so does ours for a scene that declares any. When
     // every medium comes from Beer absorption (purely absorbing, homogeneous), the path
     // tracer applies them, as the courses' tracers apply absorption inside their glass.

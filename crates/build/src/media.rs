@@ -6,7 +6,7 @@ use render::media::grid::VoxelGrid;
 use render::media::heterogeneous::Albedo;
 use std::sync::Arc;
 
-use render::media::phase::{BlendPhase, TabulatedPhase};
+use render::media::phase::{BlendPhase, SggxPhase, TabulatedPhase};
 use render::media::{
     Blackbody, Emission, EmissionSampler, Heterogeneous, Homogeneous, Medium, MediumKind, Phase,
 };
@@ -108,12 +108,17 @@ fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {
             )))
         }
     };
-    let phase = phase(&m.phase).ok_or_else(|| BuildError {
+    let phase = phase(&m.phase).map_err(|message| BuildError {
         loc: m.loc.clone(),
-        message: "a tabulated phase function needs at least two non-negative values, not all \
-                  zero"
-            .into(),
+        message,
     })?;
+    if phase.is_microflake() && !matches!(kind, MediumKind::Homogeneous(_)) {
+        // Its extinction σt·σ(ω) along a ray through a grid is not a scaled distance.
+        return Err(BuildError {
+            loc: m.loc.clone(),
+            message: "phase 'sggx' is supported in homogeneous media only".into(),
+        });
+    }
     let emission = match &m.emission {
         None => None,
         Some(MediumEmission::Radiance(VolumeParam::Const(le))) => {
@@ -257,13 +262,38 @@ fn grid(v: &VolumeDesc) -> Result<(VoxelGrid, Mat4), BuildError> {
     Ok((grid, to_world))
 }
 
-/// The renderer's phase function for `p`; `None` for a table that is not a density.
-fn phase(p: &PhaseDesc) -> Option<Phase> {
-    Some(match p {
+/// The renderer's phase function for `p`; an error for a table that is not a density, and
+/// for an SGGX S grid that cannot be read, varies over space or is not positive definite.
+fn phase(p: &PhaseDesc) -> Result<Phase, String> {
+    Ok(match p {
         PhaseDesc::Isotropic => Phase::Isotropic,
         &PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
         PhaseDesc::Rayleigh => Phase::Rayleigh,
-        PhaseDesc::Tabulated { values } => Phase::Tabulated(Arc::new(TabulatedPhase::new(values)?)),
+        PhaseDesc::Tabulated { values } => {
+            Phase::Tabulated(Arc::new(TabulatedPhase::new(values).ok_or_else(|| {
+                "a tabulated phase function needs at least two non-negative values, not all \
+                 zero"
+                    .to_string()
+            })?))
+        }
+        PhaseDesc::Sggx { s_grid } => {
+            let g = VoxelGrid::read_vol_of(s_grid, false, &[6]).map_err(|e| e.to_string())?;
+            let first: [f32; 6] = std::array::from_fn(|c| g.data[c]);
+            if g.data.chunks_exact(6).any(|v| v != first) {
+                // Phase functions are evaluated without the point (Mitsuba reads S there).
+                return Err(format!(
+                    "{}: phase 'sggx' with an S that varies over space is not supported (only \
+                     a constant S: every voxel equal)",
+                    s_grid.display()
+                ));
+            }
+            Phase::Sggx(Arc::new(SggxPhase::new(first).ok_or_else(|| {
+                format!(
+                    "phase 'sggx': S = {first:?} (S_xx, S_yy, S_zz, S_xy, S_xz, S_yz) is not \
+                     positive definite"
+                )
+            })?))
+        }
         PhaseDesc::Blend { weight, phases } => Phase::Blend(Arc::new(BlendPhase {
             weight: weight.clamp(0.0, 1.0),
             first: phase(&phases[0])?,

@@ -546,6 +546,12 @@ pub enum PhaseDesc {
         weight: f32,
         phases: Box<[PhaseDesc; 2]>,
     },
+    /// Mitsuba 3's `sggx`: specular SGGX microflakes whose S matrix (S_xx, S_yy, S_zz, S_xy,
+    /// S_xz, S_yz) a 6-channel Mitsuba `.vol` grid at `s_grid` gives; the renderer takes it
+    /// constant (every voxel equal), `build` refuses one that varies.
+    Sggx {
+        s_grid: std::path::PathBuf,
+    },
 }
 
 // ---------------------------------------------------------------------------------------------

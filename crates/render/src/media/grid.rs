@@ -125,6 +125,16 @@ impl VoxelGrid {
     /// Read a Mitsuba `.vol` file (version 3, float32 data, 1 or 3 channels). Its bounding box
     /// is ignored: the grid fills [0,1]³ of its space, placed by the scene's `to_world`.
     pub fn read_vol(path: &Path, trilinear: bool) -> Result<VoxelGrid, GridError> {
+        Self::read_vol_of(path, trilinear, &[1, 3])
+    }
+
+    /// [`Self::read_vol`] of a grid of `channels` values per voxel (6: the S matrices of
+    /// Mitsuba's `sggx`).
+    pub fn read_vol_of(
+        path: &Path,
+        trilinear: bool,
+        channels_allowed: &[i32],
+    ) -> Result<VoxelGrid, GridError> {
         let fail = |offset: Option<usize>, message: String| GridError {
             path: path.display().to_string(),
             offset,
@@ -166,10 +176,12 @@ impl VoxelGrid {
             return Err(fail(Some(8), format!("invalid resolution {dims:?}")));
         }
         let channels = int(20);
-        if channels != 1 && channels != 3 {
+        if !channels_allowed.contains(&channels) {
             return Err(fail(
                 Some(20),
-                format!("{channels} channels per voxel; only 1 or 3 are supported"),
+                format!(
+                    "{channels} channels per voxel; only {channels_allowed:?} are supported here"
+                ),
             ));
         }
         let res = dims.map(|d| d as usize);
@@ -197,7 +209,8 @@ impl VoxelGrid {
         let mut data = Vec::with_capacity(count);
         for (i, b) in bytes[48..need].chunks_exact(4).enumerate() {
             let v = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-            if !v.is_finite() || v < 0.0 {
+            // An S matrix's off-diagonal entries may be negative.
+            if !v.is_finite() || (v < 0.0 && channels != 6) {
                 return Err(fail(
                     Some(48 + 4 * i),
                     format!("voxel value {v}: values must be finite and ≥ 0"),

@@ -254,6 +254,9 @@ impl Medium {
         sampler: &mut impl Samples,
         m: &M,
     ) -> Flight<M::C> {
+        if let Some(k) = self.phase.extinction_scale(ray.d) {
+            return self.microflake_sample_in(k, d_max, hero, sampler, m);
+        }
         match &self.kind {
             MediumKind::Homogeneous(h) if h.sigma_s == Vec3::ZERO && self.emission.is_none() => {
                 Flight::Pass {
@@ -265,6 +268,39 @@ impl Medium {
             MediumKind::Heterogeneous(h) => {
                 h.sample_with_in(ray, d_max, &mut || sampler.next_1d(), m)
             }
+        }
+    }
+
+    /// [`Self::sample_in`] in a homogeneous medium of microflakes whose extinction along the
+    /// ray is `k`·σt (Mitsuba 3 scales σt by the phase function's projected area σ(ω) when
+    /// it is a microflake one, the albedo kept): the flight of the unscaled medium over
+    /// `k`·d_max, its distance divided by `k` (the weights depend on σt·d only). `build`
+    /// allows microflakes only in homogeneous media.
+    #[inline(never)]
+    fn microflake_sample_in<M: ColorMode>(
+        &self,
+        k: f32,
+        d_max: f32,
+        hero: usize,
+        sampler: &mut impl Samples,
+        m: &M,
+    ) -> Flight<M::C> {
+        let MediumKind::Homogeneous(h) = &self.kind else {
+            unreachable!("microflake phase functions are refused in grids by build")
+        };
+        match h.sample_in(d_max * k, sampler.next_1d(), hero, m) {
+            Flight::Scatter {
+                d,
+                weight,
+                ratio,
+                emit,
+            } => Flight::Scatter {
+                d: (d / k).min(d_max),
+                weight,
+                ratio,
+                emit,
+            },
+            pass => pass,
         }
     }
 
@@ -309,6 +345,10 @@ impl Medium {
 
     /// σt and σs of a homogeneous medium whose coefficients are the same in every channel.
     pub fn grey_homogeneous(&self) -> Option<(f32, f32)> {
+        if self.phase.is_microflake() {
+            // Its extinction depends on the direction.
+            return None;
+        }
         match &self.kind {
             MediumKind::Homogeneous(h)
                 if h.sigma_t.x == h.sigma_t.y
@@ -346,8 +386,9 @@ impl Medium {
         sampler: &mut impl Samples,
         m: &M,
     ) -> M::C {
+        let k = self.phase.extinction_scale(ray.d);
         match &self.kind {
-            MediumKind::Homogeneous(h) => h.transmittance_in(d_max, m),
+            MediumKind::Homogeneous(h) => h.transmittance_in(k.map_or(d_max, |k| d_max * k), m),
             MediumKind::Heterogeneous(h) => {
                 M::C::splat(h.estimate(ray, d_max, estimator, &mut || sampler.next_1d()))
             }

@@ -1,5 +1,6 @@
 //! Phase functions: isotropic, Henyey–Greenstein, Rayleigh, tabulated (Mitsuba 3's
-//! `tabphase`) and blends of two (`blendphase`), with Mitsuba 3's conventions.
+//! `tabphase`), blends of two (`blendphase`) and the specular SGGX microflake phase function
+//! of a constant S (Mitsuba 3's `sggx`), with Mitsuba 3's conventions.
 //!
 //! Directions point away from the scattering point: `wo` towards where the path came from
 //! (Mitsuba's `mi.wi`), `wi` the new direction. The scattering angle θ is between the
@@ -25,6 +26,115 @@ pub enum Phase {
     Tabulated(Arc<TabulatedPhase>),
     /// `(1 − w)·first + w·second` (Mitsuba's `blendphase`).
     Blend(Arc<BlendPhase>),
+    /// The specular SGGX microflake phase function (Mitsuba's `sggx`).
+    Sggx(Arc<SggxPhase>),
+}
+
+/// Mitsuba 3's `sggx`: specular microflakes whose normals follow the SGGX distribution of
+/// the symmetric positive definite matrix S (Heitz, Dupuy, Crassin and Dachsbacher 2015,
+/// "The SGGX microflake distribution"). Its value for scattering from `-wo` into `wi` is
+/// D(h)/(4·σ(wo)), h the half vector of `wo` and `wi`, D(m) = 1/(π·√|S|·(mᵀS⁻¹m)²) and
+/// σ(w) = √(wᵀSw) the projected area; a sample reflects `wo` about a visible normal drawn
+/// from ⟨wo, m⟩·D(m)/σ(wo), so its density is the value. S is constant here (Mitsuba lets a
+/// 6-channel volume vary it over space).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SggxPhase {
+    /// S_xx, S_yy, S_zz, S_xy, S_xz, S_yz (Mitsuba's order).
+    s: [f32; 6],
+    /// The adjugate's entries in the same order (S⁻¹ = adj / det), for D.
+    adj: [f32; 6],
+    /// |S|.
+    det: f32,
+}
+
+impl SggxPhase {
+    /// From S_xx, S_yy, S_zz, S_xy, S_xz, S_yz; `None` unless finite and positive definite.
+    pub fn new(s: [f32; 6]) -> Option<SggxPhase> {
+        let [xx, yy, zz, xy, xz, yz] = s;
+        let adj = [
+            yy * zz - yz * yz,
+            xx * zz - xz * xz,
+            xx * yy - xy * xy,
+            xz * yz - zz * xy,
+            xy * yz - yy * xz,
+            xy * xz - xx * yz,
+        ];
+        let det = xx * adj[0] + xy * adj[3] + xz * adj[4];
+        // Sylvester's criterion: the leading minors are positive.
+        let ok = s.iter().all(|v| v.is_finite()) && xx > 0.0 && adj[2] > 0.0 && det > 0.0;
+        ok.then_some(SggxPhase { s, adj, det })
+    }
+
+    /// wᵀ·M·w for a symmetric M given as its six entries.
+    #[inline]
+    fn quad(m: &[f32; 6], w: Vec3) -> f32 {
+        w.x * w.x * m[0]
+            + w.y * w.y * m[1]
+            + w.z * w.z * m[2]
+            + 2.0 * (w.x * w.y * m[3] + w.x * w.z * m[4] + w.y * w.z * m[5])
+    }
+
+    /// The microflake normal density D(m) (per steradian; `sggx_pdf` in Mitsuba).
+    #[inline]
+    fn ndf(&self, m: Vec3) -> f32 {
+        let den = Self::quad(&self.adj, m);
+        self.det * self.det.sqrt() / (PI * den * den)
+    }
+
+    /// The projected area σ(w) = √(wᵀSw).
+    #[inline]
+    fn projected_area(&self, w: Vec3) -> f32 {
+        safe_sqrt(Self::quad(&self.s, w))
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let h = wo + wi;
+        let len2 = h.length_squared();
+        let sigma = self.projected_area(wo);
+        if !(len2 > 0.0 && sigma > 0.0) {
+            return 0.0;
+        }
+        0.25 * self.ndf(h / len2.sqrt()) / sigma
+    }
+
+    /// A visible normal for `wo` (Heitz et al.'s `sample_VNDF`, as Mitsuba's `sggx_sample`:
+    /// S in a frame whose third axis is `wo`, a cosine-distributed point of the unit disk
+    /// mapped by the factor of that matrix).
+    fn sample_normal(&self, wo: Vec3, u: Vec2) -> Vec3 {
+        let f = Frame::from_normal(wo);
+        let (k, j, i) = (f.s, f.t, f.n);
+        let [xx, yy, zz, xy, xz, yz] = self.s;
+        let bil = |a: Vec3, b: Vec3| {
+            a.x * b.x * xx
+                + a.y * b.y * yy
+                + a.z * b.z * zz
+                + (a.x * b.y + a.y * b.x) * xy
+                + (a.x * b.z + a.z * b.x) * xz
+                + (a.y * b.z + a.z * b.y) * yz
+        };
+        let (s_kk, s_jj, s_ii) = (bil(k, k), bil(j, j), bil(i, i));
+        let (s_kj, s_ki, s_ji) = (bil(k, j), bil(k, i), bil(j, i));
+        let det = s_kk * s_jj * s_ii - s_kj * s_kj * s_ii - s_ki * s_ki * s_jj - s_ji * s_ji * s_kk
+            + 2.0 * s_kj * s_ki * s_ji;
+        let inv_sqrt_ii = 1.0 / s_ii.max(f32::MIN_POSITIVE).sqrt();
+        let tmp = safe_sqrt(s_jj * s_ii - s_ji * s_ji).max(f32::MIN_POSITIVE);
+        let m_k = Vec3::new(det.abs().sqrt() / tmp, 0.0, 0.0);
+        let m_j = Vec3::new(
+            -inv_sqrt_ii * (s_ki * s_ji - s_kj * s_ii) / tmp,
+            inv_sqrt_ii * tmp,
+            0.0,
+        );
+        let m_i = inv_sqrt_ii * Vec3::new(s_ki, s_ji, s_ii);
+        let w = warp::square_to_cosine_hemisphere(u);
+        let m = (w.x * m_k + w.y * m_j + w.z * m_i).normalize();
+        m.x * k + m.y * j + m.z * i
+    }
+
+    fn sample(&self, wo: Vec3, u: Vec2) -> (Vec3, f32) {
+        let m = self.sample_normal(wo, u);
+        let wi = (2.0 * wo.dot(m) * m - wo).normalize();
+        (wi, self.eval(wo, wi))
+    }
 }
 
 /// A phase function tabulated at cosines of the scattering angle spaced evenly over
@@ -123,6 +233,22 @@ fn around(axis: Vec3, cos_theta: f32, u: f32) -> Vec3 {
 }
 
 impl Phase {
+    /// For a microflake phase function (`Sggx`), the factor σ(ω) by which Mitsuba 3 scales a
+    /// medium's extinction along direction `d` (its projected area; even in `d`); `None` for
+    /// the others, whose media do not depend on the direction.
+    #[inline]
+    pub fn extinction_scale(&self, d: Vec3) -> Option<f32> {
+        match self {
+            Phase::Sggx(p) => Some(p.projected_area(d)),
+            _ => None,
+        }
+    }
+
+    /// Whether it is a microflake phase function (see [`Self::extinction_scale`]).
+    pub fn is_microflake(&self) -> bool {
+        matches!(self, Phase::Sggx(_))
+    }
+
     /// The phase function's value for scattering from `-wo` into `wi`; it is also the
     /// density `sample` gives `wi`.
     #[inline]
@@ -135,6 +261,7 @@ impl Phase {
             Phase::Blend(b) => {
                 (1.0 - b.weight) * b.first.eval(wo, wi) + b.weight * b.second.eval(wo, wi)
             }
+            Phase::Sggx(p) => p.eval(wo, wi),
         }
     }
 
@@ -183,6 +310,7 @@ impl Phase {
                 };
                 (wi, self.eval(wo, wi))
             }
+            Phase::Sggx(p) => p.sample(wo, u),
         }
     }
 }
@@ -233,6 +361,27 @@ mod tests {
         assert!(TabulatedPhase::new(&[1.0, -1.0]).is_none());
     }
 
+    /// Values Mitsuba 3.9.1's `sggx` returns (`eval_pdf`, scalar_rgb) for S = (1, 0.5, 0.2,
+    /// 0.1, 0.05, 0), mi.wi = +z; and S = I is isotropic.
+    #[test]
+    fn sggx_matches_mitsuba_values() {
+        let p = SggxPhase::new([1.0, 0.5, 0.2, 0.1, 0.05, 0.0]).unwrap();
+        for (wi, want) in [
+            (Vec3::new(0.6, 0.0, 0.8), 0.0281695f32),
+            (Vec3::new(-0.856509, 0.479107, -0.191964), 0.0574206),
+        ] {
+            let v = p.eval(Vec3::Z, wi);
+            assert!((v - want).abs() < 2e-6, "{v} vs {want}");
+        }
+        let iso = SggxPhase::new([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]).unwrap();
+        let wo = Vec3::new(0.3, -0.5, 0.8).normalize();
+        for wi in [Vec3::X, wo, Vec3::new(0.1, 0.7, -0.2).normalize()] {
+            assert!((iso.eval(wo, wi) - INV_4PI).abs() < 1e-6);
+        }
+        assert!(SggxPhase::new([1.0, 1.0, -1.0, 0.0, 0.0, 0.0]).is_none());
+        assert!(SggxPhase::new([1.0, 1.0, 1.0, 2.0, 0.0, 0.0]).is_none());
+    }
+
     #[test]
     fn samples_have_the_density_eval_reports() {
         let wo = Vec3::new(0.3, -0.5, 0.8).normalize();
@@ -250,6 +399,9 @@ mod tests {
             Phase::Rayleigh,
             table,
             blend,
+            Phase::Sggx(Arc::new(
+                SggxPhase::new([1.0, 0.5, 0.2, 0.1, 0.05, 0.0]).unwrap(),
+            )),
         ] {
             for u in [
                 Vec2::new(0.1, 0.2),

@@ -873,10 +873,31 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                 let phases = Box::new([self.phase(first)?, self.phase(second)?]);
                 PhaseDesc::Blend { weight, phases }
             }
+            "sggx" => {
+                let Some(c) = pl.named_child("s") else {
+                    return Err(err(
+                        pl.loc(),
+                        "phase 'sggx' needs its S matrix: <volume name=\"S\" type=\"gridvolume\"> \
+                         of 6 channels (S_xx, S_yy, S_zz, S_xy, S_xz, S_yz)",
+                    ));
+                };
+                match self.volume(c)? {
+                    VolumeParam::Grid(v) if matches!(v.format, VolumeFormat::MitsubaVol) => {
+                        PhaseDesc::Sggx { s_grid: v.path }
+                    }
+                    _ => {
+                        // Mitsuba's constvolume has no 6-channel value (eval_6).
+                        return Err(err(
+                            &c.loc,
+                            "phase 'sggx': S must be a 6-channel gridvolume (.vol file)",
+                        ));
+                    }
+                }
+            }
             _ => {
                 return Err(unknown_type(
                     &pl,
-                    "isotropic, hg, rayleigh, tabphase, blendphase",
+                    "isotropic, hg, rayleigh, tabphase, blendphase, sggx",
                 ));
             }
         };
