@@ -2,8 +2,13 @@
 //! does not absorb (albedo 1), under a uniform environment of radiance 1, must look exactly
 //! like the environment, whatever its density, colour of extinction or phase function.
 //! Checked per channel for a coloured homogeneous medium (spectral MIS over the hero
-//! channel), a grey one with strong forward scattering, and a random density grid (delta and
-//! ratio tracking).
+//! channel), a grey one with strong forward scattering, a random density grid (delta and
+//! ratio tracking), and Mitsuba 3's `sggx` microflakes with three anisotropic S (flakes, a
+//! general S with off-diagonal terms, fibres): their extinction σt·σ(ω) depends on the
+//! direction and their phase function is not symmetric in its two directions, so the
+//! furnace holds only if flights, phase sampling and the phase values of next-event
+//! estimation and MIS agree. (Mitsuba 3.9.1 renders these three at 0.72, 0.82 and 0.67:
+//! see `scenes/mitsuba/sggx.xml`.)
 //!
 //! Each in RGB mode and in spectral mode (four wavelengths per path, the hero wavelength's
 //! density sampling the flights, the coloured σt upsampled to a spectrum; the environment an
@@ -12,8 +17,8 @@
 //!
 //! Statistics: 24×24 pixels × 128 spp of `volpath` (unbounded depth, Russian roulette). Pixels
 //! are independent, so the standard error of the image mean is the pixel spread / √576; a
-//! two-sided z-test per channel must not reject 1 at α = 0.001 / 9 (Šidák over the 3 media ×
-//! 3 channels: |z| < 3.86), each mode its own family.
+//! two-sided z-test per channel must not reject 1 at α = 0.001 (Šidák over the 6 media × 3
+//! channels: |z| < 4.02), each mode its own family.
 
 use std::path::PathBuf;
 
@@ -45,9 +50,25 @@ fn write_grid(path: &std::path::Path) {
     std::fs::write(path, b).unwrap();
 }
 
+/// One voxel of a Mitsuba `.vol` grid with 6 channels: an SGGX matrix S (S_xx, S_yy, S_zz,
+/// S_xy, S_xz, S_yz).
+fn write_sggx(path: &std::path::Path, s: [f32; 6]) {
+    let mut b = b"VOL\x03".to_vec();
+    for v in [1i32, 1, 1, 1, 6] {
+        b.extend(v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0].into_iter().chain(s) {
+        b.extend(v.to_le_bytes());
+    }
+    std::fs::write(path, b).unwrap();
+}
+
 fn furnace(name: &str, medium: &str, mode: RenderMode) -> [(f64, f64); 3] {
     let d = dir();
     write_grid(&d.join("grid.vol"));
+    write_sggx(&d.join("flakes.vol"), [0.02, 1.0, 0.02, 0.0, 0.0, 0.0]);
+    write_sggx(&d.join("general.vol"), [1.0, 0.5, 0.2, 0.1, 0.05, 0.0]);
+    write_sggx(&d.join("fibres.vol"), [1.0, 0.05, 1.0, 0.0, 0.3, 0.0]);
     let xml = format!(
         r#"<scene version="3.0.0">
     <integrator type="volpath"><integer name="max_depth" value="-1"/><integer name="rr_depth" value="5"/></integrator>
@@ -93,7 +114,7 @@ fn check(name: &str, medium: &str) {
             let z = (mean - 1.0) / se.max(1e-9);
             println!("{name} {mode:?} channel {c}: mean {mean:.5} ± {se:.5} (z = {z:.2})");
             assert!(
-                z.abs() < 3.86,
+                z.abs() < 4.02,
                 "{name} {mode:?} channel {c}: {mean} ± {se} rejects 1"
             );
         }
@@ -138,4 +159,38 @@ fn density_grid() {
             <phase type="isotropic"/>
         </medium>"#,
     );
+}
+
+/// `sggx` with an S of its own (`flakes.vol`, `general.vol`, `fibres.vol`).
+fn sggx(name: &str) {
+    check(
+        name,
+        &format!(
+            r#"<medium type="homogeneous" name="interior">
+            <rgb name="albedo" value="1, 1, 1"/>
+            <float name="sigma_t" value="3"/>
+            <phase type="sggx">
+                <volume name="S" type="gridvolume">
+                    <string name="filename" value="{name}.vol"/>
+                    <transform name="to_world"><scale value="2.5"/><translate value="-1.25, -1.25, -1.25"/></transform>
+                </volume>
+            </phase>
+        </medium>"#
+        ),
+    );
+}
+
+#[test]
+fn sggx_flakes() {
+    sggx("flakes");
+}
+
+#[test]
+fn sggx_general() {
+    sggx("general");
+}
+
+#[test]
+fn sggx_fibres() {
+    sggx("fibres");
 }
