@@ -10,8 +10,8 @@
 //!   192 block-channels, 15 degrees of freedom on both sides). Volpath in RGB and in spectral
 //!   mode, BDPT in both, the path tracer (which renders subsurface scenes through volpath) in
 //!   RGB; with a rough boundary (`sss-sphere-rough.xml`) volpath in RGB and spectral mode
-//!   (BDPT is biased there, by its spectral MIS in chromatic media, and warns:
-//!   `bdpt_warns_on_rough_chromatic_subsurface`).
+//!   and light tracing in RGB (BDPT is biased there, by its spectral MIS in chromatic
+//!   media, and warns: `bdpt_warns_on_rough_chromatic_subsurface`).
 //!   The same test rejects the medium written with the requested multiple-scattering albedo
 //!   as its single-scattering albedo (no inversion), so it is not vacuous.
 //! - **Photon mapping** is consistent, not unbiased: SPPM's and the photon mapper's image
@@ -152,6 +152,13 @@ fn volpath_spectral_matches_dielectric_with_medium() {
 fn rough_boundary_matches_rough_dielectric_with_medium() {
     check_equivalence_of("sss-sphere-rough", None, RenderMode::Rgb);
     check_equivalence_of("sss-sphere-rough", None, RenderMode::Spectral);
+}
+
+/// Light tracing sees the sphere through its rough boundary only (a smooth one is a delta
+/// surface, which no light path reaches the lens through).
+#[test]
+fn ptracer_rough_boundary_matches_rough_dielectric_with_medium() {
+    check_equivalence_of("sss-sphere-rough", Some("ptracer"), RenderMode::Rgb);
 }
 
 /// BDPT on a rough boundary with chromatic mean free paths is biased by its spectral MIS
@@ -413,4 +420,67 @@ impl Pcg {
         let x = xorshifted.rotate_right(rot);
         (f64::from(x) + 0.5) / 4294967296.0
     }
+}
+
+/// The Mitsuba form: each parameterisation, the boundary it makes, and what is refused.
+#[test]
+fn mitsuba_subsurface_forms() {
+    let d = std::env::temp_dir().join(format!("penumbra-sss-xml-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let load_bsdf = |body: &str| {
+        let path = d.join("s.xml");
+        std::fs::write(
+            &path,
+            format!(
+                r#"<scene version="3.0.0"><shape type="sphere"><bsdf type="subsurface">{body}</bsdf></shape></scene>"#
+            ),
+        )
+        .unwrap();
+        scene::load(&path, &Default::default()).map(|doc| match doc {
+            Document::Scene(desc) => desc.materials[0].material.clone(),
+            _ => panic!(),
+        })
+    };
+    let sigma = |m: &scene::Material| match m {
+        scene::Material::Subsurface { medium, .. } => medium.sigma(),
+        _ => panic!("not subsurface: {m:?}"),
+    };
+    let m =
+        load_bsdf(r#"<string name="material" value="ketchup"/><float name="scale" value="2"/>"#)
+            .unwrap();
+    let k = base::subsurface::measured("Ketchup").unwrap();
+    assert!((sigma(&m).0.y - 2.0 * k.sigma_a[1]).abs() < 1e-6);
+    let m = load_bsdf(r#"<rgb name="sigma_a" value="1, 2, 3"/><float name="alpha" value="0.1"/>"#)
+        .unwrap();
+    assert_eq!(sigma(&m).0, scene::Rgb::new(1.0, 2.0, 3.0));
+    assert_eq!(sigma(&m).1, scene::Rgb::ZERO);
+    let scene::Material::Subsurface { boundary, .. } = &m else {
+        panic!()
+    };
+    assert!(matches!(
+        **boundary,
+        scene::Material::RoughDielectric { .. }
+    ));
+    let m =
+        load_bsdf(r#"<float name="mfp" value="0.5"/><float name="albedo" value="0.5"/>"#).unwrap();
+    let (a, s) = sigma(&m);
+    assert!(((a + s).x - 2.0).abs() < 1e-5);
+    let w = base::subsurface::single_scattering_albedo(0.5) as f32;
+    assert!((s.x / (a + s).x - w).abs() < 1e-6);
+    let scene::Material::Subsurface { boundary, .. } = &m else {
+        panic!()
+    };
+    assert!(
+        matches!(**boundary, scene::Material::Dielectric { int_ior, .. } if int_ior == 1.33),
+        "{boundary:?}"
+    );
+    for bad in [
+        r#"<rgb name="sigma_a" value="1"/><float name="mfp" value="1"/>"#,
+        r#"<string name="material" value="jade"/>"#,
+        r#"<float name="albedo" value="1.5"/>"#,
+        r#"<float name="g" value="1"/>"#,
+    ] {
+        assert!(load_bsdf(bad).is_err(), "accepted {bad}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -533,7 +533,14 @@ impl<'c, 's> SceneBuilder<'c, 's> {
     /// and `albedo` (the multiple-scattering albedo), or `material` (a name of Jensen et al.
     /// 2001's table, in mm⁻¹), each times `scale`; `g` the Henyey–Greenstein asymmetry.
     fn subsurface(&mut self, pl: &Plugin<'s>) -> Result<Material> {
-        let (int_ior, dispersion) = if pl.props.has("int_ior") {
+        // Water's index unless an index or dispersion coefficients are given.
+        let declared = ["int_ior", "cauchy_a", "cauchy_b"]
+            .iter()
+            .any(|n| pl.props.has(n))
+            || (1..=3).any(|i| {
+                pl.props.has(&format!("sellmeier_b{i}")) || pl.props.has(&format!("sellmeier_c{i}"))
+            });
+        let (int_ior, dispersion) = if declared {
             self.int_ior(pl)?
         } else {
             (1.33, None)
