@@ -8,6 +8,7 @@
 pub mod cie_data;
 pub mod dispersion;
 pub mod spectrum;
+pub mod subsurface;
 
 use std::path::Path;
 

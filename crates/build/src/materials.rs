@@ -15,7 +15,7 @@ use render::spectral::DeclaredSpectrum;
 use render::textures::{ColorRef, FloatRef, TexRef, Texture};
 use scene::{
     ColorParam, ColorValue, CourseIdeal, CourseIdealKind, FloatParam, Loc, Material, MaterialDesc,
-    MaterialId, Rgb, SpectrumDesc, SpectrumKind,
+    MaterialId, Rgb, SpectrumDesc, SpectrumKind, SubsurfaceMedium,
 };
 
 use crate::BuildError;
@@ -41,15 +41,23 @@ pub(crate) fn materials(
     Ok((list, default_material))
 }
 
-/// The material that declares the Beer–Lambert absorption inside shapes using material `id`,
-/// and its coefficient per unit length: `id` itself when it is a smooth dielectric (Mitsuba's
-/// or a course one) with a non-zero `absorption`, or the material that the normal maps, bump
-/// maps and masks around it wrap (they change the surface, not what lies behind it). A
-/// `twosided` material has no inside, so none through it.
-pub(crate) fn beer_absorption(
+/// What lies inside the shapes of a material, when the material itself says so.
+pub(crate) enum Interior<'a> {
+    /// Beer–Lambert absorption per unit length.
+    Beer(Rgb),
+    /// A subsurface material's scattering medium.
+    Subsurface(&'a SubsurfaceMedium),
+}
+
+/// The material that declares what lies inside shapes using material `id`, and what that
+/// is: `id` itself when it is a smooth dielectric (Mitsuba's or a course one) with a
+/// non-zero Beer–Lambert `absorption`, or a `subsurface` material; or the material that the
+/// normal maps, bump maps and masks around it wrap (they change the surface, not what lies
+/// behind it). A `twosided` material has no inside, so none through it.
+pub(crate) fn interior_of(
     materials: &[MaterialDesc],
     mut id: MaterialId,
-) -> Option<(MaterialId, Rgb)> {
+) -> Option<(MaterialId, Interior<'_>)> {
     // A chain of wrappers longer than the material list is a cycle.
     for _ in 0..=materials.len() {
         match &materials.get(id.0 as usize)?.material {
@@ -57,6 +65,9 @@ pub(crate) fn beer_absorption(
             | Material::BumpMap { nested, .. }
             | Material::HeightBump { nested, .. }
             | Material::Mask { nested, .. } => id = *nested,
+            Material::Subsurface { medium, .. } => {
+                return Some((id, Interior::Subsurface(medium)));
+            }
             Material::Dielectric {
                 absorption: Some(sigma),
                 ..
@@ -72,7 +83,7 @@ pub(crate) fn beer_absorption(
                         ..
                     }),
                 ..
-            } if *sigma != PVec3::ZERO => return Some((id, *sigma)),
+            } if *sigma != PVec3::ZERO => return Some((id, Interior::Beer(*sigma))),
             _ => return None,
         }
     }
@@ -512,6 +523,10 @@ fn material_kind_in(
             reflectance: declared.color_ref(specular_reflectance),
             transmittance: declared.color_ref(specular_transmittance),
         },
+        // The boundary only: the medium inside is the build's (`media::interior_media`).
+        Material::Subsurface { boundary, .. } => {
+            return material_kind_in(boundary, declared, tables);
+        }
         Material::ThinDielectric {
             int_ior,
             ext_ior,

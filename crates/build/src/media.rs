@@ -12,34 +12,59 @@ use render::media::{
 };
 use scene::spectra::{SpectrumUse, planck, sampled_to_rgb};
 use scene::{
-    MaterialDesc, MaterialId, MediumDesc, MediumEmission, PhaseDesc, SceneDesc, VolumeDesc,
-    VolumeFormat, VolumeParam,
+    MaterialDesc, MaterialId, MediumDesc, MediumEmission, PhaseDesc, SceneDesc, SubsurfaceMedium,
+    VolumeDesc, VolumeFormat, VolumeParam,
 };
 
 use crate::BuildError;
-use crate::materials::beer_absorption;
+use crate::materials::{Interior, interior_of};
 
 /// The runtime media of `desc`, in order.
 pub(crate) fn media(desc: &SceneDesc) -> Result<Vec<Medium>, BuildError> {
     desc.media.iter().map(medium).collect()
 }
 
-/// Beer–Lambert absorption of dielectrics as media: one purely absorbing homogeneous medium
-/// ([`Medium::absorbing`], σt = σ exactly) per material that declares a coefficient, appended
-/// to `media`. Returns, per material, the medium inside the shapes that use it: the one of
-/// the dielectric it is or wraps (see [`beer_absorption`]), shared by every wrapper around
-/// that dielectric.
-pub(crate) fn beer_media(materials: &[MaterialDesc], media: &mut Vec<Medium>) -> Vec<Option<u32>> {
+/// The media that materials put inside their shapes, appended to `media`: for Beer–Lambert
+/// absorption of dielectrics one purely absorbing homogeneous medium ([`Medium::absorbing`],
+/// σt = σ exactly) per material that declares a coefficient; for a `subsurface` material its
+/// homogeneous scattering medium (σt = σa + σs, albedo σs/σt, Henyey–Greenstein g). Returns,
+/// per material, the medium inside the shapes that use it: the one of the material it is or
+/// wraps (see [`interior_of`]), shared by every wrapper around that material.
+pub(crate) fn interior_media(
+    materials: &[MaterialDesc],
+    media: &mut Vec<Medium>,
+) -> Vec<Option<u32>> {
     let mut own: Vec<Option<u32>> = vec![None; materials.len()];
     (0..materials.len() as u32)
         .map(|id| {
-            let (leaf, sigma) = beer_absorption(materials, MaterialId(id))?;
+            let (leaf, interior) = interior_of(materials, MaterialId(id))?;
             Some(*own[leaf.0 as usize].get_or_insert_with(|| {
-                media.push(Medium::absorbing(sigma.into()));
+                media.push(match interior {
+                    Interior::Beer(sigma) => Medium::absorbing(sigma.into()),
+                    Interior::Subsurface(m) => subsurface_medium(m),
+                });
                 media.len() as u32 - 1
             }))
         })
         .collect()
+}
+
+/// The homogeneous medium of a subsurface material.
+pub(crate) fn subsurface_medium(m: &SubsurfaceMedium) -> Medium {
+    let (a, s) = m.sigma();
+    let t = a + s;
+    let ratio = |s: f32, t: f32| if t > 0.0 { (s / t).min(1.0) } else { 0.0 };
+    let albedo = scene::Rgb::new(ratio(s.x, t.x), ratio(s.y, t.y), ratio(s.z, t.z));
+    Medium {
+        kind: MediumKind::Homogeneous(Homogeneous::new(t.into(), albedo.into())),
+        phase: if m.g == 0.0 {
+            Phase::Isotropic
+        } else {
+            Phase::HenyeyGreenstein { g: m.g }
+        },
+        emission: None,
+        emission_sampler: None,
+    }
 }
 
 fn medium(m: &MediumDesc) -> Result<Medium, BuildError> {

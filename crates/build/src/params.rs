@@ -314,6 +314,15 @@ fn material(name: &str, m: &mut Material, f: &mut Visitor<'_>) -> ControlFlow<()
             color("specular_transmittance", specular_transmittance)?;
             alphas(name, alpha_u, alpha_v, f)?;
         }
+        // The boundary's roughness; the medium's coefficients are not editable parameters.
+        Material::Subsurface { boundary, .. } => {
+            if let Material::RoughDielectric {
+                alpha_u, alpha_v, ..
+            } = boundary.as_mut()
+            {
+                alphas(name, alpha_u, alpha_v, f)?;
+            }
+        }
         Material::Plastic {
             diffuse_reflectance,
             specular_reflectance,

@@ -703,6 +703,14 @@ pub enum Material {
         flip_invalid_normals: bool,
         shadowing: bool,
     },
+    /// Random-walk subsurface scattering (Cycles' and pbrt-v4's): `boundary`, a `Dielectric` or
+    /// `RoughDielectric`, around a homogeneous scattering medium that the build step puts
+    /// inside every shape using the material (unless the shape declares an interior), so that
+    /// every integrator serving media walks inside it as in any medium.
+    Subsurface {
+        boundary: Box<Material>,
+        medium: SubsurfaceMedium,
+    },
     /// No shading at all (CENG795 `replace_all`): the surface shows `color` as radiance to
     /// whoever looks at it, reflects nothing and lights nothing else.
     Unlit { color: ColorParam },
@@ -878,7 +886,47 @@ impl Material {
             Material::Blend { .. } => "blendbsdf",
             Material::PolarizedPlastic { .. } => "pplastic",
             Material::HeightBump { .. } => "bumpmap",
+            Material::Subsurface { .. } => "subsurface",
         }
+    }
+}
+
+/// The medium inside a [`Material::Subsurface`]: its coefficients as declared, a scale
+/// applied to σa and σs (pbrt-v4's `scale`; units per scene length) and the
+/// Henyey–Greenstein asymmetry `g`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SubsurfaceMedium {
+    pub coefficients: SubsurfaceCoefficients,
+    pub scale: f32,
+    pub g: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum SubsurfaceCoefficients {
+    /// Absorption and scattering coefficients per unit length.
+    Sigma { sigma_a: Rgb, sigma_s: Rgb },
+    /// Mean free path (1/σt) and multiple-scattering albedo, inverted to the single-scattering
+    /// albedo by `base::subsurface::single_scattering_albedo`.
+    MeanFreePath { mfp: Rgb, albedo: Rgb },
+    /// Jensen et al. 2001's measured medium (`base::subsurface::MEASURED`), in mm⁻¹.
+    Measured(&'static base::subsurface::Measured),
+}
+
+impl SubsurfaceMedium {
+    /// σa and σs per unit length, scaled.
+    pub fn sigma(&self) -> (Rgb, Rgb) {
+        let (a, s) = match &self.coefficients {
+            SubsurfaceCoefficients::Sigma { sigma_a, sigma_s } => (*sigma_a, *sigma_s),
+            SubsurfaceCoefficients::MeanFreePath { mfp, albedo } => {
+                let (a, s) =
+                    base::subsurface::coefficients_from_albedo(mfp.to_array(), albedo.to_array());
+                (Rgb::from(a), Rgb::from(s))
+            }
+            SubsurfaceCoefficients::Measured(m) => {
+                (Rgb::from(m.sigma_a), Rgb::from(m.sigma_prime_s))
+            }
+        };
+        (a * self.scale, s * self.scale)
     }
 }
 

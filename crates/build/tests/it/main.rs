@@ -40,4 +40,5 @@ mod references;
 mod render_seeds;
 mod repo_references;
 mod sppm;
+mod subsurface;
 mod volpath_record;

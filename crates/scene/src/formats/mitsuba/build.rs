@@ -527,6 +527,120 @@ impl<'c, 's> SceneBuilder<'c, 's> {
         }
     }
 
+    /// Our extension `<bsdf type="subsurface">`: a dielectric boundary (`int_ior`,
+    /// `ext_ior`, smooth unless `alpha` or `alpha_u`/`alpha_v` is given, then rough with
+    /// `distribution`) around a homogeneous medium given by `sigma_a` and `sigma_s`, or `mfp`
+    /// and `albedo` (the multiple-scattering albedo), or `material` (a name of Jensen et al.
+    /// 2001's table, in mm⁻¹), each times `scale`; `g` the Henyey–Greenstein asymmetry.
+    fn subsurface(&mut self, pl: &Plugin<'s>) -> Result<Material> {
+        // Water's index unless an index or dispersion coefficients are given.
+        let declared = ["int_ior", "cauchy_a", "cauchy_b"]
+            .iter()
+            .any(|n| pl.props.has(n))
+            || (1..=3).any(|i| {
+                pl.props.has(&format!("sellmeier_b{i}")) || pl.props.has(&format!("sellmeier_c{i}"))
+            });
+        let (int_ior, dispersion) = if declared {
+            self.int_ior(pl)?
+        } else {
+            (1.33, None)
+        };
+        let ext_ior = self.ior(pl, "ext_ior", ior::AIR)?;
+        let one = || ColorParam::constant(1.0);
+        let boundary = if ["alpha", "alpha_u", "alpha_v"]
+            .iter()
+            .any(|n| pl.props.has(n))
+        {
+            let (alpha_u, alpha_v) = self.alphas(pl)?;
+            Material::RoughDielectric {
+                distribution: self.distribution(pl)?,
+                alpha_u,
+                alpha_v,
+                int_ior,
+                ext_ior,
+                dispersion,
+                dispersion_sampling: self.dispersion_sampling(pl)?,
+                specular_reflectance: one(),
+                specular_transmittance: one(),
+            }
+        } else {
+            Material::Dielectric {
+                int_ior,
+                ext_ior,
+                dispersion,
+                specular_reflectance: one(),
+                specular_transmittance: one(),
+                absorption: None,
+            }
+        };
+        let mut rgb = |name: &str, default: f32| -> Result<Option<Rgb>> {
+            if !pl.props.has(name) {
+                return Ok(None);
+            }
+            match self.color(pl, name, default, false)?.const_rgb() {
+                Some(c) => Ok(Some(c)),
+                None => Err(err(
+                    pl.loc(),
+                    format!("subsurface: '{name}' must be a constant colour, not a texture"),
+                )),
+            }
+        };
+        let sigma_a = rgb("sigma_a", 0.0)?;
+        let sigma_s = rgb("sigma_s", 0.0)?;
+        let mfp = rgb("mfp", 1.0)?;
+        let albedo = rgb("albedo", 0.8)?;
+        let name = pl.props.string_opt("material")?;
+        let coefficients = match (sigma_a.or(sigma_s), mfp.or(albedo), name) {
+            (Some(_), None, None) => SubsurfaceCoefficients::Sigma {
+                sigma_a: sigma_a.unwrap_or(Rgb::ZERO),
+                sigma_s: sigma_s.unwrap_or(Rgb::ZERO),
+            },
+            (None, _, None) => SubsurfaceCoefficients::MeanFreePath {
+                mfp: mfp.unwrap_or(Rgb::ONE),
+                albedo: albedo.unwrap_or(Rgb::splat(0.8)),
+            },
+            (None, None, Some((n, loc))) => SubsurfaceCoefficients::Measured(
+                base::subsurface::measured(n).ok_or_else(|| {
+                    err(
+                        loc,
+                        format!(
+                            "subsurface: unknown measured material \"{n}\" (known: {})",
+                            base::subsurface::MEASURED.map(|m| m.name).join(", ")
+                        ),
+                    )
+                })?,
+            ),
+            _ => {
+                return Err(err(
+                    pl.loc(),
+                    "subsurface: give one of sigma_a/sigma_s, mfp/albedo or material",
+                ));
+            }
+        };
+        if let SubsurfaceCoefficients::MeanFreePath { mfp, albedo } = &coefficients
+            && (mfp.min_element() <= 0.0
+                || albedo.min_element() < 0.0
+                || albedo.max_element() > 1.0)
+        {
+            return Err(err(
+                pl.loc(),
+                "subsurface: 'mfp' must be > 0 and 'albedo' within [0, 1]",
+            ));
+        }
+        let g = pl.props.float("g", 0.0)?;
+        if !(g > -1.0 && g < 1.0) {
+            return Err(err(pl.loc(), "subsurface: 'g' must lie in (-1, 1)"));
+        }
+        Ok(Material::Subsurface {
+            boundary: Box::new(boundary),
+            medium: SubsurfaceMedium {
+                coefficients,
+                scale: pl.props.float("scale", 1.0)?,
+                g,
+            },
+        })
+    }
+
     fn alphas(&mut self, pl: &Plugin<'s>) -> Result<(FloatParam, FloatParam)> {
         if pl.props.has("alpha_u") || pl.props.has("alpha_v") {
             if pl.props.has("alpha") {
@@ -1038,6 +1152,7 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     specular_transmittance: self.color(pl, "specular_transmittance", 1.0, false)?,
                 }
             }
+            "subsurface" => self.subsurface(pl)?,
             "plastic" => Material::Plastic {
                 diffuse_reflectance: self.color(pl, "diffuse_reflectance", 0.5, false)?,
                 specular_reflectance: self.color(pl, "specular_reflectance", 1.0, false)?,

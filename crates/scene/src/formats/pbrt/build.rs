@@ -1055,7 +1055,81 @@ impl Loader {
                     transmittance: t,
                 }
             }
-            "hair" | "measured" | "subsurface" | "kdsubsurface" | "fourier" | "disney" => {
+            "subsurface" => {
+                let (au, av) = self.roughness(p, "", 0.0, loc)?;
+                let (eta, dispersion) = self.eta(p, "eta", 1.33)?;
+                let boundary = dielectric(false, au, av, eta, dispersion);
+                let mut rgb = |name: &str, default: f32, usage: Usage| -> Result<Option<Rgb>> {
+                    if !p.has(name) {
+                        return Ok(None);
+                    }
+                    match self.color(p, name, default, usage)?.const_rgb() {
+                        Some(c) => Ok(Some(c)),
+                        None => Err(err(
+                            loc,
+                            format!("subsurface: a textured '{name}' is not supported"),
+                        )),
+                    }
+                };
+                let sigma_a = rgb("sigma_a", 0.0, Usage::Unbounded)?;
+                let sigma_s = rgb("sigma_s", 0.0, Usage::Unbounded)?;
+                let reflectance = rgb("reflectance", 0.0, Usage::Albedo)?;
+                let mfp = rgb("mfp", 1.0, Usage::Unbounded)?;
+                let scale = p.float("scale", 1.0)?;
+                // pbrt-v4's order: a name, else σa/σs, else reflectance with mfp, else its
+                // defaults (whole milk's coefficients, in mm⁻¹); `scale` multiplies all but the
+                // reflectance form.
+                let (coefficients, scale) = if let Some((n, q)) = p.string_opt("name")? {
+                    let m = base::subsurface::measured(n).ok_or_else(|| {
+                        q.err(format!(
+                            "subsurface: unknown measured medium \"{n}\" (known: {})",
+                            base::subsurface::MEASURED.map(|m| m.name).join(", ")
+                        ))
+                    })?;
+                    (SubsurfaceCoefficients::Measured(m), scale)
+                } else if sigma_a.is_some() || sigma_s.is_some() {
+                    (
+                        SubsurfaceCoefficients::Sigma {
+                            sigma_a: sigma_a.unwrap_or(Rgb::new(0.0011, 0.0024, 0.014)),
+                            sigma_s: sigma_s.unwrap_or(Rgb::new(2.55, 3.21, 3.77)),
+                        },
+                        scale,
+                    )
+                } else if let Some(r) = reflectance {
+                    let mfp = mfp.unwrap_or(Rgb::ONE);
+                    if mfp.min_element() <= 0.0 {
+                        return Err(err(loc, "subsurface: 'mfp' must be > 0"));
+                    }
+                    (
+                        SubsurfaceCoefficients::MeanFreePath {
+                            mfp,
+                            albedo: r.clamp(Rgb::ZERO, Rgb::ONE),
+                        },
+                        1.0,
+                    )
+                } else {
+                    (
+                        SubsurfaceCoefficients::Sigma {
+                            sigma_a: Rgb::new(0.0011, 0.0024, 0.014),
+                            sigma_s: Rgb::new(2.55, 3.21, 3.77),
+                        },
+                        scale,
+                    )
+                };
+                let g = p.float("g", 0.0)?;
+                if !(g > -1.0 && g < 1.0) {
+                    return Err(err(loc, "subsurface: 'g' must lie in (-1, 1)"));
+                }
+                Material::Subsurface {
+                    boundary: Box::new(boundary),
+                    medium: SubsurfaceMedium {
+                        coefficients,
+                        scale,
+                        g,
+                    },
+                }
+            }
+            "hair" | "measured" | "kdsubsurface" | "fourier" | "disney" => {
                 return Err(err(
                     loc,
                     format!(

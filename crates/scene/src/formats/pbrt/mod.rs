@@ -51,7 +51,10 @@
 //!
 //! The `dots` texture is pbrt-v4's (improved noise picks the cells and jitters the dots).
 //!
-//! Refused with an error: `curve`, `hair`/`measured`/`subsurface` materials, `nanovdb` and
+//! The `subsurface` material is our random-walk one (`Material::Subsurface`: its dielectric
+//! boundary around a homogeneous medium; `docs/formats.md`), not pbrt-v4's tabulated BSSRDF.
+//!
+//! Refused with an error: `curve`, `hair`/`measured` materials, `nanovdb` and
 //! `cloud` media, `realistic`/`spherical` cameras, textured conductor indices, unknown names
 //! of any kind. Approximated with a warning: the `directionmix` and `ptex` textures (a
 //! constant 0.5), `displacement` (our bump map's slope is per texel), motion other than
