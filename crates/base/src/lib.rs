@@ -228,6 +228,14 @@ pub enum SamplerKind {
     Halton,
     /// Owen-scrambled Sobol.
     Sobol,
+    /// Kensler's correlated multi-jittered sampling (2013; Mitsuba's `multijitter`): the
+    /// samples of a pixel fill an m × n grid of cells (m·n = spp) and, within the cells, the
+    /// n × m sub-grid of every row and column once, the sub-cells of one column shuffled by
+    /// one permutation for all columns (and the rows alike); without `jitter` each sample sits
+    /// at its sub-cell's centre.
+    MultiJitter {
+        jitter: bool,
+    },
 }
 
 #[derive(Clone, Debug)]

@@ -40,6 +40,7 @@ fn sampler(k: SamplerKind) -> &'static str {
         SamplerKind::Stratified => "stratified",
         SamplerKind::Halton => "halton",
         SamplerKind::Sobol => "sobol",
+        SamplerKind::MultiJitter { .. } => "multijitter",
     }
 }
 

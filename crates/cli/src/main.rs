@@ -225,7 +225,7 @@ pub(crate) struct TransportArgs {
     /// Russian roulette from this many segments on (Mitsuba `rr_depth`).
     #[arg(long, value_name = "N")]
     rr_depth: Option<u32>,
-    /// Sample generator: independent, stratified, halton or sobol.
+    /// Sample generator: independent, stratified, halton, sobol or multijitter.
     #[arg(long, value_name = "KIND", value_parser = parse_sampler)]
     sampler: Option<scene::SamplerKind>,
     /// Reconstruction filter with Mitsuba's defaults: box, tent, gaussian, mitchell or lanczos.
@@ -246,8 +246,9 @@ fn parse_sampler(s: &str) -> Result<scene::SamplerKind, String> {
         "stratified" => Ok(K::Stratified),
         "halton" => Ok(K::Halton),
         "sobol" => Ok(K::Sobol),
+        "multijitter" => Ok(K::MultiJitter { jitter: true }),
         _ => Err(format!(
-            "expected independent, stratified, halton or sobol, found '{s}'"
+            "expected independent, stratified, halton, sobol or multijitter, found '{s}'"
         )),
     }
 }

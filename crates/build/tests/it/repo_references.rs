@@ -85,3 +85,11 @@ pub(crate) fn check_repo_reference_with(name: &str, scene_file: Option<&Path>, s
 fn lanczos_filter() {
     check_repo_reference("lanczos");
 }
+
+/// Mitsuba's `multijitter` sampler: a checkerboard and a sphere, every pixel across edges.
+/// The sampler changes the noise, not the image: the test is that stratified draws stay
+/// unbiased in every dimension the paths use (its stratification is `sampling_stats.rs`'s).
+#[test]
+fn multijitter_sampler() {
+    check_repo_reference("multijitter");
+}

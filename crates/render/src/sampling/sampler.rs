@@ -396,6 +396,16 @@ impl Sampler {
         mix64(state)
     }
 
+    /// The offset of a sample within its stratum in dimension `d`: uniform, or ½ for a
+    /// multi-jittered sampler without jitter.
+    #[inline]
+    fn jitter(&self, d: u32) -> f32 {
+        match self.kind {
+            SamplerKind::MultiJitter { jitter: false } => 0.5,
+            _ => self.independent(d),
+        }
+    }
+
     /// Per-(pixel, dimension) key (constant over the pixel's samples).
     #[inline]
     fn dim_key(&self, d: u32) -> u64 {
@@ -419,12 +429,12 @@ impl Sampler {
     fn next_1d_other(&self, d: u32) -> f32 {
         match self.kind {
             SamplerKind::Independent => self.independent(d),
-            SamplerKind::Stratified => {
+            SamplerKind::Stratified | SamplerKind::MultiJitter { .. } => {
                 if self.index >= self.spp {
                     return self.independent(d);
                 }
                 let stratum = permute(self.index, self.spp, self.dim_key(d) as u32);
-                let jitter = self.independent(d);
+                let jitter = self.jitter(d);
                 ((stratum as f32 + jitter) / self.spp as f32).min(ONE_MINUS_EPSILON)
             }
             SamplerKind::Halton => {
@@ -472,6 +482,24 @@ impl Sampler {
                 let sx = permute(col, m, hash2(k, row as u64) as u32);
                 let sy = permute(row, n, hash2(k, (col as u64) | (1 << 32)) as u32);
                 let (jx, jy) = (self.independent(d), self.independent(d + 1));
+                let x = (col as f32 + (sy as f32 + jx) / n as f32) / m as f32;
+                let y = (row as f32 + (sx as f32 + jy) / m as f32) / n as f32;
+                Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))
+            }
+            SamplerKind::MultiJitter { .. } => {
+                if self.index >= self.spp {
+                    return self.independent_2d(d);
+                }
+                let k = self.dim_key(d);
+                let (m, n) = self.grid;
+                let s = permute(self.index, self.spp, k as u32);
+                let (col, row) = (s % m, s / m);
+                // Correlated (Kensler 2013): one permutation of the sub-columns for every
+                // row and one of the sub-rows for every column, which keeps the n-rooks
+                // property of multi-jittering with less clumping than a permutation per row.
+                let sx = permute(col, m, (k >> 32) as u32);
+                let sy = permute(row, n, mix64(k) as u32);
+                let (jx, jy) = (self.jitter(d), self.jitter(d + 1));
                 let x = (col as f32 + (sy as f32 + jx) / n as f32) / m as f32;
                 let y = (row as f32 + (sx as f32 + jy) / m as f32) / n as f32;
                 Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))

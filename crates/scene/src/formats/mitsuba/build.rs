@@ -1690,18 +1690,24 @@ impl<'c, 's> SceneBuilder<'c, 's> {
             "stratified" => SamplerKind::Stratified,
             "halton" => SamplerKind::Halton,
             "sobol" => SamplerKind::Sobol,
-            "multijitter" | "orthogonal" => {
+            "multijitter" => SamplerKind::MultiJitter {
+                jitter: pl.props.bool("jitter", true)?,
+            },
+            "orthogonal" => {
                 self.ctx.warn(
                     pl.loc(),
-                    format!("sampler '{}' approximated by stratified", pl.ty),
+                    "sampler 'orthogonal' approximated by multijitter (each 2D draw \
+                     stratified alike; not an orthogonal array across all dimensions)",
                 );
-                SamplerKind::Stratified
+                SamplerKind::MultiJitter {
+                    jitter: pl.props.bool("jitter", true)?,
+                }
             }
-            "ldsampler" => {
-                self.ctx
-                    .warn(pl.loc(), "sampler 'ldsampler' approximated by sobol");
-                SamplerKind::Sobol
-            }
+            // Mitsuba 0.6's low-discrepancy sampler: padded (0,2)-sequences for 2D draws and
+            // van der Corput for 1D ones, scrambled per pixel and dimension; our `sobol` is
+            // that construction (its first two dimensions are the (0,2)-sequence), with Owen
+            // scrambling for 0.6's random digit scrambling.
+            "ldsampler" => SamplerKind::Sobol,
             "hammersley" => {
                 self.ctx
                     .warn(pl.loc(), "sampler 'hammersley' approximated by halton");
