@@ -61,7 +61,16 @@ pub(crate) fn render_desc_batches(
         mode,
         ..Default::default()
     };
-    build::render_seeds(desc, &opts, 0..BATCHES)
+    render_opts_batches(desc, &opts, 0..BATCHES)
+}
+
+/// One image per seed of `seeds`, the scene built once with `opts` (no NaN/Inf samples).
+pub(crate) fn render_opts_batches(
+    desc: &scene::SceneDesc,
+    opts: &BuildOptions,
+    seeds: std::ops::Range<u64>,
+) -> Vec<Image> {
+    build::render_seeds(desc, opts, seeds)
         .expect("scene builds")
         .into_iter()
         .map(|out| {

@@ -23,10 +23,12 @@
 
 use std::path::PathBuf;
 
-use build::{BuildOptions, render_seeds};
+use build::BuildOptions;
 use render::compare::{CompareOptions, Comparison, Reference, TestImages, compare_with};
 use render::film::Image;
 use scene::{Document, IntegratorDesc, LoadOptions, RenderMode, SceneDesc};
+
+use crate::references::render_opts_batches;
 
 fn scene_path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -85,14 +87,7 @@ fn batches(
         integrator,
         ..Default::default()
     };
-    render_seeds(desc, &opts, seeds)
-        .expect("scene builds")
-        .into_iter()
-        .map(|out| {
-            assert_eq!(out.film.nonfinite_count(), 0, "NaN/Inf samples");
-            out.film.develop()
-        })
-        .collect()
+    render_opts_batches(desc, &opts, seeds)
 }
 
 fn volpath_reference(albedo: [f64; 3], mode: RenderMode) -> Reference {

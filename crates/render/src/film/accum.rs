@@ -105,6 +105,24 @@ pub struct PixelSums {
 }
 
 impl PixelSums {
+    /// The sums in [`FixedSums::v`]'s order.
+    #[inline]
+    fn fields(&self) -> [f64; 11] {
+        [
+            self.weighted[0],
+            self.weighted[1],
+            self.weighted[2],
+            self.weight,
+            self.weighted_sq[0],
+            self.weighted_sq[1],
+            self.weighted_sq[2],
+            self.weight_sq,
+            self.cross[0],
+            self.cross[1],
+            self.cross[2],
+        ]
+    }
+
     #[inline]
     fn add(&mut self, l: [f64; 3], w: f64) {
         for (c, &lc) in l.iter().enumerate() {
@@ -198,19 +216,7 @@ impl FixedSums {
         if p.count == 0 {
             return;
         }
-        let f = [
-            p.weighted[0],
-            p.weighted[1],
-            p.weighted[2],
-            p.weight,
-            p.weighted_sq[0],
-            p.weighted_sq[1],
-            p.weighted_sq[2],
-            p.weight_sq,
-            p.cross[0],
-            p.cross[1],
-            p.cross[2],
-        ];
+        let f = p.fields();
         let scaled = f.map(|x| x * FIXED_SCALE);
         // `&` rather than a short-circuit or a NaN-aware `max`, so that the test is a few
         // vector compares; NaN fails it and takes the general path.
@@ -1206,19 +1212,7 @@ mod tests {
                     count: 1 + k as u64,
                 };
                 p.weight_sq = -x;
-                let fields = [
-                    p.weighted[0],
-                    p.weighted[1],
-                    p.weighted[2],
-                    p.weight,
-                    p.weighted_sq[0],
-                    p.weighted_sq[1],
-                    p.weighted_sq[2],
-                    p.weight_sq,
-                    p.cross[0],
-                    p.cross[1],
-                    p.cross[2],
-                ];
+                let fields = p.fields();
                 let mut f = FixedSums {
                     v: [3; 11],
                     count: 0,

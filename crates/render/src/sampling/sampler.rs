@@ -292,6 +292,21 @@ pub struct Sampler {
     dim: u32,
 }
 
+/// The point of cell (`col`, `row`) of an m × n grid at sub-column `sx` of m and sub-row `sy`
+/// of n (multi-jittering's n × m sub-grid within the cells), offset by `j` ∈ [0, 1)² in its
+/// sub-cell.
+#[inline]
+fn multi_jittered(
+    (m, n): (u32, u32),
+    (col, row): (u32, u32),
+    (sx, sy): (u32, u32),
+    j: Vec2,
+) -> Vec2 {
+    let x = (col as f32 + (sy as f32 + j.x) / n as f32) / m as f32;
+    let y = (row as f32 + (sx as f32 + j.y) / m as f32) / n as f32;
+    Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))
+}
+
 /// The divisor pair `m × n = spp` with `m ≤ n` closest to square.
 fn stratified_grid(spp: u32) -> (u32, u32) {
     let mut m = (spp as f64).sqrt() as u32;
@@ -481,10 +496,8 @@ impl Sampler {
                 // (and vice versa), so x offsets of different rows are uncorrelated.
                 let sx = permute(col, m, hash2(k, row as u64) as u32);
                 let sy = permute(row, n, hash2(k, (col as u64) | (1 << 32)) as u32);
-                let (jx, jy) = (self.independent(d), self.independent(d + 1));
-                let x = (col as f32 + (sy as f32 + jx) / n as f32) / m as f32;
-                let y = (row as f32 + (sx as f32 + jy) / m as f32) / n as f32;
-                Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))
+                let j = Vec2::new(self.independent(d), self.independent(d + 1));
+                multi_jittered(self.grid, (col, row), (sx, sy), j)
             }
             SamplerKind::MultiJitter { .. } => {
                 if self.index >= self.spp {
@@ -499,10 +512,8 @@ impl Sampler {
                 // property of multi-jittering with less clumping than a permutation per row.
                 let sx = permute(col, m, (k >> 32) as u32);
                 let sy = permute(row, n, mix64(k) as u32);
-                let (jx, jy) = (self.jitter(d), self.jitter(d + 1));
-                let x = (col as f32 + (sy as f32 + jx) / n as f32) / m as f32;
-                let y = (row as f32 + (sx as f32 + jy) / m as f32) / n as f32;
-                Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))
+                let j = Vec2::new(self.jitter(d), self.jitter(d + 1));
+                multi_jittered(self.grid, (col, row), (sx, sy), j)
             }
             SamplerKind::Halton => {
                 if d as usize + 1 >= N_PRIMES {
