@@ -457,31 +457,6 @@ pub fn build_cached(
             sample_emission: false,
         });
     }
-    // BDPT's (and so MLT's) spectral MIS over the hero channel weighs each strategy by the
-    // density ratios of its own vertices, which do not sum to one over the strategies of a
-    // path through a chromatic scattering medium that connections can reach: behind a rough
-    // boundary its images are biased (+3 % in blue on scenes/subsurface/sss-sphere-rough.xml,
-    // the same with the equivalent declared medium). Behind a smooth one they agree.
-    if matches!(integrator, Integrator::Bdpt(_) | Integrator::Mlt(_))
-        && desc.materials.iter().any(|m| match &m.material {
-            Material::Subsurface { boundary, medium } => {
-                let (a, s) = medium.sigma();
-                let t = a + s;
-                matches!(boundary.as_ref(), Material::RoughDielectric { .. })
-                    && s.max_element() > 0.0
-                    && t.min_element() != t.max_element()
-            }
-            _ => false,
-        })
-    {
-        warnings.push(format!(
-            "{}: warning: {} is biased (a few per cent) on subsurface materials with a rough \
-             boundary and chromatic mean free paths (its spectral MIS over the hero channel); \
-             use volpath for them",
-            desc.source.display(),
-            integrator.name(),
-        ));
-    }
     if let Integrator::Path(cfg) = &mut integrator {
         cfg.media_absorption = desc.media.is_empty() && !media.is_empty();
         debug_assert!(!cfg.media_absorption || media.iter().all(|m| m.is_purely_absorbing()));

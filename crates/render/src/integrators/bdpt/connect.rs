@@ -48,11 +48,10 @@ impl<M: PathMode> Bdpt<'_, M> {
                 sink.joint(s, t, &Joint::new(pt, None), 1.0);
                 return (m.to_rgb(pt.le * m.hero_weight(pt.ratio)), 1.0);
             }
-            let c = pt.beta * pt.le * m.hero_weight(pt.ratio);
             let joint = Joint::new(pt, None);
-            let w = self.mis_weight(j, &joint, (s, t));
+            let (f, w) = self.mis(j, &joint, (s, t), pt.ratio, m);
             sink.joint(s, t, &joint, w);
-            return (m.to_rgb(c * w), w);
+            return (m.to_rgb(pt.beta * pt.le * f), w);
         }
         if !pt.connectible() || !matches!(pt.kind, Kind::Surface | Kind::Medium) {
             return NONE;
@@ -103,12 +102,12 @@ impl<M: PathMode> Bdpt<'_, M> {
                 }
             };
             sampled.pdf_fwd = self.pdf_light_origin(scene, &sampled, pt);
-            let c = pt.beta * f * tr * ls.li / (ls.pdf * pmf) * m.hero_weight(pt.ratio);
+            let c = pt.beta * f * tr * ls.li / (ls.pdf * pmf);
             let mut joint = Joint::new(pt, Some(&sampled));
-            joint.seg = self.connection_seg(tr, hero);
-            let w = self.mis_weight(j, &joint, (s, t));
+            (joint.seg, joint.seg_lanes) = self.connection_seg(tr, hero);
+            let (mis, w) = self.mis(j, &joint, (s, t), pt.ratio, m);
             sink.joint(s, t, &joint, w);
-            return (m.to_rgb(c * w), w);
+            return (m.to_rgb(c * mis), w);
         }
         let qs = &light[s - 1];
         if !qs.connectible() || !matches!(qs.kind, Kind::Surface | Kind::Medium) {
@@ -145,11 +144,10 @@ impl<M: PathMode> Bdpt<'_, M> {
         if tr.is_black() {
             return NONE;
         }
-        joint.seg = self.connection_seg(tr, hero);
-        let hero = m.hero_weight(pt.ratio * qs.ratio);
-        let w = self.mis_weight(j, &joint, (s, t));
+        (joint.seg, joint.seg_lanes) = self.connection_seg(tr, hero);
+        let (mis, w) = self.mis(j, &joint, (s, t), pt.ratio * qs.ratio, m);
         sink.joint(s, t, &joint, w);
-        (m.to_rgb(c * tr * (hero * w)), w)
+        (m.to_rgb(c * tr * mis), w)
     }
 
     /// Strategy t = 1 of the subpaths `j`: light vertex s − 1 seen by the lens; the film
@@ -185,11 +183,10 @@ impl<M: PathMode> Bdpt<'_, M> {
         if tr.is_black() {
             return None;
         }
-        joint.seg = self.connection_seg(tr, hero);
-        let value = qs.beta * f * tr * (c.weight * m.hero_weight(qs.ratio));
-        let w = self.mis_weight(j, &joint, (s, 1));
+        (joint.seg, joint.seg_lanes) = self.connection_seg(tr, hero);
+        let (mis, w) = self.mis(j, &joint, (s, 1), qs.ratio, m);
         sink.joint(s, 1, &joint, w);
-        Some((c.p_film, m.to_rgb(value * w), w))
+        Some((c.p_film, m.to_rgb(qs.beta * f * tr * (c.weight * mis)), w))
     }
 
     /// The transmittance from surface or medium vertex `v` to the query's target: 0 if a
@@ -228,12 +225,16 @@ impl<M: PathMode> Bdpt<'_, M> {
     }
 
     /// A connection's free-flight factor from its transmittance `tr` (exact where
-    /// `flight_densities` holds: homogeneous media only).
-    fn connection_seg(&self, tr: M::C, hero: usize) -> f32 {
-        if self.flight_densities {
-            tr.lane(hero)
+    /// `flight_densities` holds: homogeneous media only), in the hero lane and in every lane
+    /// relative to it.
+    fn connection_seg(&self, tr: M::C, hero: usize) -> (f32, M::C) {
+        let h = tr.lane(hero);
+        if self.flight_densities && h > 0.0 {
+            (h, tr / h)
+        } else if self.flight_densities {
+            (h, M::C::ONE)
         } else {
-            1.0
+            (1.0, M::C::ONE)
         }
     }
 }

@@ -239,18 +239,12 @@ impl<'a, M: PathMode> Bdpt<'a, M> {
         }
     }
 
-    /// σt of medium `medium` in lane `hero` of `m` if the free-flight densities enter the MIS
+    /// σt of medium `medium` in every lane of `m` if the free-flight densities enter the MIS
     /// weights (else, and outside media, `None`).
-    pub(super) fn flight_sigma(
-        &self,
-        scene: &Scene,
-        medium: Option<u32>,
-        hero: usize,
-        m: &M,
-    ) -> Option<f32> {
+    pub(super) fn flight_sigma(&self, scene: &Scene, medium: Option<u32>, m: &M) -> Option<M::C> {
         match medium.map(|i| &scene.media[i as usize].kind) {
             Some(MediumKind::Homogeneous(h)) if self.flight_densities => {
-                Some(m.unbounded(h.sigma_t).lane(hero))
+                Some(m.unbounded(h.sigma_t))
             }
             _ => None,
         }

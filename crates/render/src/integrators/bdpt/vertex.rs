@@ -51,6 +51,8 @@ pub(super) struct Vertex<C: Color = Vec3> {
     /// media it crosses (1 without media, or where `Bdpt::flight_densities` is off). The
     /// segment's both densities carry it (symmetric).
     pub(super) seg: f32,
+    /// `seg` in every lane relative to the hero's: e^{−(σt,c − σt,hero)·d} (1 without media).
+    pub(super) seg_lanes: C,
     /// σt in the hero channel at a medium vertex whose flight density enters the MIS
     /// densities (1 at every other vertex): with `seg`, a free flight's density σt·e^{−σt·d}
     /// per unit length, a surface reached through a medium e^{−σt·d}.
@@ -84,6 +86,7 @@ impl<C: Color> Vertex<C> {
             ratio: C::ONE,
             beta,
             seg: 1.0,
+            seg_lanes: C::ONE,
             sigma: 1.0,
             le: C::ZERO,
             terminated: false,
@@ -131,6 +134,8 @@ pub struct Joint<'a, C: Color = Vec3> {
     pub(super) qs_to_pt: Vec3,
     /// The connection segment's free-flight factor (as a vertex's `seg`).
     pub(super) seg: f32,
+    /// `seg` in every lane relative to the hero's (as a vertex's `seg_lanes`).
+    pub(super) seg_lanes: C,
 }
 
 impl<'a, C: Color> Joint<'a, C> {
@@ -145,6 +150,7 @@ impl<'a, C: Color> Joint<'a, C> {
             pt_to_qs,
             qs_to_pt,
             seg: 1.0,
+            seg_lanes: C::ONE,
         }
     }
 }

@@ -41,8 +41,10 @@ impl<M: PathMode> Bdpt<'_, M> {
             max_vertices,
         } = start;
         let mut ratio = M::C::ONE;
-        // The free-flight factor since the last vertex.
+        // The free-flight factor since the last vertex, in the hero lane and in every lane
+        // relative to it.
         let mut seg = 1.0f32;
+        let mut seg_lanes = M::C::ONE;
         // The product of relative indices of refraction crossed (Russian roulette).
         let mut eta = 1.0f32;
         // Bounded: null crossings add no vertex.
@@ -50,9 +52,8 @@ impl<M: PathMode> Bdpt<'_, M> {
             if path.len() >= max_vertices {
                 return;
             }
-            let sigma = w
-                .medium
-                .and_then(|_| self.flight_sigma(scene, w.medium, w.hero, m));
+            let sigma_lanes = w.medium.and_then(|_| self.flight_sigma(scene, w.medium, m));
+            let sigma = sigma_lanes.map(|s| s.lane(w.hero));
             let ahead = w.ahead(scene);
             let (weight, r) = match w.fly(scene, &ahead, sampler, m) {
                 Flight::Scatter {
@@ -81,8 +82,9 @@ impl<M: PathMode> Bdpt<'_, M> {
                     v.le = emitted;
                     v.terminated = m.terminated();
                     v.to_prev = -w.ray.d;
-                    if let Some(s) = sigma {
+                    if let (Some(s), Some(sl)) = (sigma, sigma_lanes) {
                         v.seg = seg * (-s * d).exp();
+                        v.seg_lanes = seg_lanes * ((M::C::splat(s) - sl) * d).exp();
                         v.sigma = s;
                     }
                     v.pdf_fwd = convert_density(pdf_dir, prev, &v) * v.seg * v.sigma;
@@ -96,6 +98,7 @@ impl<M: PathMode> Bdpt<'_, M> {
                     path[n - 2].pdf_rev =
                         convert_density(sc.pdf_rev, &v, prev) * v.seg * prev.sigma;
                     seg = 1.0;
+                    seg_lanes = M::C::ONE;
                     w.scatter(v.p, sc.wi);
                     beta = sc.beta;
                     eta = sc.eta;
@@ -107,8 +110,9 @@ impl<M: PathMode> Bdpt<'_, M> {
             };
             beta *= weight;
             ratio *= r;
-            if let Some(s) = sigma {
+            if let (Some(s), Some(sl)) = (sigma, sigma_lanes) {
                 seg *= (-s * ahead.end).exp();
+                seg_lanes *= ((M::C::splat(s) - sl) * ahead.end).exp();
             }
             let si = w.surface(scene, ahead);
             if let Some(si) = &si
@@ -125,6 +129,7 @@ impl<M: PathMode> Bdpt<'_, M> {
                     v.ratio = ratio;
                     v.terminated = m.terminated();
                     v.seg = seg;
+                    v.seg_lanes = seg_lanes;
                     v.pdf_fwd = pdf_dir * seg;
                     path.push(v);
                 }
@@ -145,6 +150,7 @@ impl<M: PathMode> Bdpt<'_, M> {
                 v.le = scene.lights[l as usize].le(scene, &si, m);
             }
             v.seg = seg;
+            v.seg_lanes = seg_lanes;
             v.pdf_fwd = convert_density(pdf_dir, prev, &v) * seg;
             v.bsdf = bsdf;
             if let Some((_, frame)) = &v.bsdf {
@@ -170,6 +176,7 @@ impl<M: PathMode> Bdpt<'_, M> {
             let rev = convert_density(sc.pdf_rev, &v, prev) * seg * prev.sigma;
             path[n - 2].pdf_rev = rev;
             seg = 1.0;
+            seg_lanes = M::C::ONE;
             w.leave(scene, v.si.as_ref().expect("stored above"), sc.wi);
             beta = sc.beta;
             eta = sc.eta;
