@@ -29,15 +29,17 @@
 //! a hero channel drawn per camera sample and shared by both subpaths) make medium vertices,
 //! which scatter by their phase function and connect like surface vertices; every
 //! connection carries the transmittance of its segment (through null surfaces and media,
-//! the transport layer's shadow query). Each strategy's estimate carries the spectral-MIS weight over
-//! the hero choice of the vertices it uses (`hero_weight` of the product of both prefixes'
-//! density ratios), as `volpath`'s paths do. When every medium is homogeneous the MIS
-//! densities carry the free flights' densities in the hero channel (σt·e^{−σt·d} per unit
-//! length to a medium vertex, e^{−σt·d} to a surface reached through a medium; Mitsuba
-//! 0.6's BDPT does the same): a connection's segment gets the same factor from its exact
-//! transmittance. With grids, whose transmittance is only estimated, they are left out
-//! (pbrt-v3's choice). Either way the weights are one function of the path for every
-//! strategy, so they sum to one. An emitting medium's light is
+//! the transport layer's shadow query). When every medium is homogeneous the MIS
+//! densities carry the free flights' densities (σt·e^{−σt·d} per unit length to a medium
+//! vertex, e^{−σt·d} to a surface reached through a medium; Mitsuba 0.6's BDPT does the same)
+//! in every colour lane: a connection's segment gets the same factor from its exact
+//! transmittance, and the weights are the power heuristic over the (strategy, lane) pairs
+//! (`mis.rs`), since a camera sample draws one hero lane and evaluates every strategy. With
+//! grids, whose transmittance is only estimated (and whose extinction is grey), they are
+//! left out (pbrt-v3's choice) and each strategy's estimate carries the spectral-MIS weight
+//! over the hero choice of the vertices it uses (`hero_weight` of the product of both
+//! prefixes' density ratios), as `volpath`'s paths do. Either way the weights are one
+//! function of the path for every strategy, so they sum to one. An emitting medium's light is
 //! found by the camera subpath's collision estimator (`volpath`'s default), the one strategy
 //! that samples it: no light subpath starts in a volume, so its MIS weight is 1.
 //!
