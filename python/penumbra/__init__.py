@@ -94,10 +94,10 @@ def load_string(text: str, format: str = "xml", **params: object) -> Scene:
 _TAGS = {
     "bsdf": "diffuse conductor roughconductor dielectric thindielectric roughdielectric "
     "plastic roughplastic twosided null principled principledthin blendbsdf bumpmap "
-    "normalmap mask pplastic mirror microfacet",
+    "normalmap mask pplastic mirror microfacet subsurface",
     "shape": "obj ply serialized sphere rectangle disk cube cylinder shapegroup instance",
     "emitter": "area point spot directional constant envmap sunsky projector directionalarea",
-    "sensor": "perspective thinlens orthographic radiancemeter",
+    "sensor": "perspective thinlens orthographic radiancemeter irradiancemeter",
     "film": "hdrfilm ldrfilm specfilm",
     "sampler": "independent stratified multijitter orthogonal ldsampler halton hammersley sobol",
     "rfilter": "box tent gaussian mitchell catmullrom lanczos",
@@ -105,7 +105,7 @@ _TAGS = {
     "normals albedo depth aov ao whitted simple prb",
     "texture": "bitmap checkerboard",
     "medium": "homogeneous heterogeneous",
-    "phase": "isotropic hg rayleigh tabphase blendphase",
+    "phase": "isotropic hg rayleigh tabphase blendphase sggx",
     "volume": "constvolume gridvolume",
     "spectrum": "blackbody d65 regular irregular uniform",
 }
