@@ -20,9 +20,9 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::{Estimator, work};
+use crate::camera::CameraRay;
 use crate::film::FilmTile;
 use crate::film::accum::tile_bounds;
-use crate::camera::CameraRay;
 use crate::math::{UVec2, Vec3};
 use crate::sampling::Sampler;
 use crate::session::{Job, Progress, RenderOptions, RenderOutcome, camera_sample};

@@ -211,11 +211,11 @@ impl IntegratorModel for PathConfig {
             Some(g) => {
                 let (outcome, stats) = path::guided::render::<M>(job, self, g);
                 job.observer.note(&format!(
-                    "path guiding: {} spatial leaves, {} directional nodes, {:.1} MB of {} MB{}",
+                    "path guiding: {} spatial leaves, {} directional nodes, {:.1} MB of {:.1} MB{}",
                     stats.leaves,
                     stats.directional_nodes,
                     stats.bytes as f64 / (1u64 << 20) as f64,
-                    g.max_bytes >> 20,
+                    g.max_bytes as f64 / (1u64 << 20) as f64,
                     if stats.capped { " (capped)" } else { "" }
                 ));
                 outcome
@@ -225,10 +225,12 @@ impl IntegratorModel for PathConfig {
 
     fn work_items(&self, scene: &Scene, opts: &RenderOptions) -> Result<u64, String> {
         if self.guiding.is_some() {
-            return Err("a guided render (--guiding on) cannot be split into shards or \
+            return Err(
+                "a guided render (--guiding on) cannot be split into shards or \
                         resumed from a checkpoint (each training phase learns from the ones \
                         before); render it in one process"
-                .into());
+                    .into(),
+            );
         }
         Ok(drive::TileWork::new(scene, opts).len())
     }

@@ -36,16 +36,37 @@ const BUILD_BYTES: u64 = std::mem::size_of::<BNode>() as u64;
 const SPATIAL_BYTES: u64 = std::mem::size_of::<SNode>() as u64;
 const LEAF_BYTES: u64 = std::mem::size_of::<Leaf>() as u64;
 
+/// `atan2(y, x) / 2π` in `[0, 1)`: a minimax polynomial for atan on [0, 1] (error below
+/// 1e-5 rad), the octant restored by swaps and reflections. libm's `atan2f` was a tenth of a
+/// guided render's time.
+#[inline(always)]
+fn azimuth_turns(y: f32, x: f32) -> f32 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (lo, hi) = if ax > ay { (ay, ax) } else { (ax, ay) };
+    if hi == 0.0 {
+        return 0.0;
+    }
+    let t = lo / hi;
+    let t2 = t * t;
+    let mut a = t
+        * (0.999_866
+            + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
+    if ay > ax {
+        a = std::f32::consts::FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = std::f32::consts::PI - a;
+    }
+    let turns = a * (0.5 * std::f32::consts::FRAC_1_PI);
+    let turns = if y < 0.0 { 1.0 - turns } else { turns };
+    if turns >= 1.0 { 0.0 } else { turns }
+}
+
 /// The square point of a unit direction.
 #[inline]
 pub fn dir_to_square(d: Vec3) -> Vec2 {
     let u = ((d.z + 1.0) * 0.5).clamp(0.0, 1.0);
-    let mut phi = d.y.atan2(d.x);
-    if phi < 0.0 {
-        phi += 2.0 * std::f32::consts::PI;
-    }
-    let v = (phi * (0.5 * std::f32::consts::FRAC_1_PI)).clamp(0.0, 1.0);
-    Vec2::new(u, v)
+    Vec2::new(u, azimuth_turns(d.y, d.x))
 }
 
 /// The unit direction of a square point.
@@ -53,7 +74,7 @@ pub fn dir_to_square(d: Vec3) -> Vec2 {
 pub fn square_to_dir(p: Vec2) -> Vec3 {
     let cos_t = 2.0 * p.x - 1.0;
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-    let (s, c) = (2.0 * std::f32::consts::PI * p.y).sin_cos();
+    let (s, c) = crate::sampling::warp::sin_cos_2pi(p.y);
     Vec3::new(sin_t * c, sin_t * s, cos_t)
 }
 
@@ -87,7 +108,9 @@ fn quadrant(p: Vec2) -> (usize, Vec2) {
 impl DTree {
     /// Whether it has energy to sample from.
     pub fn is_valid(&self) -> bool {
-        self.nodes.first().is_some_and(|n| n.e.iter().sum::<f32>() > 0.0)
+        self.nodes
+            .first()
+            .is_some_and(|n| n.e.iter().sum::<f32>() > 0.0)
     }
 
     /// Nodes held.
@@ -95,11 +118,13 @@ impl DTree {
         self.nodes.len()
     }
 
-    /// A point of the square drawn with the tree's density from `u` (`is_valid` trees only).
-    pub fn sample_square(&self, mut u: Vec2) -> Vec2 {
+    /// A point of the square drawn with the tree's density from `u`, and that density
+    /// (`is_valid` trees only).
+    pub fn sample_square(&self, mut u: Vec2) -> (Vec2, f32) {
         const ONE_MINUS: f32 = 1.0 - f32::EPSILON;
         let mut origin = Vec2::ZERO;
         let mut scale = 1.0f32;
+        let mut pdf = 1.0f32;
         let mut n = 0usize;
         loop {
             let e = self.nodes[n].e;
@@ -123,10 +148,11 @@ impl DTree {
                 1
             };
             let i = qx + 2 * qy;
+            pdf *= 4.0 * e[i] / total;
             scale *= 0.5;
             origin += Vec2::new(qx as f32, qy as f32) * scale;
             match self.nodes[n].child[i] {
-                0 => return origin + u * scale,
+                0 => return (origin + u * scale, pdf),
                 c => n = c as usize,
             }
         }
@@ -157,10 +183,11 @@ impl DTree {
         }
     }
 
-    /// A unit direction drawn with the tree's density.
+    /// A unit direction drawn with the tree's density, and its solid-angle density.
     #[inline]
-    pub fn sample(&self, u: Vec2) -> Vec3 {
-        square_to_dir(self.sample_square(u))
+    pub fn sample(&self, u: Vec2) -> (Vec3, f32) {
+        let (p, pdf) = self.sample_square(u);
+        (square_to_dir(p), pdf * (0.25 * std::f32::consts::FRAC_1_PI))
     }
 
     /// The solid-angle density of the unit direction `d`.
@@ -210,13 +237,6 @@ impl DBuild {
         }
     }
 
-    /// The same topology with zero sums.
-    fn cleared(&self) -> DBuild {
-        DBuild {
-            nodes: self.nodes.iter().map(|n| BNode::new(n.child)).collect(),
-        }
-    }
-
     fn record(&self, mut p: Vec2, units: u64) {
         let mut n = 0usize;
         loop {
@@ -257,7 +277,8 @@ impl DBuild {
     fn refined(&self, budget: &mut u64) -> DBuild {
         let total = self.total() as f64;
         if total <= 0.0 {
-            return self.cleared();
+            // Nothing to refine by (the leaf's sampled tree stays what it was).
+            return DBuild::single();
         }
         let mut out = DBuild { nodes: Vec::new() };
         out.nodes.push(BNode::new([0; 4]));
@@ -504,14 +525,20 @@ impl SdTree {
         // 3. Refined, cleared building trees, in leaf order, within the node budget: every
         //    building node counts as a sampled one too (what it becomes at the next
         //    iteration), so that the tree stays under `max_bytes` then as well.
-        let overhead = self.leaves.len() as u64 * LEAF_BYTES + self.nodes.len() as u64 * SPATIAL_BYTES;
-        let sampled: u64 = self.leaves.iter().map(|l| l.sampled.nodes.len() as u64).sum();
-        let mut budget = self
+        let overhead =
+            self.leaves.len() as u64 * LEAF_BYTES + self.nodes.len() as u64 * SPATIAL_BYTES;
+        let sampled: u64 = self
+            .leaves
+            .iter()
+            .map(|l| l.sampled.nodes.len() as u64)
+            .sum();
+        // Every leaf keeps at least its root.
+        let mut budget = (self
             .max_bytes
             .saturating_sub(overhead + sampled * SAMPLED_BYTES)
-            / (SAMPLED_BYTES + BUILD_BYTES);
+            / (SAMPLED_BYTES + BUILD_BYTES))
+            .saturating_sub(self.leaves.len() as u64);
         for l in &mut self.leaves {
-            budget = budget.saturating_sub(1); // its root
             l.building = l.building.refined(&mut budget);
             if budget == 0 {
                 self.capped = true;
@@ -526,10 +553,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn azimuth_matches_atan2() {
+        for k in 0..10_000 {
+            let a = k as f32 * 0.000_628_3;
+            let (y, x) = (a.sin() * 3.0, a.cos() * 3.0);
+            let mut want = y.atan2(x) / (2.0 * std::f32::consts::PI);
+            if want < 0.0 {
+                want += 1.0;
+            }
+            let got = azimuth_turns(y, x);
+            let d = (got - want).abs().min(1.0 - (got - want).abs());
+            assert!(d < 4e-6, "{a}: {got} vs {want}");
+        }
+    }
+
+    #[test]
     fn square_map_round_trip() {
         for &(u, v) in &[(0.1f32, 0.2f32), (0.5, 0.9), (0.99, 0.01), (0.3, 0.6)] {
             let p = dir_to_square(square_to_dir(Vec2::new(u, v)));
-            assert!((p.x - u).abs() < 1e-5 && (p.y - v).abs() < 1e-5, "{u} {v} {p}");
+            assert!(
+                (p.x - u).abs() < 1e-5 && (p.y - v).abs() < 1e-5,
+                "{u} {v} {p}"
+            );
         }
     }
 

@@ -15,14 +15,16 @@
 //!
 //! # Sampling: one-sample MIS of the BSDF and the learnt distribution
 //!
-//! At a vertex whose BSDF has no delta lobe and whose spatial leaf has learnt something, the
+//! At a vertex whose BSDF is guidable ([`Bsdf::guidable`]: no delta lobe, nor a glossy lobe
+//! that the learnt distribution would only waste samples on) and whose spatial leaf has
+//! learnt something, the
 //! next direction comes from the BSDF with probability α = ½ and from the leaf's quadtree
 //! otherwise; its weight is f·cos / (α·p_bsdf + (1 − α)·p_guide), the density of the mixture
 //! (the one-sample MIS estimator with the balance heuristic, unbiased wherever the BSDF's
 //! density covers f). Next-event estimation weighs its samples against that same mixture
 //! density (`nee.rs`), and emission found by a guided direction against NEE with it (the
 //! path's `Previous::pdf`), so the MIS of emitter and direction sampling stays a partition of
-//! unity. Vertices with delta lobes sample the BSDF alone.
+//! unity. Other vertices sample the BSDF alone.
 //!
 //! # Training and determinism
 //!
@@ -100,18 +102,19 @@ pub fn sample<C: Color>(
     u2: Vec2,
 ) -> Option<BsdfSample<C>> {
     let mode = TransportMode::Radiance;
-    let (wi, eta) = if u1 < BSDF_FRACTION {
+    let (wi, eta, pdf_guide) = if u1 < BSDF_FRACTION {
         let bs = bsdf.sample(wo, u1 / BSDF_FRACTION, u2, mode)?;
         if bs.delta {
             return Some(bs);
         }
-        (bs.wi, bs.eta)
+        (bs.wi, bs.eta, g.pdf(frame.to_world(bs.wi)))
     } else {
         // Only Russian roulette reads η; 1 keeps it unbiased.
-        (frame.to_local(g.sample(u2)), 1.0)
+        let (d, pdf) = g.sample(u2);
+        (frame.to_local(d), 1.0, pdf)
     };
     let (f, pdf_bsdf) = bsdf.eval_pdf(wo, wi, mode);
-    let pdf = mixture_pdf(pdf_bsdf, g, frame.to_world(wi));
+    let pdf = BSDF_FRACTION * pdf_bsdf + (1.0 - BSDF_FRACTION) * pdf_guide;
     if f.is_black() || !(pdf > 0.0) {
         return None;
     }

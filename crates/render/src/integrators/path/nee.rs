@@ -148,7 +148,7 @@ impl<C: Color> NeeContext<'_, C> {
         } else if cfg.directions == DirectionSampling::Bsdf {
             let (f, pdf) = bsdf.eval_pdf(wo, wi, mode);
             // Guided vertices sample the mixture of the BSDF and the learnt distribution.
-            match t.rec.guide().filter(|_| !bsdf.has_delta()) {
+            match t.rec.guide().filter(|_| bsdf.guidable()) {
                 Some(g) => (f, super::guided::mixture_pdf(pdf, g, ls.wi)),
                 None => (f, pdf),
             }
