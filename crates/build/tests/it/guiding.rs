@@ -72,9 +72,13 @@ fn guided_mitsuba_cbox() {
     );
 }
 
+/// 128-spp batches: with 32-spp batches (seeds 0–15) one block of the caustic under the glass
+/// sphere fails at p = 2.3e-6 (Šidák threshold 1.3e-5) while the mean ratio is 1.001; seeds
+/// 16–31 pass (p_min 2.4e-5) and 16 × 128 spp pass (p_min 1.2e-4): the skew of 32-spp batch
+/// means of caustics that `references.rs` describes, which the t-test does not model.
 #[test]
 fn guided_cbox_specular() {
-    check_guided("cbox-specular", "cbox-specular.xml", &[], 0.0102, SPP);
+    check_guided("cbox-specular", "cbox-specular.xml", &[], 0.0102, 128);
 }
 
 #[test]

@@ -286,8 +286,8 @@ impl DBuild {
         let mut stack: Vec<(usize, Option<usize>, [f64; 4], u32)> =
             vec![(0, Some(0), self.nodes[0].sums().map(|s| s as f64), 1)];
         while let Some((new, old, e, depth)) = stack.pop() {
-            for i in 0..4 {
-                if e[i] / total > RHO && depth < MAX_DEPTH && *budget > 0 {
+            for (i, &ei) in e.iter().enumerate() {
+                if ei / total > RHO && depth < MAX_DEPTH && *budget > 0 {
                     *budget -= 1;
                     let idx = out.nodes.len();
                     out.nodes.push(BNode::new([0; 4]));
@@ -298,7 +298,7 @@ impl DBuild {
                         .map(|c| c as usize);
                     let ce = match old_child {
                         Some(c) => self.nodes[c].sums().map(|s| s as f64),
-                        None => [e[i] * 0.25; 4],
+                        None => [ei * 0.25; 4],
                     };
                     stack.push((idx, old_child, ce, depth + 1));
                 }

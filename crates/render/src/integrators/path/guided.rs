@@ -115,7 +115,7 @@ pub fn sample<C: Color>(
     };
     let (f, pdf_bsdf) = bsdf.eval_pdf(wo, wi, mode);
     let pdf = BSDF_FRACTION * pdf_bsdf + (1.0 - BSDF_FRACTION) * pdf_guide;
-    if f.is_black() || !(pdf > 0.0) {
+    if f.is_black() || pdf.is_nan() || pdf <= 0.0 {
         return None;
     }
     Some(BsdfSample {
@@ -191,7 +191,12 @@ impl<C: Color> PathRecorder<C> for GuideRecorder<'_, C> {
     #[inline]
     fn scatter(&mut self, s: &RecordedScatter<C>) {
         self.guide = None;
-        if !self.train || s.scatter.delta || self.len == MAX_RECORDS || !(s.pdf > 0.0) {
+        if !self.train
+            || s.scatter.delta
+            || self.len == MAX_RECORDS
+            || s.pdf.is_nan()
+            || s.pdf <= 0.0
+        {
             return;
         }
         let t = s.throughput;
