@@ -304,6 +304,8 @@ impl DBuild {
                 }
             }
         }
+        // The byte budget counts nodes: no spare capacity from the pushes.
+        out.nodes.shrink_to_fit();
         out
     }
 }
