@@ -2,13 +2,14 @@
 
 use render::integrators::bdpt::{BdptConfig, StrategyImages};
 use render::integrators::mlt::MltConfig;
+use render::integrators::path::guided::Guiding;
 use render::integrators::path::{Combine, PathConfig};
 use render::integrators::photon::{Lookup, PhotonConfig};
 use render::integrators::ptracer::PtracerConfig;
 use render::integrators::sppm::{Progressive, SppmConfig};
 use render::integrators::volpath::VolPathConfig;
 use render::integrators::{Aov, DirectConfig, Integrator, UnsupportedIntegrator};
-use scene::{IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
+use scene::{DirectionSampling, IntegratorDesc, MisHeuristic, NoriIntegrator, PathDesc};
 
 /// The integrator a scene description asks for.
 /// `scene_radius`: the bounding-sphere radius of the scene's geometry (relative lookup radii).
@@ -159,6 +160,11 @@ pub fn path_config(d: &PathDesc) -> PathConfig {
         caustics: d.caustics,
         clamp: d.clamp,
         only_depth: d.only_depth,
+        guiding: (d.guiding
+            && d.directions == DirectionSampling::Bsdf
+            && d.splitting <= 1
+            && d.only_depth.is_none())
+        .then(Guiding::default),
         ..PathConfig::mitsuba(d.max_depth, 0, d.hide_emitters, combine)
     }
 }

@@ -220,6 +220,9 @@ impl RenderObserver for Live<'_> {
     fn progress(&self, p: &Progress) {
         self.inner.progress(p);
     }
+    fn note(&self, line: &str) {
+        self.inner.note(line);
+    }
     fn pass_done(&self, film: &Film, spp: u32) {
         self.inner.pass_done(film, spp);
         self.display.update(Frame::rgb(&film.develop()));

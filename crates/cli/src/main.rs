@@ -237,6 +237,11 @@ pub(crate) struct TransportArgs {
     /// Next-event estimation: on (default) or off (brute force: emitters only when hit).
     #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
     nee: Option<bool>,
+    /// Path guiding (Müller et al. 2017): on or off (default). The path tracer learns the
+    /// incident light in training passes of doubling length and samples from it beside the
+    /// BSDF.
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    guiding: Option<bool>,
 }
 
 fn parse_sampler(s: &str) -> Result<scene::SamplerKind, String> {
@@ -284,7 +289,10 @@ impl TransportArgs {
                 s.film.filter = f;
             }
         }
-        let path_only = self.rr_depth.is_some() || self.clamp.is_some() || self.nee.is_some();
+        let path_only = self.rr_depth.is_some()
+            || self.clamp.is_some()
+            || self.nee.is_some()
+            || self.guiding == Some(true);
         // `--integrator sppm` keeps the scene's path length (a scene's max_depth is part of
         // what its reference shows).
         if let Some(i) = integrator.as_mut() {
@@ -312,12 +320,15 @@ impl TransportArgs {
                     if let Some(n) = self.nee {
                         p.nee = n;
                     }
+                    if let Some(g) = self.guiding {
+                        p.guiding = g;
+                    }
                 }
                 IntegratorDesc::VolPath {
                     max_depth,
                     rr_depth,
                     ..
-                } if self.clamp.is_none() && self.nee.is_none() => {
+                } if self.clamp.is_none() && self.nee.is_none() && self.guiding != Some(true) => {
                     if let Some(d) = self.max_depth {
                         *max_depth = d.max(-1);
                     }
@@ -357,7 +368,7 @@ impl TransportArgs {
                 }
                 _ if self.max_depth.is_some() || path_only => {
                     return Err(Failure::input(
-                        "--max-depth, --rr-depth, --clamp and --nee apply to the path tracer \
+                        "--max-depth, --rr-depth, --clamp, --nee and --guiding on apply to the path tracer \
                          (--max-depth and --rr-depth to volpath, --max-depth to Whitted, the \
                          photon mappers and the light-path integrators); this scene or \
                          --integrator uses another",
@@ -846,6 +857,9 @@ struct Progressive<'a> {
 impl RenderObserver for Progressive<'_> {
     fn progress(&self, p: &Progress) {
         self.inner.progress(p);
+    }
+    fn note(&self, line: &str) {
+        self.inner.note(line);
     }
     fn pass_done(&self, film: &Film, spp: u32) {
         self.inner.pass_done(film, spp);

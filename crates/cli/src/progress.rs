@@ -76,6 +76,14 @@ impl Reporter {
 }
 
 impl RenderObserver for Reporter {
+    fn note(&self, line: &str) {
+        if self.bar.is_some() || self.plain {
+            match &self.bar {
+                Some(bar) => bar.println(line),
+                None => eprintln!("{line}"),
+            }
+        }
+    }
     fn progress(&self, p: &Progress) {
         if let Some(bar) = &self.bar {
             bar.set_length(p.samples_total);

@@ -151,6 +151,9 @@ impl RenderObserver for Checkpointing<'_> {
     fn pass_done(&self, film: &Film, spp: u32) {
         self.inner.pass_done(film, spp);
     }
+    fn note(&self, line: &str) {
+        self.inner.note(line);
+    }
     fn checkpoint(&self, film: &Film, items: Range<u64>) {
         self.inner.checkpoint(film, items.clone());
         let Some((path, every)) = &self.saver.checkpoint else {

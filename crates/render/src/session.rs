@@ -141,6 +141,8 @@ pub trait RenderObserver: Sync {
     /// Called after every pass of a render split into work items with the film and the
     /// items in it (what a checkpoint saves).
     fn checkpoint(&self, _film: &Film, _items: Range<u64>) {}
+    /// A line for the user (path guiding's memory report), shown unless quiet.
+    fn note(&self, _line: &str) {}
 }
 
 /// An observer that ignores everything.

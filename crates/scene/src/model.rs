@@ -1425,6 +1425,10 @@ pub struct PathDesc {
     /// Keep only light that reached the camera along exactly this many segments (CS184's
     /// `-o 0`, `isAccumBounces = false`: only the last bounce).
     pub only_depth: Option<u32>,
+    /// Path guiding (our extension: `guiding` on Mitsuba's `path`, `--guiding on`): learn
+    /// the incident light online (Müller et al. 2017's SD-tree) and sample from it beside
+    /// the BSDF. Applies with BSDF directions, no splitting and no `only_depth`.
+    pub guiding: bool,
 }
 
 impl Default for PathDesc {
@@ -1442,6 +1446,7 @@ impl Default for PathDesc {
             caustics: true,
             clamp: None,
             only_depth: None,
+            guiding: false,
         }
     }
 }

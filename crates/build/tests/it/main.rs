@@ -13,6 +13,7 @@ mod ellipsoid;
 mod equal_area_envmap;
 mod furnace_media;
 mod furnace_render;
+mod guiding;
 mod instancing;
 mod light_selection;
 mod media_emission;

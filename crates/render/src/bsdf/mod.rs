@@ -235,6 +235,26 @@ impl<C: Color> Bsdf<C> {
         dispatch!(self, b => b.has_delta())
     }
 
+    /// Whether path guiding samples this BSDF's directions from the learnt distribution too
+    /// (`integrators/path/guided.rs`): no delta lobe, and no lobe so glossy (microfacet
+    /// α < 0.25, principled roughness < 0.5) that the half of its samples spent on the learnt
+    /// distribution, which does not know the lobe, would cost more than they save. With a
+    /// fixed mixing fraction that is the case Müller et al. 2017 leave to the BSDF.
+    pub fn guidable(&self) -> bool {
+        const MIN_ALPHA: f32 = 0.25;
+        let rough = |m: &Microfacet| m.alpha_u.min(m.alpha_v) >= MIN_ALPHA;
+        match self {
+            Bsdf::Diffuse(_) | Bsdf::DiffuseTransmission(_) => true,
+            Bsdf::RoughConductor(b) => rough(&b.distribution),
+            Bsdf::RoughDielectric(b) => rough(&b.distribution),
+            Bsdf::RoughPlastic(b) => rough(&b.distribution),
+            Bsdf::NoriMicrofacet(b) => rough(&b.distribution),
+            Bsdf::Principled(p) => p.roughness >= 0.5 && !self.has_delta(),
+            Bsdf::Bumped(b) => b.inner.guidable(),
+            _ => false,
+        }
+    }
+
     /// Has at least one non-delta lobe (worth light sampling / MIS).
     #[inline]
     pub fn has_smooth(&self) -> bool {

@@ -24,7 +24,7 @@ pub mod work;
 
 pub use chains::run_chains;
 pub use passes::{rows, run_passes};
-pub use tiles::{CHUNK_SPP, TileWork, render_tiles};
+pub use tiles::{CHUNK_SPP, Phased, TileWork, render_tiles, render_tiles_phased};
 pub use work::Resume;
 
 use crate::camera::CameraRay;

@@ -20,9 +20,10 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::{Estimator, work};
+use crate::camera::CameraRay;
 use crate::film::FilmTile;
 use crate::film::accum::tile_bounds;
-use crate::math::UVec2;
+use crate::math::{UVec2, Vec3};
 use crate::sampling::Sampler;
 use crate::session::{Job, Progress, RenderOptions, RenderOutcome, camera_sample};
 use crate::spectral::lanes::PathMode;
@@ -128,12 +129,72 @@ fn render_tile<M: PathMode, E: Estimator<M>>(
 /// options' items (all, a shard's range, or what a checkpoint left) in passes of whole
 /// chunks, items in parallel, each tile reused by its worker from item to item.
 pub fn render_tiles<M: PathMode, E: Estimator<M>>(job: &Job, integrator: &E) -> RenderOutcome {
+    render_tiles_phased::<M, _>(job, &mut OnePhase(integrator))
+}
+
+/// A per-sample estimator whose state changes between phases of a render, at chunk
+/// boundaries fixed in advance (path guiding: each training iteration samples from what the
+/// ones before it learnt). A phase's estimator is read only while its items render; the
+/// state changes in [`Phased::end_phase`], when every item of the phase is done.
+pub trait Phased<M: PathMode> {
+    type Phase<'a>: Estimator<M>
+    where
+        Self: 'a;
+    /// The chunk (of `chunks` in all) at which phase `k` ends.
+    fn phase_end(&self, k: u32, chunks: u64) -> u64;
+    /// The estimator of phase `k`.
+    fn phase(&self, k: u32) -> Self::Phase<'_>;
+    /// Phase `k` is done (all its items), and phase `k + 1` follows.
+    fn end_phase(&mut self, k: u32);
+}
+
+/// An estimator that does not change: one phase.
+struct OnePhase<'a, E>(&'a E);
+
+impl<M: PathMode, E: Estimator<M>> Phased<M> for OnePhase<'_, E> {
+    type Phase<'b>
+        = &'b E
+    where
+        Self: 'b;
+    fn phase_end(&self, _k: u32, chunks: u64) -> u64 {
+        chunks
+    }
+    fn phase(&self, _k: u32) -> &E {
+        self.0
+    }
+    fn end_phase(&mut self, _k: u32) {}
+}
+
+impl<M: PathMode, E: Estimator<M>> Estimator<M> for &E {
+    #[inline(always)]
+    fn li(&self, scene: &Scene, cray: &CameraRay, sampler: &mut Sampler) -> Vec3 {
+        (*self).li(scene, cray, sampler)
+    }
+    #[inline(always)]
+    fn li_stream<T>(
+        &self,
+        scene: &Scene,
+        template: &Sampler,
+        next: impl FnMut(&mut Sampler) -> Option<(T, CameraRay)>,
+        done: impl FnMut(T, Vec3),
+    ) {
+        (*self).li_stream(scene, template, next, done)
+    }
+}
+
+/// [`render_tiles`] of an estimator in phases: each phase's items (`drive/work.rs`) in passes
+/// as [`render_tiles`] runs them, the phase's end at a chunk boundary (a pass never spans
+/// two phases), then [`Phased::end_phase`]. Items are a pure function of the item and the
+/// phases before, so the image still does not depend on the thread count; it does on the
+/// items rendered before, so a phased render is not split into shards (the integrator says
+/// so in `work_items`).
+pub fn render_tiles_phased<M: PathMode, P: Phased<M>>(job: &Job, phases: &mut P) -> RenderOutcome {
     let start = Instant::now();
     let (scene, opts, observer) = (job.scene, job.opts, job.observer);
     let (blank, template) = job.film_and_sampler();
     let layout = blank.layout();
     let plan = TileWork::new(scene, opts);
-    let (range, mut film, next) = work::start(opts, plan.len(), blank);
+    let (range, mut film, mut next) = work::start(opts, plan.len(), blank);
     let pixels = film.pixel_count();
     let samples_total =
         pixels * opts.spp.max(1) as u64 * (range.end - range.start) / plan.len().max(1);
@@ -142,50 +203,80 @@ pub fn render_tiles<M: PathMode, E: Estimator<M>>(job: &Job, integrator: &E) -> 
     // Tiles kept from item to item and pass to pass, so that their storage is not
     // allocated (and page-faulted) again.
     let spare = Mutex::new(Vec::<FilmTile>::new());
-    let (next, cancelled) = work::run(
-        job,
-        start,
-        &mut film,
-        range.clone(),
-        next,
-        plan.per_chunk(),
-        true,
-        |film, items| {
-            let shared = Mutex::new(&mut *film);
-            let first = items.start;
-            plan.by_tile(items.clone())
-                .into_par_iter()
-                .for_each(|(bounds, chunks)| {
-                    let mut tile = spare
-                        .lock()
-                        .expect("a worker panicked")
-                        .pop()
-                        .unwrap_or_default();
-                    let tile = &mut tile;
-                    layout.reset_tile(tile, bounds.0, bounds.1);
-                    let n = (bounds.1 - bounds.0).as_u64vec2();
-                    for samples in chunks {
-                        let count = n.x * n.y * samples.len() as u64;
-                        render_tile::<M, E>(scene, integrator, &template, tile, bounds, samples);
-                        tile.finish_unit();
-                        let d = done.fetch_add(count, Ordering::Relaxed) + count;
-                        observer.progress(&Progress {
-                            samples_done: d,
-                            samples_total,
-                            elapsed: start.elapsed(),
-                            spp_done: plan.spp_before(first),
-                        });
-                    }
-                    shared.lock().expect("a worker panicked").merge(tile);
-                    spare
-                        .lock()
-                        .expect("a worker panicked")
-                        .push(std::mem::take(tile));
-                });
-            passes += 1;
-            observer.pass_done(film, plan.spp_before(items.end));
-        },
-    );
+    let per_chunk = plan.per_chunk().max(1);
+    let chunks = plan.len() / per_chunk;
+    let mut cancelled = false;
+    let mut k = 0u32;
+    loop {
+        let end = phases
+            .phase_end(k, chunks)
+            .min(chunks)
+            .saturating_mul(per_chunk)
+            .clamp(next, range.end);
+        let integrator = phases.phase(k);
+        let (reached, stopped) = work::run(
+            job,
+            start,
+            &mut film,
+            range.start..end,
+            next,
+            per_chunk,
+            true,
+            |film, items| {
+                let shared = Mutex::new(&mut *film);
+                let first = items.start;
+                plan.by_tile(items.clone())
+                    .into_par_iter()
+                    .for_each(|(bounds, chunks)| {
+                        let mut tile = spare
+                            .lock()
+                            .expect("a worker panicked")
+                            .pop()
+                            .unwrap_or_default();
+                        let tile = &mut tile;
+                        layout.reset_tile(tile, bounds.0, bounds.1);
+                        let n = (bounds.1 - bounds.0).as_u64vec2();
+                        for samples in chunks {
+                            let count = n.x * n.y * samples.len() as u64;
+                            render_tile::<M, _>(
+                                scene,
+                                &integrator,
+                                &template,
+                                tile,
+                                bounds,
+                                samples,
+                            );
+                            tile.finish_unit();
+                            let d = done.fetch_add(count, Ordering::Relaxed) + count;
+                            observer.progress(&Progress {
+                                samples_done: d,
+                                samples_total,
+                                elapsed: start.elapsed(),
+                                spp_done: plan.spp_before(first),
+                            });
+                        }
+                        shared.lock().expect("a worker panicked").merge(tile);
+                        spare
+                            .lock()
+                            .expect("a worker panicked")
+                            .push(std::mem::take(tile));
+                    });
+                passes += 1;
+                observer.pass_done(film, plan.spp_before(items.end));
+            },
+        );
+        drop(integrator);
+        next = reached;
+        if stopped {
+            cancelled = true;
+            break;
+        }
+        if next < end || end >= range.end {
+            break; // the time budget ran out, or the render is done
+        }
+        phases.end_phase(k);
+        k += 1;
+    }
     RenderOutcome {
         film,
         spp: plan.spp_before(next),

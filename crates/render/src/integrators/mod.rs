@@ -198,7 +198,43 @@ macro_rules! per_sample_model {
     };
 }
 
-per_sample_model!(PathConfig, "path");
+impl IntegratorModel for PathConfig {
+    fn name(&self) -> &'static str {
+        "path"
+    }
+
+    /// The tile loop; with guiding, in training phases (`path/guided.rs`), and a line on the
+    /// SD-tree's memory for the user.
+    fn render<M: PathMode + Send>(&self, job: &Job) -> RenderOutcome {
+        match &self.guiding {
+            None => drive::render_tiles::<M, Self>(job, self),
+            Some(g) => {
+                let (outcome, stats) = path::guided::render::<M>(job, self, g);
+                job.observer.note(&format!(
+                    "path guiding: {} spatial leaves, {} directional nodes, {:.1} MB of {:.1} MB{}",
+                    stats.leaves,
+                    stats.directional_nodes,
+                    stats.bytes as f64 / (1u64 << 20) as f64,
+                    g.max_bytes as f64 / (1u64 << 20) as f64,
+                    if stats.capped { " (capped)" } else { "" }
+                ));
+                outcome
+            }
+        }
+    }
+
+    fn work_items(&self, scene: &Scene, opts: &RenderOptions) -> Result<u64, String> {
+        if self.guiding.is_some() {
+            return Err(
+                "a guided render (--guiding on) cannot be split into shards or \
+                        resumed from a checkpoint (each training phase learns from the ones \
+                        before); render it in one process"
+                    .into(),
+            );
+        }
+        Ok(drive::TileWork::new(scene, opts).len())
+    }
+}
 per_sample_model!(volpath::VolPathConfig, "volpath");
 per_sample_model!(DirectConfig, "direct");
 

@@ -1,9 +1,10 @@
 //! Sampling: warps, discrete and piecewise-constant distributions, equiangular distances
-//! towards a point, and the per-pixel samplers.
+//! towards a point, the per-pixel samplers, and path guiding's SD-tree (`sdtree.rs`).
 
 pub mod distrib;
 pub mod equiangular;
 pub mod sampler;
+pub mod sdtree;
 pub mod warp;
 
 pub use distrib::{AliasTable, Distribution1D, Distribution2D, ONE_MINUS_EPSILON};

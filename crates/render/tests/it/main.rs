@@ -4,6 +4,7 @@
 mod accel;
 mod architecture_doc;
 mod chi2_bsdf;
+mod chi2_guiding;
 mod chi2_media;
 mod chi2_warps;
 mod compare;

@@ -177,6 +177,7 @@ fn mitsuba_defaults() {
             caustics: true,
             clamp: None,
             only_depth: None,
+            guiding: false,
         })
     );
     assert_eq!(s.sensors.len(), 1);

@@ -51,6 +51,7 @@ impl PathConfig {
             clamp: None,
             only_depth: None,
             media_absorption: false,
+            guiding: None,
         }
     }
 

@@ -29,11 +29,14 @@
 //! - `scatter.rs`: the next direction and Russian roulette;
 //! - `batched.rs`: the batched loop with its deferred shadow rays — why, and why its
 //!   estimates are the single-path loop's bit for bit;
+//! - `guided.rs`: path guiding (Müller et al. 2017's SD-tree, trained in phases of the
+//!   tile loop; the guided recorder and the mixture of BSDF and learnt directions);
 //! - `record.rs`: what a [`PathRecorder`] sees (render layers, the path visualiser);
 //!   [`NoRecorder`] compiles to nothing.
 
 mod batched;
 mod course;
+pub mod guided;
 mod nee;
 mod record;
 mod scatter;
@@ -117,6 +120,9 @@ pub struct PathConfig {
     /// Beer–Lambert absorption in a dielectric (the course formats); off, as Mitsuba's `path`,
     /// media are ignored.
     pub media_absorption: bool,
+    /// Path guiding (`guided.rs`): learn the incident light online and sample from it beside
+    /// the BSDF. Only with BSDF directions, no splitting and no `only_depth` (`build` checks).
+    pub guiding: Option<guided::Guiding>,
 }
 
 impl PathConfig {
@@ -141,6 +147,7 @@ impl PathConfig {
             clamp: None,
             only_depth: None,
             media_absorption: false,
+            guiding: None,
         }
     }
 }

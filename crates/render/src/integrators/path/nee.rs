@@ -146,7 +146,12 @@ impl<C: Color> NeeContext<'_, C> {
         let (f, pdf_bsdf) = if !weighted {
             (bsdf.eval(wo, wi, mode), 0.0)
         } else if cfg.directions == DirectionSampling::Bsdf {
-            bsdf.eval_pdf(wo, wi, mode)
+            let (f, pdf) = bsdf.eval_pdf(wo, wi, mode);
+            // Guided vertices sample the mixture of the BSDF and the learnt distribution.
+            match t.rec.guide().filter(|_| bsdf.guidable()) {
+                Some(g) => (f, super::guided::mixture_pdf(pdf, g, ls.wi)),
+                None => (f, pdf),
+            }
         } else {
             let f = bsdf.eval(wo, wi, mode);
             (f, direction_pdf(cfg, bsdf, wo, wi))

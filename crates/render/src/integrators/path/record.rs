@@ -6,6 +6,7 @@
 
 use crate::geometry::Ray;
 use crate::math::Vec3;
+use crate::sampling::sdtree::DTree;
 use crate::spectral::lanes::Color;
 
 /// How a path left a vertex.
@@ -97,6 +98,14 @@ pub trait PathRecorder<C = Vec3> {
     fn end(&mut self, _why: PathEnd) {}
     /// Radiance `l` was added to the estimate.
     fn contribution(&mut self, _l: C, _c: Contribution) {}
+    /// The learnt distribution of incident light at the vertex last told to
+    /// [`Self::vertex`], to sample directions from beside the BSDF (path guiding's recorder,
+    /// `guided.rs`). `None` for every other recorder: the tracer then samples as it always
+    /// did, and its default instantiation ([`NoRecorder`]) compiles the question away.
+    #[inline(always)]
+    fn guide(&self) -> Option<&DTree> {
+        None
+    }
 }
 
 /// Records nothing.

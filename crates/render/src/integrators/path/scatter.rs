@@ -38,6 +38,8 @@ impl<R: PathRecorder<M::C>, M: PathMode> Tracer<'_, R, M> {
                 // Only Russian roulette reads η; 1 keeps it unbiased.
                 eta: 1.0,
             })
+        } else if let Some(g) = self.rec.guide().filter(|_| bsdf.guidable()) {
+            super::guided::sample(bsdf, v.frame, wo, g, u1, u2)
         } else {
             bsdf.sample(wo, u1, u2, TransportMode::Radiance)
         };

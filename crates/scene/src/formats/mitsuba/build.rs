@@ -2153,6 +2153,8 @@ impl<'c, 's> SceneBuilder<'c, 's> {
                     from_depth: pl.props.int_in("rr_depth", 5, 0, u32::MAX as i64)? as u32,
                 },
                 hide_emitters: pl.props.bool("hide_emitters", false)?,
+                // Our extension: path guiding (`docs/formats.md`).
+                guiding: pl.props.bool("guiding", false)?,
                 ..PathDesc::default()
             }),
             "direct" => {
