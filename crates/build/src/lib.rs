@@ -457,6 +457,19 @@ pub fn build_cached(
             sample_emission: false,
         });
     }
+    // Guiding asked for where it does not apply (see `integrator::path_config`) is said, not
+    // dropped quietly.
+    if let IntegratorDesc::Path(d) = &integrator_desc
+        && d.guiding
+        && !matches!(&integrator, Integrator::Path(c) if c.guiding.is_some())
+    {
+        warnings.push(format!(
+            "{}: warning: path guiding is off for this render: it guides the path tracer's \
+             BSDF-sampled directions, without splitting or a depth filter, in scenes without \
+             subsurface materials",
+            desc.source.display()
+        ));
+    }
     if let Integrator::Path(cfg) = &mut integrator {
         cfg.media_absorption = desc.media.is_empty() && !media.is_empty();
         debug_assert!(!cfg.media_absorption || media.iter().all(|m| m.is_purely_absorbing()));

@@ -157,6 +157,31 @@ fn guided_same_image_for_any_thread_count() {
     assert!(bytes != one, "guiding changed nothing");
 }
 
+/// Guiding asked for where it does not apply (a depth filter, splitting) renders unguided
+/// and says so; where it applies, nothing is said.
+#[test]
+fn guiding_that_cannot_apply_is_said() {
+    let file =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml");
+    let warned = |edit: &dyn Fn(&mut scene::PathDesc)| {
+        let mut desc = guided(load(&file, &[("res", "16")]));
+        if let IntegratorDesc::Path(p) = &mut desc.integrator {
+            edit(p);
+        }
+        let built = build(&desc, &BuildOptions::default()).expect("scene builds");
+        let guided = matches!(&built.integrator, Integrator::Path(c) if c.guiding.is_some());
+        let said = built
+            .scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("path guiding is off"));
+        (guided, said)
+    };
+    assert_eq!(warned(&|_| {}), (true, false));
+    assert_eq!(warned(&|p| p.only_depth = Some(2)), (false, true));
+    assert_eq!(warned(&|p| p.splitting = 4), (false, true));
+}
+
 /// Keeps the notes a render gives (the guiding memory report).
 #[derive(Default)]
 struct Notes(Mutex<Vec<String>>);
