@@ -13,8 +13,8 @@
 //! `build/tests/it/subsurface.rs` simulates. Under it the reflectance is known exactly
 //! through Chandrasekhar's H function of isotropic scattering:
 //! `A(ϖ) = 1 − 2·√(1−ϖ)·∫₀¹ H(μ) μ dμ`. [`single_scattering_albedo`] starts from
-//! Christensen–Burley's closed form (off by up to 1.6 % at A = 0.1, measured) and refines
-//! it on that exact relation, so the requested `A` is reproduced to the H function's
+//! Christensen–Burley's closed form (a fit, whose albedo is a little off at low albedos)
+//! and refines it on that exact relation, so the requested `A` is reproduced to the H function's
 //! quadrature error (below 10⁻⁵).
 
 /// Christensen & Burley (2015)'s fit of the single-scattering albedo ϖ of a medium whose

@@ -15,19 +15,10 @@ use build::{BuildOptions, render_desc, render_seeds};
 use render::compare::{TestImages, compare, load_reference};
 use render::film::Image;
 use render::render::RenderOptions;
-use scene::{Document, IntegratorDesc, LoadOptions, RenderMode, SceneDesc};
+use scene::{IntegratorDesc, RenderMode, SceneDesc};
 
 fn load(file: &Path, defines: &[(&str, &str)]) -> SceneDesc {
-    let opts = LoadOptions {
-        defines: defines
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect(),
-    };
-    let Document::Scene(desc) = scene::load(file, &opts).expect("scene loads") else {
-        panic!("not a scene")
-    };
-    *desc
+    crate::references::load_scene(file, defines)
 }
 
 /// The scene's path length (its path tracer's).

@@ -15,7 +15,7 @@ use build::{BuildOptions, Built, build};
 use render::integrators::Integrator;
 use render::integrators::path::guided::Guiding;
 use render::render::{RenderObserver, RenderOptions, Silent, render};
-use scene::{Document, IntegratorDesc, LoadOptions, RenderMode, SceneDesc};
+use scene::{IntegratorDesc, RenderMode, SceneDesc};
 
 use crate::references::{SPP, check_desc, shared};
 
@@ -37,16 +37,7 @@ fn guided(mut desc: SceneDesc) -> SceneDesc {
 }
 
 fn load(file: &std::path::Path, defines: &[(&str, &str)]) -> SceneDesc {
-    let opts = LoadOptions {
-        defines: defines
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect(),
-    };
-    let Document::Scene(desc) = scene::load(file, &opts).expect("scene loads") else {
-        panic!("not a scene")
-    };
-    *desc
+    crate::references::load_scene(file, defines)
 }
 
 fn check_guided(name: &str, scene_rel: &str, defines: &[(&str, &str)], mitsuba: f64, spp: u32) {

@@ -39,16 +39,21 @@ fn render_batches(
     spp: u32,
     mode: RenderMode,
 ) -> Vec<Image> {
+    render_desc_batches(&load_scene(scene_file, defines), spp, mode)
+}
+
+/// The scene of `file` with the `-D` parameters `defines` (panics unless it is a scene).
+pub(crate) fn load_scene(file: &Path, defines: &[(&str, &str)]) -> scene::SceneDesc {
     let opts = LoadOptions {
         defines: defines
             .iter()
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect(),
     };
-    let Document::Scene(desc) = scene::load(scene_file, &opts).expect("scene loads") else {
+    let Document::Scene(desc) = scene::load(file, &opts).expect("scene loads") else {
         panic!("not a scene")
     };
-    render_desc_batches(&desc, spp, mode)
+    *desc
 }
 
 pub(crate) fn render_desc_batches(

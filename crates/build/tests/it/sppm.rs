@@ -19,7 +19,7 @@ use build::{BuildOptions, Built, build};
 use render::compare::{load_reference, rel_mse};
 use render::film::Image;
 use render::render::{RenderOptions, Silent, render};
-use scene::{Document, IntegratorDesc, LoadOptions, RenderMode, SceneDesc, SppmDesc};
+use scene::{IntegratorDesc, RenderMode, SceneDesc, SppmDesc};
 
 fn repo_scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -28,16 +28,7 @@ fn repo_scene(name: &str) -> PathBuf {
 }
 
 fn load(file: &Path, defines: &[(&str, &str)]) -> SceneDesc {
-    let opts = LoadOptions {
-        defines: defines
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect(),
-    };
-    let Document::Scene(desc) = scene::load(file, &opts).expect("scene loads") else {
-        panic!("not a scene")
-    };
-    *desc
+    crate::references::load_scene(file, defines)
 }
 
 fn render_with(desc: &SceneDesc, integrator: IntegratorDesc, spp: u32, threads: usize) -> Image {
